@@ -1,0 +1,190 @@
+"""The result type: segments, breakpoints and corners of one scan."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+
+__all__ = ["Extraction", "Segment"]
+
+# Columns of Extraction.lines, one row per segment.
+RHO, ALPHA, START_X, START_Y, END_X, END_Y, RMS = range(7)
+N_LINE_COLUMNS = 7
+
+
+@dataclass(frozen=True, slots=True)
+class Segment:
+    """One fitted line segment.
+
+    Attributes
+    ----------
+    first, last:
+        Inclusive beam indices. ``first > last`` only for the segment that
+        crosses the seam of a full-circle scan (it runs from ``first`` to the
+        last beam and on from beam 0 to ``last``).
+    start, end:
+        ``(x, y)`` of the first and last points projected onto the line.
+    rho, alpha:
+        Hesse normal form ``x cos(alpha) + y sin(alpha) = rho``, ``rho >= 0``,
+        ``alpha`` in ``(-pi, pi]``.
+    n_points:
+        Points the line was fitted to.
+    rms:
+        Root-mean-square orthogonal distance of those points to the line.
+    covariance:
+        2 x 2 covariance of ``(rho, alpha)`` propagated from ``range_sigma``.
+    """
+
+    first: int
+    last: int
+    start: tuple[float, float]
+    end: tuple[float, float]
+    rho: float
+    alpha: float
+    n_points: int
+    rms: float
+    covariance: np.ndarray
+
+    @property
+    def length(self) -> float:
+        """Distance from ``start`` to ``end`` in metres."""
+        return math.hypot(self.end[0] - self.start[0], self.end[1] - self.start[1])
+
+
+class Extraction:
+    """Features of one scan, as arrays, with :class:`Segment` views built on access.
+
+    Attributes
+    ----------
+    breakpoints:
+        One beam index per gap: the last valid beam before it.
+    corners:
+        Beam index of each corner (the beam nearer the true corner).
+    outliers:
+        Beams rejected as isolated noise points; they belong to no segment.
+    first, last, n_points:
+        Per-segment integer arrays (see :class:`Segment`).
+    lines:
+        ``M x 7`` float array: rho, alpha, start x, start y, end x, end y, rms.
+    covariances:
+        ``M x 2 x 2`` covariances of ``(rho, alpha)``.
+    method:
+        Name of the method that produced it.
+    params:
+        The full resolved parameters (read-only mapping).
+    """
+
+    __slots__ = (
+        "_segments",
+        "breakpoints",
+        "corners",
+        "covariances",
+        "first",
+        "last",
+        "lines",
+        "method",
+        "n_points",
+        "outliers",
+        "params",
+    )
+
+    def __init__(
+        self,
+        *,
+        first: np.ndarray,
+        last: np.ndarray,
+        n_points: np.ndarray,
+        lines: np.ndarray,
+        covariances: np.ndarray,
+        breakpoints: np.ndarray,
+        corners: np.ndarray,
+        outliers: np.ndarray,
+        method: str,
+        params: Mapping[str, Any],
+    ) -> None:
+        self.first = _frozen(first, np.intp)
+        self.last = _frozen(last, np.intp)
+        self.n_points = _frozen(n_points, np.intp)
+        self.lines = _frozen(lines, np.float64).reshape(-1, N_LINE_COLUMNS)
+        self.covariances = _frozen(covariances, np.float64).reshape(-1, 2, 2)
+        self.breakpoints = _frozen(breakpoints, np.intp)
+        self.corners = _frozen(corners, np.intp)
+        self.outliers = _frozen(outliers, np.intp)
+        self.method = method
+        self.params = params if isinstance(params, MappingProxyType) else MappingProxyType(dict(params))
+        self._segments: tuple[Segment, ...] | None = None
+
+    @property
+    def segments(self) -> tuple[Segment, ...]:
+        """Segments in beam-index order (``segments[k].last <= segments[k+1].first``)."""
+        if self._segments is None:
+            self._segments = tuple(self._segment(k) for k in range(len(self.first)))
+        return self._segments
+
+    def _segment(self, k: int) -> Segment:
+        row = self.lines[k]
+        return Segment(
+            first=int(self.first[k]),
+            last=int(self.last[k]),
+            start=(float(row[START_X]), float(row[START_Y])),
+            end=(float(row[END_X]), float(row[END_Y])),
+            rho=float(row[RHO]),
+            alpha=float(row[ALPHA]),
+            n_points=int(self.n_points[k]),
+            rms=float(row[RMS]),
+            covariance=self.covariances[k],
+        )
+
+    def __len__(self) -> int:
+        return len(self.first)
+
+    def __repr__(self) -> str:
+        return (
+            f"Extraction(method={self.method!r}, segments={len(self)}, "
+            f"breakpoints={len(self.breakpoints)}, corners={len(self.corners)})"
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-Python form (JSON-serialisable)."""
+        return {
+            "method": self.method,
+            "params": {k: _jsonable(v) for k, v in self.params.items()},
+            "segments": [
+                {
+                    "first": s.first,
+                    "last": s.last,
+                    "start": list(s.start),
+                    "end": list(s.end),
+                    "rho": s.rho,
+                    "alpha": s.alpha,
+                    "n_points": s.n_points,
+                    "rms": s.rms,
+                    "length": s.length,
+                    "covariance": s.covariance.tolist(),
+                }
+                for s in self.segments
+            ],
+            "breakpoints": self.breakpoints.tolist(),
+            "corners": self.corners.tolist(),
+            "outliers": self.outliers.tolist(),
+        }
+
+
+def _frozen(values: np.ndarray, dtype: type) -> np.ndarray:
+    arr = np.ascontiguousarray(values, dtype=dtype)
+    if arr.flags.writeable:
+        arr.setflags(write=False)
+    return arr
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, tuple):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, float) and not math.isfinite(value):
+        return None if math.isnan(value) else ("inf" if value > 0 else "-inf")
+    return value

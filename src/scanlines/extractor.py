@@ -1,0 +1,124 @@
+"""The one entry point: a configured :class:`Extractor`, and :func:`extract`."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+
+from scanlines.errors import ParameterError, ScanError
+from scanlines.extraction import Extraction
+from scanlines.methods import REGISTRY
+from scanlines.params import resolve
+from scanlines.scan import Scan
+from scanlines.steps.points import make_sequence
+
+__all__ = ["Extractor", "extract", "method_info", "methods"]
+
+
+def methods() -> tuple[str, ...]:
+    """Names of the registered methods."""
+    return tuple(REGISTRY)
+
+
+def _module(method: str):
+    try:
+        return REGISTRY[method]
+    except (KeyError, TypeError):
+        raise ParameterError(
+            f"unknown method {method!r}; valid: {', '.join(methods())}"
+        ) from None
+
+
+def method_info(method: str) -> dict[str, Any]:
+    """Parameters (default and doc) and presets of ``method``."""
+    module = _module(method)
+    return {
+        "name": module.NAME,
+        "doc": (module.__doc__ or "").strip().splitlines()[0],
+        "params": {name: (p.default, p.doc) for name, p in module.PARAMS.items()},
+        "presets": {name: dict(values) for name, values in module.PRESETS.items()},
+    }
+
+
+class Extractor:
+    """A configured extractor; call it on a :class:`~scanlines.Scan`.
+
+    Parameters
+    ----------
+    method:
+        A name from :func:`methods`; ``"adaptive"`` is the paper's method.
+    preset:
+        A named parameter set of the method (``"paper"``: the paper, literally).
+    **params:
+        Overrides of single parameters (see :func:`method_info`).
+
+    Raises
+    ------
+    ParameterError
+        For an unknown method, preset or parameter (the message lists the valid
+        ones) or a value out of range.
+
+    Notes
+    -----
+    Bearing tables are cached per sensor (beam count and increment), so one
+    extractor reused over a log does not recompute them.
+    """
+
+    def __init__(self, method: str = "adaptive", preset: str | None = None, **params: Any) -> None:
+        self._module = _module(method)
+        self.method = method
+        self.preset = preset
+        self.params: Mapping[str, Any] = MappingProxyType(
+            resolve(method, self._module.PARAMS, self._module.PRESETS, preset, params)
+        )
+        self._tables: dict[tuple[int, float], tuple[np.ndarray, np.ndarray]] = {}
+
+    def __repr__(self) -> str:
+        preset = f", preset={self.preset!r}" if self.preset else ""
+        return f"Extractor(method={self.method!r}{preset})"
+
+    def __call__(self, scan: Scan) -> Extraction:
+        """Extract segments, breakpoints and corners of ``scan``."""
+        if not isinstance(scan, Scan):
+            raise ScanError(f"expected a scanlines.Scan, got {type(scan).__name__}")
+        cos, sin = self._bearings(len(scan), scan.angle_increment)
+        seq = make_sequence(scan.ranges, scan.valid, cos, sin, scan.angle_increment)
+        return self._module.run(seq, scan.angle_min, self.params)
+
+    def batch(
+        self,
+        ranges: np.ndarray,
+        angle_min: float,
+        angle_increment: float,
+        range_min: float = 0.0,
+        range_max: float = math.inf,
+    ) -> list[Extraction]:
+        """Extract from a stack of scans of one sensor, ``ranges`` of shape (scans, beams)."""
+        stack = np.asarray(ranges)
+        if stack.ndim != 2:
+            raise ScanError(f"ranges must be 2-D (scans, beams), got shape {stack.shape}")
+        return [
+            self(Scan(row, angle_min, angle_increment, range_min, range_max)) for row in stack
+        ]
+
+    def _bearings(self, n_beams: int, increment: float) -> tuple[np.ndarray, np.ndarray]:
+        key = (n_beams, increment)
+        table = self._tables.get(key)
+        if table is None:
+            local = increment * np.arange(n_beams, dtype=np.float64)
+            table = (np.cos(local), np.sin(local))
+            if len(self._tables) > 16:
+                self._tables.clear()
+            self._tables[key] = table
+        return table
+
+
+def extract(
+    scan: Scan, method: str = "adaptive", preset: str | None = None, **params: Any
+) -> Extraction:
+    """One-shot form of :class:`Extractor`: ``Extractor(method, preset, **params)(scan)``."""
+    return Extractor(method, preset, **params)(scan)

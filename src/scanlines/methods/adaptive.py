@@ -1,0 +1,391 @@
+"""The adaptive-threshold line-segment extractor of Li et al. (2022) [1]_.
+
+Steps (the paper's numbering, sec. 3):
+
+1. points and neighbour distances ``d_i`` (eq. 3, 4/19);
+2-3. denoising: isolated noise points (Step 2) and their replacement by a window
+   mean (eq. 5/20) -- :mod:`scanlines.steps.denoise`;
+4. adaptive nearest-neighbour breakpoints ``D = k rho dtheta`` (eq. 6-7/21) --
+   :mod:`scanlines.steps.breakpoints`;
+5. corner candidates from the slope difference ``Dk`` (eq. 12-13) with the peak
+   and position rules, and the removal of corners with fewer than two points on a
+   side -- :mod:`scanlines.steps.corners`;
+6-7. the sweep of the corner threshold ``dkth`` over ``(a, b)``, keeping the cut
+   with the best fitting-error criterion (eq. 14) -- :mod:`scanlines.steps.select`;
+8. a line per part: five sub-set means and ordinary least squares (eq. 15-17) --
+   :mod:`scanlines.steps.fit`.
+
+``preset="paper"`` runs exactly that: window 10, ``k = 3``, ``Dk`` as printed,
+``dkth`` in ``(0, 0.052)`` in steps of 0.01, ``W_i = 1``, the smallest SSE, the
+5-point OLS fit, the corner point shared by both segments.
+
+Deviations of the default, each a parameter (the evidence is in the tests named
+in brackets and in ``docs/``):
+
+``denoise="isolated"``
+    Step 2 as printed (``d_{i-1} > d_{i-2}`` and ``d_i > d_{i+1}``) flags any local
+    bump of the neighbour distance: about a quarter of the points of a straight
+    noisy wall. The default flags only a point that the breakpoint test cuts from
+    both neighbours while the neighbours stay continuous (a spike), and drops it
+    instead of averaging: a window mean next to a corner is on neither wall.
+    [test_adaptive.py::test_spike_outlier_in_wall, test_steps.py::test_literal_noise_rule_fires_often]
+``corner_score="turn"``
+    ``Dk`` from raw ranges is dominated by range noise at fine resolution (at
+    0.33 deg and 1 cm noise one noisy pair gives ``|Dk|`` near 0.8), and with the
+    printed absolute values a corner seen symmetrically scores zero. The default
+    scores the turn angle between lines fitted to ``slope_window`` points on each
+    side. [test_steps.py::test_dk_misses_symmetric_corner]
+``criterion="bic"``, ``dkth_range="auto"``
+    The smallest SSE always picks the lowest threshold (more cuts never raise a
+    least-squares error). The default charges each segment ``penalty ln(n)``
+    noise variances (BIC), with the noise estimated from the scan. ``(0, 0.052)``
+    is the range of ``|Dk|`` in the paper's own scan; the default tries every
+    distinct cut the candidates allow (at most ``max_evaluations``).
+    [test_steps.py::test_min_sse_picks_lowest_threshold]
+``fit="tls"``
+    ``y = kx + b`` cannot describe a wall parallel to the y axis and its error is
+    measured vertically; total least squares in Hesse form has neither fault.
+    [test_adaptive.py::test_vertical_wall]
+``corner_split="refine"``, ``merge=True``, ``max_residual=0.1``
+    The corner point goes to the side whose fit it suits (among the three beams
+    around the peak), collinear neighbours that a global threshold cut apart are
+    merged by the same criterion, and no point of a segment is farther than
+    ``max_residual`` from its line.
+
+Missing beams: one missing beam is bridged, two or more end a cluster
+(``docs/conventions``); full-circle scans join across the seam.
+
+References
+----------
+.. [1] Y. Li, J. Liu, Z. Zhang, et al., "Adaptive threshold-based feature
+   extraction method for environmental line segments", Electronics 11(11),
+   1759, 2022. doi:10.3390/electronics11111759
+.. [2] G. A. Borges and M.-J. Aldon, "Line extraction in 2D range images for
+   mobile robotics", J. Intelligent and Robotic Systems 40, 267-297, 2004.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from scanlines.extraction import Extraction
+from scanlines.params import Param, auto_or, choice, float_pair, int_at_least, number, optional
+from scanlines.scan import is_full_circle
+from scanlines.steps.assemble import assemble, empty_extraction
+from scanlines.steps.breakpoints import (
+    BREAKPOINT_PARAMS,
+    BreakpointRule,
+    Clusters,
+    cluster,
+    is_break,
+    seam_is_break,
+)
+from scanlines.steps.corners import SCORES, peak_candidates, slope_difference, turn_angle
+from scanlines.steps.denoise import (
+    MIN_NOISE_SIGMA,
+    estimate_noise,
+    isolated_noise,
+    literal_noise,
+    replace_by_window_mean,
+)
+from scanlines.steps.fit import FITS, Moments, fit_runs, point_residuals, run_labels
+from scanlines.steps.merge import merge_collinear, split_by_residual
+from scanlines.steps.points import Sequence, rotate
+from scanlines.steps.select import CRITERIA, sweep, threshold_grid
+
+NAME = "adaptive"
+
+PARAMS: dict[str, Param] = {
+    **BREAKPOINT_PARAMS,
+    "denoise": Param(
+        "isolated", choice("isolated", "paper", "none"), "noise rule: isolated | paper | none"
+    ),
+    "window": Param(10, int_at_least(1), "paper denoising: mean-filter window N (eq. 5)"),
+    "corner_score": Param("turn", choice(*SCORES), "corner score: " + ", ".join(SCORES)),
+    "slope_window": Param(5, int_at_least(1), "turn score: points fitted on each side"),
+    "dkth_range": Param(
+        "auto", auto_or(float_pair()), "threshold range (a, b), or auto: the candidates' scores"
+    ),
+    "dkth_step": Param(0.01, number(low=0.0, low_open=True), "threshold step with a fixed range"),
+    "max_evaluations": Param(100, int_at_least(1), "most thresholds tried"),
+    "criterion": Param("bic", choice(*CRITERIA), "selection: bic | sse (smallest SSE)"),
+    "penalty": Param(4.0, number(low=0.0), "bic: cost of a segment, in ln(n) noise variances"),
+    "noise_sigma": Param(
+        "auto", auto_or(number(low=0.0, low_open=True)), "bic noise (m), or auto: estimated"
+    ),
+    "fit": Param("tls", choice(*FITS), "line fit: tls | paper (5-point OLS, eq. 15-17)"),
+    "corner_split": Param(
+        "refine", choice("refine", "shared"), "corner point: refine (best side) | shared"
+    ),
+    "merge": Param(True, choice(True, False), "merge collinear neighbours"),
+    "max_residual": Param(
+        0.1, optional(number(low=0.0, low_open=True)), "largest point-to-line distance (m)"
+    ),
+    "min_points": Param(3, int_at_least(2), "fewest points of a segment"),
+    "min_length": Param(0.0, number(low=0.0), "shortest segment (m)"),
+    "range_sigma": Param(0.01, number(low=0.0), "range noise for the covariance (m)"),
+}
+
+PRESETS: dict[str, dict[str, Any]] = {
+    "paper": {
+        "breakpoints": "adaptive",
+        "k": 3.0,
+        "noise_k": 0.0,
+        "denoise": "paper",
+        "window": 10,
+        "corner_score": "dk",
+        "dkth_range": (0.0, 0.052),
+        "dkth_step": 0.01,
+        "max_evaluations": 100,
+        "criterion": "sse",
+        "fit": "paper",
+        "corner_split": "shared",
+        "merge": False,
+        "max_residual": None,
+        "min_points": 2,
+        "min_length": 0.0,
+    },
+}
+
+
+def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extraction:
+    """Extract features from the valid returns ``seq`` of one scan."""
+    if len(seq) == 0:
+        return empty_extraction(NAME, params)
+    if params["fit"] == "paper":
+        # y = kx + b depends on the frame: fit in the sensor frame, as the paper does.
+        seq, angle_min = seq.turned(angle_min), 0.0
+    sigma = _noise_sigma(seq, params)
+    rule = BreakpointRule.from_params(dict(params), sigma)
+    seq, outliers = _denoise(seq, rule, params)
+    if len(seq) == 0:
+        return empty_extraction(NAME, params, outliers=outliers)
+    seq, clusters, ring = _clusters(seq, rule, params)
+    shared = params["corner_split"] == "shared"
+    moments = Moments(seq.x, seq.y)
+    scores = _scores(seq, clusters, moments, params)
+    candidates = peak_candidates(scores, clusters)
+    grid = None
+    if params["dkth_range"] != "auto":
+        low, high = params["dkth_range"]
+        grid = threshold_grid(low, high, params["dkth_step"], params["max_evaluations"])
+    n_points = len(seq)
+    cuts = sweep(
+        moments,
+        params["fit"],
+        clusters,
+        candidates,
+        scores[candidates],
+        grid=grid,
+        max_evaluations=params["max_evaluations"],
+        shared=shared,
+    )
+    selection = cuts.choose(params["criterion"], sigma, params["penalty"])
+    if params["noise_sigma"] == "auto" and params["criterion"] == "bic":
+        # Second pass with the noise measured on the lines of the first choice.
+        a, b, _ = _cut(clusters, selection.corners, shared)
+        sigma = _residual_sigma(seq, moments, params["fit"], a, b, sigma)
+        selection = cuts.choose(params["criterion"], sigma, params["penalty"])
+    a, b, owner = _cut(clusters, selection.corners, shared)
+    if not shared:
+        b, a = _refine_splits(moments, params["fit"], a, b, owner)
+    if params["merge"]:
+        a, b, owner = merge_collinear(
+            moments, params["fit"], a, b, owner,
+            sigma=sigma, penalty=params["penalty"], n_points=n_points,
+        )
+    if params["max_residual"] is not None:
+        a, b, owner = split_by_residual(
+            seq.x, seq.y, moments, params["fit"], a, b, owner,
+            max_residual=params["max_residual"], min_points=params["min_points"],
+        )
+    a, b, owner = _drop_small(seq, a, b, owner, params)
+    corners = _corner_beams(seq, moments, params["fit"], a, b, owner, shared, ring)
+    return assemble(
+        seq, a, b,
+        fit=params["fit"], moments=moments, corners=corners, breakpoints=clusters.breakpoints,
+        outliers=outliers, angle_min=angle_min, range_sigma=params["range_sigma"],
+        method=NAME, params=params,
+    )
+
+
+def _noise_sigma(seq: Sequence, params: Mapping[str, Any]) -> float:
+    """The range noise: given, or estimated from the raw returns."""
+    if params["noise_sigma"] != "auto":
+        return params["noise_sigma"]
+    return estimate_noise(seq, np.array([0]), np.array([len(seq) - 1]))
+
+
+def _residual_sigma(
+    seq: Sequence, moments: Moments, fit: str, a: np.ndarray, b: np.ndarray, fallback: float
+) -> float:
+    """Robust noise from the orthogonal residuals of the runs ``[a, b]``."""
+    lines = fit_runs(fit, moments, a, b)
+    position, run = run_labels(a, b, len(seq))
+    residual = np.abs(point_residuals(seq.x, seq.y, lines.rho, lines.alpha, position, run))
+    residual = residual[np.isfinite(residual)]
+    if residual.size < 3:
+        return fallback
+    return max(float(np.median(residual)) / 0.6745, MIN_NOISE_SIGMA)
+
+
+def _denoise(
+    seq: Sequence, rule: BreakpointRule, params: Mapping[str, Any]
+) -> tuple[Sequence, np.ndarray]:
+    """Steps 2-3; returns the cleaned sequence and the beams dropped as noise."""
+    none = np.zeros(0, dtype=np.intp)
+    if params["denoise"] == "none" or len(seq) < 3:
+        return seq, none
+    raw_breaks = is_break(seq, rule)
+    if params["denoise"] == "paper":
+        d = np.hypot(np.diff(seq.x), np.diff(seq.y))
+        noise = literal_noise(d)
+        return replace_by_window_mean(seq, noise, params["window"], raw_breaks), none
+    noise = isolated_noise(seq, rule, raw_breaks)
+    if not noise.any():
+        return seq, none
+    return seq.subset(~noise), seq.index[noise]
+
+
+def _clusters(
+    seq: Sequence, rule: BreakpointRule, params: Mapping[str, Any]
+) -> tuple[Sequence, Clusters, bool]:
+    """Step 4, with the seam of a full circle joined when it is continuous.
+
+    Returns the (possibly rotated) sequence, its clusters and whether the scan
+    is one closed ring (no gap anywhere).
+    """
+    breaks = is_break(seq, rule)
+    if not is_full_circle(seq.n_beams, seq.step) or len(seq) < 3:
+        return seq, cluster(seq, breaks), False
+    if seam_is_break(seq, rule):
+        return seq, cluster(seq, breaks, seam_break=True), False
+    cut = np.flatnonzero(breaks)
+    if cut.size:
+        seq = rotate(seq, int(cut[0]) + 1)
+        return seq, cluster(seq, is_break(seq, rule), seam_break=True), False
+    seq = rotate(seq, _ring_anchor(seq, params))
+    return seq, cluster(seq, np.zeros(len(seq) - 1, dtype=bool)), True
+
+
+def _ring_anchor(seq: Sequence, params: Mapping[str, Any]) -> int:
+    """Position of the strongest corner score of a closed ring, scored cyclically."""
+    n = len(seq)
+    half = n // 2
+    whole = Clusters(np.array([0]), np.array([n - 1]), np.zeros(0, dtype=np.intp))
+    direct = np.abs(_scores(seq, whole, Moments(seq.x, seq.y), params))
+    turned_seq = rotate(seq, half)
+    turned = np.abs(_scores(turned_seq, whole, Moments(turned_seq.x, turned_seq.y), params))
+    p = np.arange(n)
+    shifted = (p - half) % n
+    from_end = np.minimum(p, n - 1 - p)
+    from_end_turned = np.minimum(shifted, n - 1 - shifted)
+    combined = np.where(from_end >= from_end_turned, direct, turned[shifted])
+    return int(np.argmax(combined))
+
+
+def _scores(
+    seq: Sequence, clusters: Clusters, moments: Moments, params: Mapping[str, Any]
+) -> np.ndarray:
+    kind = params["corner_score"]
+    if kind == "turn":
+        return turn_angle(seq, clusters, params["slope_window"], moments)
+    return slope_difference(seq, clusters, signed=kind == "dk_signed")
+
+
+def _cut(
+    clusters: Clusters, corners: np.ndarray, shared: bool
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Runs ``[a, b]`` and their cluster number after cutting the clusters at ``corners``."""
+    a = np.sort(np.r_[clusters.start, corners + (0 if shared else 1)]).astype(np.intp)
+    b = np.sort(np.r_[corners, clusters.end]).astype(np.intp)
+    owner = np.searchsorted(clusters.start, a, side="right") - 1
+    return a, b, owner
+
+
+def _refine_splits(
+    moments: Moments, fit: str, a: np.ndarray, b: np.ndarray, owner: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Move each cut (end ``b[k]`` / start ``a[k+1]``) by one position where that fits better."""
+    b, a = b.copy(), a.copy()
+    k = np.flatnonzero(owner[:-1] == owner[1:])
+    if k.size == 0:
+        return b, a
+    best_cost = np.full(k.size, np.inf)
+    best_shift = np.zeros(k.size, dtype=np.intp)
+    for shift in (0, -1, 1):
+        end = b[k] + shift
+        ok = (end - a[k] >= 1) & (b[k + 1] - end - 1 >= 1)
+        cost = fit_runs(fit, moments, a[k], end).sse + fit_runs(fit, moments, end + 1, b[k + 1]).sse
+        cost = np.where(ok & ~np.isnan(cost), cost, np.inf)
+        better = cost < best_cost - 1e-15
+        best_cost = np.where(better, cost, best_cost)
+        best_shift = np.where(better, shift, best_shift)
+    # Two cuts moving towards each other could leave a run of one point: keep those still.
+    new_b = b.copy()
+    new_b[k] += best_shift
+    new_a = a.copy()
+    new_a[k + 1] = new_b[k] + 1
+    too_short = new_b - new_a < 1
+    if too_short.any():
+        bad = np.flatnonzero(too_short)
+        frozen = np.isin(k, bad) | np.isin(k + 1, bad)
+        new_b[k[frozen]] = b[k[frozen]]
+        new_a[k[frozen] + 1] = a[k[frozen] + 1]
+    return new_b, new_a
+
+
+def _drop_small(
+    seq: Sequence, a: np.ndarray, b: np.ndarray, owner: np.ndarray, params: Mapping[str, Any]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    length = np.hypot(seq.x[b] - seq.x[a], seq.y[b] - seq.y[a])
+    keep = (b - a + 1 >= params["min_points"]) & (length >= params["min_length"])
+    return a[keep], b[keep], owner[keep]
+
+
+def _corner_beams(
+    seq: Sequence,
+    moments: Moments,
+    fit: str,
+    a: np.ndarray,
+    b: np.ndarray,
+    owner: np.ndarray,
+    shared: bool,
+    ring: bool,
+) -> np.ndarray:
+    """Beam of each corner: where two kept segments of one cluster meet.
+
+    A shared corner is its shared point; otherwise the point nearer the two
+    lines' intersection among those between the segments.
+    """
+    if a.size == 0:
+        return np.zeros(0, dtype=np.intp)
+    left = np.flatnonzero((owner[:-1] == owner[1:]) & (a[1:] - b[:-1] <= 2))
+    ends, starts = b[left], a[left + 1]
+    if ring and a.size >= 2 and a[0] == 0 and b[-1] == len(seq) - 1:
+        left = np.r_[left, a.size - 1]
+        ends, starts = np.r_[ends, b[-1]], np.r_[starts, a[0]]
+    if shared:
+        return seq.index[starts]
+    lines = fit_runs(fit, moments, a, b)
+    right = (left + 1) % a.size
+    corner_x, corner_y = _intersections(lines.rho, lines.alpha, left, right)
+    before_dist = np.hypot(seq.x[ends] - corner_x, seq.y[ends] - corner_y)
+    after_dist = np.hypot(seq.x[starts] - corner_x, seq.y[starts] - corner_y)
+    pick = np.where(after_dist < before_dist, starts, ends)
+    return seq.index[pick]
+
+
+def _intersections(
+    rho: np.ndarray, alpha: np.ndarray, i: np.ndarray, j: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Intersection of lines ``i`` and ``j`` (NaN for parallel lines)."""
+    det = np.sin(alpha[j] - alpha[i])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x = (rho[i] * np.sin(alpha[j]) - rho[j] * np.sin(alpha[i])) / det
+        y = (rho[j] * np.cos(alpha[i]) - rho[i] * np.cos(alpha[j])) / det
+    parallel = np.abs(det) < 1e-9
+    return np.where(parallel, np.nan, x), np.where(parallel, np.nan, y)

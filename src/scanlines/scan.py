@@ -1,0 +1,208 @@
+"""The input type: one 2D range scan."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from scanlines.errors import ScanError
+
+__all__ = ["Scan", "is_full_circle"]
+
+FloatArray = np.ndarray
+
+
+def _as_float(name: str, value: Any, *, finite: bool = False, allow_inf: bool = True) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ScanError(f"{name} must be a real number, got {value!r}")
+    out = float(value)
+    if math.isnan(out) or (finite and not math.isfinite(out)) or (not allow_inf and math.isinf(out)):
+        raise ScanError(f"{name} must be finite, got {value!r}")
+    return out
+
+
+def _as_vector(name: str, values: Any, *, length: int | None = None) -> FloatArray:
+    arr = np.asarray(values)
+    if arr.dtype.kind not in "fiu" or arr.dtype == np.bool_:
+        raise ScanError(f"{name} must hold real numbers, got dtype {arr.dtype} ({_preview(values)})")
+    if arr.ndim != 1:
+        raise ScanError(f"{name} must be 1-D, got shape {arr.shape}")
+    if length is not None and arr.shape[0] != length:
+        raise ScanError(f"{name} has {arr.shape[0]} values but ranges has {length}")
+    out = np.array(arr, dtype=np.float64, copy=True)
+    out.setflags(write=False)
+    return out
+
+
+def _preview(values: Any) -> str:
+    text = repr(values)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def is_full_circle(n_beams: int, angle_increment: float) -> bool:
+    """True when ``n_beams`` beams at ``angle_increment`` close the circle.
+
+    The rule is ``N |dtheta| >= 2 pi - |dtheta| / 2``: the gap between the last
+    and first beam is no wider than one and a half increments.
+    """
+    step = abs(angle_increment)
+    return n_beams >= 3 and n_beams * step >= 2.0 * math.pi - step / 2.0
+
+
+class Scan:
+    """One 2D laser scan, immutable.
+
+    Parameters
+    ----------
+    ranges:
+        1-D ranges in metres, one per beam, in beam order. Beams with no return
+        (0, negative, ``inf``, ``NaN``, or outside ``[range_min, range_max]``) are
+        normal data: they are kept and reported as not :attr:`valid`.
+    angle_min:
+        Bearing of beam 0 in radians, in the sensor frame (REP 103: x forward,
+        y left, counter-clockwise positive).
+    angle_increment:
+        Bearing step between beams in radians; negative for clockwise scanners.
+    range_min, range_max:
+        The sensor's valid range interval in metres.
+    timestamp:
+        Seconds, or ``None`` when the log has none. Kept as given.
+    intensities:
+        Optional 1-D array of the same length as ``ranges``.
+    pose:
+        The sensor's ``(x, y, theta)`` in the log's world frame, when known.
+
+    Raises
+    ------
+    ScanError
+        When a field has the wrong shape or type, or the increment is zero or
+        not finite. The message names the field and the bad value.
+
+    Notes
+    -----
+    The arrays are copied on construction and made read-only, so neither the
+    caller's arrays nor the scan can change afterwards.
+    """
+
+    __slots__ = (
+        "_angles",
+        "_points",
+        "_valid",
+        "angle_increment",
+        "angle_min",
+        "intensities",
+        "pose",
+        "range_max",
+        "range_min",
+        "ranges",
+        "timestamp",
+    )
+
+    ranges: FloatArray
+    angle_min: float
+    angle_increment: float
+    range_min: float
+    range_max: float
+    timestamp: float | None
+    intensities: FloatArray | None
+    pose: tuple[float, float, float] | None
+
+    def __init__(
+        self,
+        ranges: Sequence[float] | FloatArray,
+        angle_min: float,
+        angle_increment: float,
+        range_min: float = 0.0,
+        range_max: float = math.inf,
+        timestamp: float | None = None,
+        intensities: Sequence[float] | FloatArray | None = None,
+        pose: Sequence[float] | None = None,
+    ) -> None:
+        set_ = object.__setattr__
+        ranges_arr = _as_vector("ranges", ranges)
+        set_(self, "ranges", ranges_arr)
+        set_(self, "angle_min", _as_float("angle_min", angle_min, finite=True))
+        increment = _as_float("angle_increment", angle_increment, finite=True)
+        if increment == 0.0:
+            raise ScanError("angle_increment must be non-zero, got 0.0")
+        set_(self, "angle_increment", increment)
+        rmin = _as_float("range_min", range_min)
+        rmax = _as_float("range_max", range_max)
+        if rmin > rmax:
+            raise ScanError(f"range_min ({rmin}) is larger than range_max ({rmax})")
+        set_(self, "range_min", rmin)
+        set_(self, "range_max", rmax)
+        stamp = None if timestamp is None else _as_float("timestamp", timestamp)
+        set_(self, "timestamp", stamp)
+        set_(
+            self,
+            "intensities",
+            None
+            if intensities is None
+            else _as_vector("intensities", intensities, length=ranges_arr.shape[0]),
+        )
+        set_(self, "pose", None if pose is None else _as_pose(pose))
+        set_(self, "_angles", None)
+        set_(self, "_points", None)
+        set_(self, "_valid", None)
+
+    def __setattr__(self, name: str, value: object) -> None:
+        raise AttributeError(f"Scan is immutable: cannot set {name!r}")
+
+    def __len__(self) -> int:
+        return int(self.ranges.shape[0])
+
+    def __repr__(self) -> str:
+        return (
+            f"Scan({len(self)} beams, angle_min={self.angle_min:.6g}, "
+            f"angle_increment={self.angle_increment:.6g}, valid={int(self.valid.sum())}, "
+            f"timestamp={self.timestamp!r})"
+        )
+
+    @property
+    def angles(self) -> FloatArray:
+        """Bearing of every beam in radians (read-only)."""
+        if self._angles is None:
+            angles = self.angle_min + self.angle_increment * np.arange(len(self), dtype=np.float64)
+            angles.setflags(write=False)
+            object.__setattr__(self, "_angles", angles)
+        return self._angles  # type: ignore[return-value]
+
+    @property
+    def valid(self) -> np.ndarray:
+        """Boolean mask of beams with a return: finite, > 0 and within the range limits."""
+        if self._valid is None:
+            r = self.ranges
+            with np.errstate(invalid="ignore"):
+                mask = np.isfinite(r) & (r > 0.0) & (r >= self.range_min) & (r <= self.range_max)
+            mask.setflags(write=False)
+            object.__setattr__(self, "_valid", mask)
+        return self._valid  # type: ignore[return-value]
+
+    @property
+    def points(self) -> FloatArray:
+        """N x 2 Cartesian points in the sensor frame; NaN rows for beams with no return."""
+        if self._points is None:
+            r = np.where(self.valid, self.ranges, np.nan)
+            pts = np.column_stack((r * np.cos(self.angles), r * np.sin(self.angles)))
+            pts.setflags(write=False)
+            object.__setattr__(self, "_points", pts)
+        return self._points  # type: ignore[return-value]
+
+    @property
+    def full_circle(self) -> bool:
+        """True when the beams cover the whole circle (see :func:`is_full_circle`)."""
+        return is_full_circle(len(self), self.angle_increment)
+
+
+def _as_pose(pose: Sequence[float]) -> tuple[float, float, float]:
+    try:
+        values = tuple(pose)
+    except TypeError:
+        raise ScanError(f"pose must be (x, y, theta), got {pose!r}") from None
+    if len(values) != 3:
+        raise ScanError(f"pose must be (x, y, theta), got {len(values)} values: {pose!r}")
+    return tuple(_as_float(f"pose[{i}]", v, finite=True) for i, v in enumerate(values))  # type: ignore[return-value]

@@ -1,0 +1,194 @@
+"""The adaptive method on hand-built scans with known answers (issue: foundation)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scenes import beam_of, cast, scan_of, square_room
+
+from scanlines import Extractor, Scan, extract
+
+SIGMA = 0.01  # 1 cm Gaussian range noise
+SEEDS = range(5)
+
+
+def wall_lines(half: float = 2.0) -> list[tuple[float, float]]:
+    """(rho, alpha) of the four walls of a square room seen from its centre."""
+    return [(half, 0.0), (half, math.pi / 2), (half, math.pi), (half, -math.pi / 2)]
+
+
+def angle_error(a: float, b: float) -> float:
+    return abs(math.remainder(a - b, 2 * math.pi))
+
+
+def match_line(segment, truth):
+    return min(truth, key=lambda t: abs(segment.rho - t[0]) + angle_error(segment.alpha, t[1]))
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_square_room_340_degrees(seed):
+    scan = scan_of(square_room(), fov_deg=340, step_deg=1 / 3, sigma=SIGMA, seed=seed, start_deg=-170)
+    result = extract(scan)
+    assert len(result.segments) == 5
+    assert len(result.corners) == 4
+    assert len(result.breakpoints) == 0
+    expected_corners = [beam_of(scan, math.radians(d)) for d in (-135, -45, 45, 135)]
+    assert np.all(np.abs(result.corners - expected_corners) <= 1)
+    for segment in result.segments:
+        rho, alpha = match_line(segment, wall_lines())
+        assert abs(segment.rho - rho) < 0.01
+        assert angle_error(segment.alpha, alpha) < math.radians(0.5)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_square_room_full_circle(seed):
+    scan = scan_of(square_room(), fov_deg=360, step_deg=1 / 3, sigma=SIGMA, seed=seed, full_circle=True)
+    assert scan.full_circle
+    result = extract(scan)
+    assert len(result.segments) == 4
+    assert len(result.corners) == 4
+    assert len(result.breakpoints) == 0
+    # Beam 0 looks along +x at the middle of a wall: the segment across the seam is listed last.
+    assert result.segments[-1].first > result.segments[-1].last
+    for segment in result.segments:
+        rho, alpha = match_line(segment, wall_lines())
+        assert abs(segment.rho - rho) < 0.01
+        assert angle_error(segment.alpha, alpha) < math.radians(0.5)
+
+
+def vertical_wall_scan(sigma: float, seed: int = 0) -> Scan:
+    # A wall at x = 3 m, parallel to the sensor's y axis: vertical in the sensor frame.
+    return scan_of([((3.0, -4.0), (3.0, 4.0))], fov_deg=100, step_deg=1 / 3, sigma=sigma, seed=seed)
+
+
+def test_vertical_wall_default_fits_it():
+    for seed in SEEDS:
+        (segment,) = extract(vertical_wall_scan(SIGMA, seed)).segments
+        assert abs(segment.rho - 3.0) < 0.005
+        assert angle_error(segment.alpha, 0.0) < math.radians(0.2)
+
+
+def test_vertical_wall_paper_fit_has_no_slope():
+    """y = kx + b cannot represent x = 3: without noise the paper fit is undefined (NaN)."""
+    result = extract(vertical_wall_scan(0.0), fit="paper")
+    assert len(result.segments) == 1
+    assert math.isnan(result.segments[0].alpha)
+    assert math.isnan(result.segments[0].rho)
+
+
+def test_vertical_wall_paper_fit_is_worse_with_noise():
+    tls, ols = [], []
+    for seed in range(20):
+        scan = vertical_wall_scan(SIGMA, seed)
+        tls += [angle_error(s.alpha, 0.0) for s in extract(scan).segments]
+        ols += [angle_error(s.alpha, 0.0) for s in extract(scan, fit="paper").segments]
+    assert np.mean(ols) > 3 * np.mean(tls)
+
+
+def door_scene():
+    # Near wall at x = 3 with a door from y = -0.5 to 0.5, a far wall at x = 5 behind it.
+    return [((3.0, -4.0), (3.0, -0.5)), ((3.0, 0.5), (3.0, 4.0)), ((5.0, -4.0), (5.0, 4.0))]
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_door_gap_gives_two_breakpoints(seed):
+    scan = scan_of(door_scene(), fov_deg=100, step_deg=1 / 3, sigma=SIGMA, seed=seed)
+    result = extract(scan)
+    bearings = scan.angles
+    near = np.abs(np.tan(bearings) * 3.0) > 0.5
+    last_near_before_door = int(np.flatnonzero(near & (bearings < 0))[-1])
+    last_far_in_door = int(np.flatnonzero(~near)[-1])
+    assert result.breakpoints.tolist() == [last_near_before_door, last_far_in_door]
+    assert len(result.segments) == 3
+    assert len(result.corners) == 0
+
+
+def test_spike_outlier_in_wall_is_dropped():
+    scan = vertical_wall_scan(SIGMA, 3)
+    ranges = scan.ranges.copy()
+    spike = 150
+    ranges[spike] -= 1.0
+    result = extract(Scan(ranges, scan.angle_min, scan.angle_increment))
+    assert len(result.segments) == 1
+    assert len(result.breakpoints) == 0
+    assert result.outliers.tolist() == [spike]
+
+
+def test_single_dropout_is_bridged_and_two_are_a_gap():
+    scan = vertical_wall_scan(SIGMA, 4)
+    one = scan.ranges.copy()
+    one[150] = np.nan
+    result = extract(Scan(one, scan.angle_min, scan.angle_increment))
+    assert len(result.segments) == 1
+    assert len(result.breakpoints) == 0
+    two = scan.ranges.copy()
+    two[150:152] = np.inf
+    result = extract(Scan(two, scan.angle_min, scan.angle_increment))
+    assert result.breakpoints.tolist() == [149]
+    assert len(result.segments) == 2
+
+
+def test_clockwise_scan_gives_the_same_geometry():
+    ccw = scan_of(square_room(), fov_deg=340, step_deg=1 / 3, sigma=SIGMA, seed=1, start_deg=-170)
+    n = len(ccw)
+    cw = Scan(ccw.ranges[::-1], ccw.angles[-1], -ccw.angle_increment)
+    a, b = extract(ccw), extract(cw)
+    assert len(a.segments) == len(b.segments) == 5
+    assert sorted((n - 1 - b.corners).tolist()) == sorted(a.corners.tolist())
+    lines_a = sorted((round(s.rho, 6), round(s.alpha, 6)) for s in a.segments)
+    lines_b = sorted((round(s.rho, 6), round(s.alpha, 6)) for s in b.segments)
+    np.testing.assert_allclose(lines_a, lines_b, atol=1e-6)
+
+
+@pytest.mark.parametrize("preset", [None, "paper"])
+@pytest.mark.parametrize("valid_count", [0, 1, 2, 3])
+def test_degenerate_scans(preset, valid_count):
+    ranges = np.full(50, np.inf)
+    ranges[10 : 10 + valid_count] = 2.0
+    result = extract(Scan(ranges, -0.5, 0.02), preset=preset)
+    assert len(result.segments) <= (1 if valid_count >= 2 else 0)
+    assert len(result.corners) == 0
+    assert len(result.breakpoints) == 0
+
+
+@pytest.mark.parametrize("preset", [None, "paper"])
+def test_empty_scan(preset):
+    result = extract(Scan([], 0.0, 0.01), preset=preset)
+    assert len(result.segments) == 0
+    assert result.breakpoints.size == 0
+
+
+def test_extractor_is_reusable_and_reports_params():
+    extractor = Extractor(k=4)
+    scan = vertical_wall_scan(SIGMA)
+    first, second = extractor(scan), extractor(scan)
+    assert first.params["k"] == 4.0
+    assert first.params["fit"] == "tls"
+    assert first.lines.tolist() == second.lines.tolist()
+    paper = Extractor(preset="paper")
+    assert paper.params["criterion"] == "sse"
+    assert paper.params["dkth_range"] == (0.0, 0.052)
+
+
+def test_covariance_matches_monte_carlo():
+    """Empirical covariance of (rho, alpha) over noisy draws agrees with the reported one."""
+    wall = [((2.0, -1.0), (3.5, 2.5))]
+    step = math.radians(0.5)
+    angles = -math.radians(30) + step * np.arange(121)
+    clean = cast(wall, angles)
+    rng = np.random.default_rng(7)
+    estimates, reported = [], []
+    for _ in range(400):
+        scan = Scan(clean + rng.normal(0, SIGMA, clean.size), angles[0], step)
+        result = extract(scan, range_sigma=SIGMA)
+        segment = result.segments[int(np.argmax(result.n_points))]
+        estimates.append((segment.rho, segment.alpha))
+        reported.append(segment.covariance)
+    empirical = np.cov(np.asarray(estimates).T)
+    model = np.mean(reported, axis=0)
+    assert np.all(np.abs(np.diag(empirical) / np.diag(model) - 1) < 0.2)
+    correlation_empirical = empirical[0, 1] / math.sqrt(empirical[0, 0] * empirical[1, 1])
+    correlation_model = model[0, 1] / math.sqrt(model[0, 0] * model[1, 1])
+    assert abs(correlation_empirical - correlation_model) < 0.1
