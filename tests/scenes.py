@@ -9,7 +9,9 @@ import numpy as np
 from scanlines import Scan
 
 
-def cast(walls: list[tuple[tuple[float, float], tuple[float, float]]], angles: np.ndarray) -> np.ndarray:
+def cast(
+    walls: list[tuple[tuple[float, float], tuple[float, float]]], angles: np.ndarray
+) -> np.ndarray:
     """Range along each bearing to the nearest wall segment (inf where none is hit)."""
     walls_arr = np.asarray(walls, dtype=float)  # (W, 2, 2)
     p, q = walls_arr[:, 0], walls_arr[:, 1]
@@ -39,7 +41,7 @@ def scan_of(
     full_circle: bool = False,
 ) -> Scan:
     step = math.radians(step_deg)
-    n = int(round(fov_deg / step_deg)) + (0 if full_circle else 1)
+    n = round(fov_deg / step_deg) + (0 if full_circle else 1)
     angle_min = math.radians(-fov_deg / 2 if start_deg is None else start_deg)
     angles = angle_min + step * np.arange(n)
     ranges = cast(walls, angles)

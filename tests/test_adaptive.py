@@ -6,9 +6,9 @@ import math
 
 import numpy as np
 import pytest
-from scenes import beam_of, cast, scan_of, square_room
 
 from scanlines import Extractor, Scan, extract
+from scenes import beam_of, cast, scan_of, square_room
 
 SIGMA = 0.01  # 1 cm Gaussian range noise
 SEEDS = range(5)
@@ -29,7 +29,9 @@ def match_line(segment, truth):
 
 @pytest.mark.parametrize("seed", SEEDS)
 def test_square_room_340_degrees(seed):
-    scan = scan_of(square_room(), fov_deg=340, step_deg=1 / 3, sigma=SIGMA, seed=seed, start_deg=-170)
+    scan = scan_of(
+        square_room(), fov_deg=340, step_deg=1 / 3, sigma=SIGMA, seed=seed, start_deg=-170
+    )
     result = extract(scan)
     assert len(result.segments) == 5
     assert len(result.corners) == 4
@@ -44,7 +46,9 @@ def test_square_room_340_degrees(seed):
 
 @pytest.mark.parametrize("seed", SEEDS)
 def test_square_room_full_circle(seed):
-    scan = scan_of(square_room(), fov_deg=360, step_deg=1 / 3, sigma=SIGMA, seed=seed, full_circle=True)
+    scan = scan_of(
+        square_room(), fov_deg=360, step_deg=1 / 3, sigma=SIGMA, seed=seed, full_circle=True
+    )
     assert scan.full_circle
     result = extract(scan)
     assert len(result.segments) == 4

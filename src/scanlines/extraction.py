@@ -116,7 +116,9 @@ class Extraction:
         self.corners = _frozen(corners, np.intp)
         self.outliers = _frozen(outliers, np.intp)
         self.method = method
-        self.params = params if isinstance(params, MappingProxyType) else MappingProxyType(dict(params))
+        self.params = (
+            params if isinstance(params, MappingProxyType) else MappingProxyType(dict(params))
+        )
         self._segments: tuple[Segment, ...] | None = None
 
     @property

@@ -28,9 +28,7 @@ def _module(method: str):
     try:
         return REGISTRY[method]
     except (KeyError, TypeError):
-        raise ParameterError(
-            f"unknown method {method!r}; valid: {', '.join(methods())}"
-        ) from None
+        raise ParameterError(f"unknown method {method!r}; valid: {', '.join(methods())}") from None
 
 
 def method_info(method: str) -> dict[str, Any]:
@@ -101,9 +99,7 @@ class Extractor:
         stack = np.asarray(ranges)
         if stack.ndim != 2:
             raise ScanError(f"ranges must be 2-D (scans, beams), got shape {stack.shape}")
-        return [
-            self(Scan(row, angle_min, angle_increment, range_min, range_max)) for row in stack
-        ]
+        return [self(Scan(row, angle_min, angle_increment, range_min, range_max)) for row in stack]
 
     def _bearings(self, n_beams: int, increment: float) -> tuple[np.ndarray, np.ndarray]:
         key = (n_beams, increment)

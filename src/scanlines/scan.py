@@ -19,7 +19,11 @@ def _as_float(name: str, value: Any, *, finite: bool = False, allow_inf: bool = 
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise ScanError(f"{name} must be a real number, got {value!r}")
     out = float(value)
-    if math.isnan(out) or (finite and not math.isfinite(out)) or (not allow_inf and math.isinf(out)):
+    if (
+        math.isnan(out)
+        or (finite and not math.isfinite(out))
+        or (not allow_inf and math.isinf(out))
+    ):
         raise ScanError(f"{name} must be finite, got {value!r}")
     return out
 
@@ -27,7 +31,9 @@ def _as_float(name: str, value: Any, *, finite: bool = False, allow_inf: bool = 
 def _as_vector(name: str, values: Any, *, length: int | None = None) -> FloatArray:
     arr = np.asarray(values)
     if arr.dtype.kind not in "fiu" or arr.dtype == np.bool_:
-        raise ScanError(f"{name} must hold real numbers, got dtype {arr.dtype} ({_preview(values)})")
+        raise ScanError(
+            f"{name} must hold real numbers, got dtype {arr.dtype} ({_preview(values)})"
+        )
     if arr.ndim != 1:
         raise ScanError(f"{name} must be 1-D, got shape {arr.shape}")
     if length is not None and arr.shape[0] != length:

@@ -28,24 +28,25 @@ in brackets and in ``docs/``):
     noisy wall. The default flags only a point that the breakpoint test cuts from
     both neighbours while the neighbours stay continuous (a spike), and drops it
     instead of averaging: a window mean next to a corner is on neither wall.
-    [test_adaptive.py::test_spike_outlier_in_wall, test_steps.py::test_literal_noise_rule_fires_often]
+    [test_adaptive.py::test_spike_outlier_in_wall_is_dropped,
+    test_steps.py::test_literal_noise_rule_fires_on_ordinary_wall_points]
 ``corner_score="turn"``
     ``Dk`` from raw ranges is dominated by range noise at fine resolution (at
     0.33 deg and 1 cm noise one noisy pair gives ``|Dk|`` near 0.8), and with the
     printed absolute values a corner seen symmetrically scores zero. The default
     scores the turn angle between lines fitted to ``slope_window`` points on each
-    side. [test_steps.py::test_dk_misses_symmetric_corner]
+    side. [test_steps.py::test_dk_as_printed_misses_a_symmetric_corner]
 ``criterion="bic"``, ``dkth_range="auto"``
     The smallest SSE always picks the lowest threshold (more cuts never raise a
     least-squares error). The default charges each segment ``penalty ln(n)``
     noise variances (BIC), with the noise estimated from the scan. ``(0, 0.052)``
     is the range of ``|Dk|`` in the paper's own scan; the default tries every
     distinct cut the candidates allow (at most ``max_evaluations``).
-    [test_steps.py::test_min_sse_picks_lowest_threshold]
+    [test_steps.py::test_min_sse_picks_the_lowest_threshold]
 ``fit="tls"``
     ``y = kx + b`` cannot describe a wall parallel to the y axis and its error is
     measured vertically; total least squares in Hesse form has neither fault.
-    [test_adaptive.py::test_vertical_wall]
+    [test_adaptive.py::test_vertical_wall_paper_fit_has_no_slope]
 ``corner_split="refine"``, ``merge=True``, ``max_residual=0.1``
     The corner point goes to the side whose fit it suits (among the three beams
     around the peak), collinear neighbours that a global threshold cut apart are
@@ -194,21 +195,42 @@ def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extractio
         b, a = _refine_splits(moments, params["fit"], a, b, owner)
     if params["merge"]:
         a, b, owner = merge_collinear(
-            moments, params["fit"], a, b, owner,
-            sigma=sigma, penalty=params["penalty"], n_points=n_points,
+            moments,
+            params["fit"],
+            a,
+            b,
+            owner,
+            sigma=sigma,
+            penalty=params["penalty"],
+            n_points=n_points,
         )
     if params["max_residual"] is not None:
         a, b, owner = split_by_residual(
-            seq.x, seq.y, moments, params["fit"], a, b, owner,
-            max_residual=params["max_residual"], min_points=params["min_points"],
+            seq.x,
+            seq.y,
+            moments,
+            params["fit"],
+            a,
+            b,
+            owner,
+            max_residual=params["max_residual"],
+            min_points=params["min_points"],
         )
     a, b, owner = _drop_small(seq, a, b, owner, params)
     corners = _corner_beams(seq, moments, params["fit"], a, b, owner, shared, ring)
     return assemble(
-        seq, a, b,
-        fit=params["fit"], moments=moments, corners=corners, breakpoints=clusters.breakpoints,
-        outliers=outliers, angle_min=angle_min, range_sigma=params["range_sigma"],
-        method=NAME, params=params,
+        seq,
+        a,
+        b,
+        fit=params["fit"],
+        moments=moments,
+        corners=corners,
+        breakpoints=clusters.breakpoints,
+        outliers=outliers,
+        angle_min=angle_min,
+        range_sigma=params["range_sigma"],
+        method=NAME,
+        params=params,
     )
 
 

@@ -53,12 +53,13 @@ def slope_difference(seq: Sequence, clusters: Clusters, *, signed: bool = False)
     if n < 3:
         return score
     r = seq.r
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(all="ignore"):
         slope = np.diff(r) / (r[:-1] * seq.step * seq.gap)  # tan(phi_i) between i and i+1 (eq. 12)
     if not signed:
         slope = np.abs(slope)
     inside = _interior(clusters, n)
-    score[1:-1] = slope[:-1] - slope[1:]
+    with np.errstate(all="ignore"):
+        score[1:-1] = slope[:-1] - slope[1:]
     score[~inside] = 0.0
     return np.nan_to_num(score, nan=0.0, posinf=0.0, neginf=0.0)
 

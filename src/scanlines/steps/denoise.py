@@ -111,7 +111,6 @@ def replace_by_window_mean(
     return seq.with_points(x, y)
 
 
-
 MIN_NOISE_SIGMA = 1e-3
 """Floor (metres) of the estimated noise: ranges logged to 1 mm or 1 cm carry at
 least this much quantisation noise, and a noise-free simulation must not make
@@ -121,23 +120,22 @@ the criterion divide by zero."""
 def estimate_noise(seq: Sequence, cluster_start: np.ndarray, cluster_end: np.ndarray) -> float:
     """Robust range-noise estimate from the scan itself, in metres.
 
-    Each interior point's distance to the chord of its two neighbours is, on a
-    straight surface, noise with standard deviation ``sigma sqrt(3/2)``; the
-    median absolute value (robust to the few corners and edges) gives ``sigma``.
+    On a smooth surface the second difference of three consecutive ranges,
+    ``r_{i+1} - 2 r_i + r_{i-1}``, is noise with standard deviation ``sigma sqrt(6)``
+    (its geometric part, ``r'' dtheta^2``, is far smaller at the resolutions of
+    real scanners); the median absolute value, robust to the few corners and
+    edges, gives ``sigma``. Triples across a missing beam or a cluster end are
+    left out.
     """
     n = len(seq)
     interior = np.ones(n, dtype=bool)
     interior[cluster_start] = False
     interior[cluster_end] = False
+    if n >= 2:
+        interior[1:-1] &= (seq.gap[:-1] == 1) & (seq.gap[1:] == 1)
     i = np.flatnonzero(interior)
     if i.size < 3:
         return MIN_NOISE_SIGMA
-    cx, cy = seq.x[i + 1] - seq.x[i - 1], seq.y[i + 1] - seq.y[i - 1]
-    px, py = seq.x[i] - seq.x[i - 1], seq.y[i] - seq.y[i - 1]
-    chord = np.hypot(cx, cy)
-    ok = chord > 0.0
-    distance = np.abs(cx[ok] * py[ok] - cy[ok] * px[ok]) / chord[ok]
-    if distance.size == 0:
-        return MIN_NOISE_SIGMA
-    sigma = float(np.median(distance)) / (0.6745 * math.sqrt(1.5))
+    second = np.abs(seq.r[i + 1] - 2.0 * seq.r[i] + seq.r[i - 1])
+    sigma = float(np.median(second)) / (0.6745 * math.sqrt(6.0))
     return max(sigma, MIN_NOISE_SIGMA)

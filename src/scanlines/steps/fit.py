@@ -137,8 +137,9 @@ def paper_lines(moments: Moments, a: np.ndarray, b: np.ndarray) -> Lines:
         intercept = np.where(vertical, np.nan, (sum_xx * sum_y - sum_x * sum_xy) / denominator)
     n, sx, sy, sxx, sxy, syy = moments.sums(a, b)
     # Intercept in relative coordinates is the same line; shift back to absolute below.
-    sse = syy - 2 * k * sxy - 2 * intercept * sy + k * k * sxx + 2 * k * intercept * sx
-    sse = sse + n * intercept * intercept
+    with np.errstate(invalid="ignore", over="ignore"):
+        sse = syy - 2 * k * sxy - 2 * intercept * sy + k * k * sxx + 2 * k * intercept * sx
+        sse = sse + n * intercept * intercept
     sse = np.where(vertical, np.nan, np.maximum(sse, 0.0))
     ox, oy = moments.origin
     # y - oy = k (x - ox) + b  <=>  -k x + y = b + oy - k ox
@@ -165,7 +166,11 @@ def run_labels(a: np.ndarray, b: np.ndarray, n: int) -> tuple[np.ndarray, np.nda
 
 
 def point_residuals(
-    x: np.ndarray, y: np.ndarray, rho: np.ndarray, alpha: np.ndarray, position: np.ndarray,
+    x: np.ndarray,
+    y: np.ndarray,
+    rho: np.ndarray,
+    alpha: np.ndarray,
+    position: np.ndarray,
     run: np.ndarray,
 ) -> np.ndarray:
     """Signed orthogonal distance of each labelled point to its run's line."""
@@ -194,18 +199,23 @@ def line_covariances(
     runs = rho.shape[0]
     if runs == 0:
         return np.zeros((0, 2, 2))
+    # Degenerate runs (two points, a paper fit without slope) give inf/NaN, not errors.
+    with np.errstate(all="ignore"):
+        return _covariances(x, y, r, rho, alpha, position, run, range_sigma)
+
+
+def _covariances(x, y, r, rho, alpha, position, run, range_sigma):
+    runs = rho.shape[0]
     a = alpha[run]
     along = -x[position] * np.sin(a) + y[position] * np.cos(a)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        var = (range_sigma * rho[run] / r[position]) ** 2
+    var = (range_sigma * rho[run] / r[position]) ** 2
     count = np.bincount(run, minlength=runs).astype(np.float64)
     t0 = np.bincount(run, along, minlength=runs) / np.maximum(count, 1.0)
     s = along - t0[run]
     s2 = np.bincount(run, s * s, minlength=runs)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        var_alpha = np.bincount(run, s * s * var, minlength=runs) / (s2 * s2)
-        var_mean = np.bincount(run, var, minlength=runs) / (count * count)
-        cov_mean_alpha = -np.bincount(run, s * var, minlength=runs) / (count * s2)
+    var_alpha = np.bincount(run, s * s * var, minlength=runs) / (s2 * s2)
+    var_mean = np.bincount(run, var, minlength=runs) / (count * count)
+    cov_mean_alpha = -np.bincount(run, s * var, minlength=runs) / (count * s2)
     var_rho = var_mean + t0 * t0 * var_alpha + 2.0 * t0 * cov_mean_alpha
     cov_rho_alpha = cov_mean_alpha + t0 * var_alpha
     out = np.empty((runs, 2, 2))

@@ -58,8 +58,13 @@ class Sequence:
         """The same returns in a frame turned by ``-angle`` (points rotated by ``angle``)."""
         c, s = np.cos(angle), np.sin(angle)
         return Sequence(
-            self.index, self.r, c * self.x - s * self.y, s * self.x + c * self.y, self.gap,
-            self.step, self.n_beams,
+            self.index,
+            self.r,
+            c * self.x - s * self.y,
+            s * self.x + c * self.y,
+            self.gap,
+            self.step,
+            self.n_beams,
         )
 
     def subset(self, keep: np.ndarray) -> Sequence:
@@ -113,6 +118,11 @@ def rotate(seq: Sequence, start: int) -> Sequence:
     order = np.r_[start : len(seq), 0:start]
     index = seq.index[order]
     return Sequence(
-        index, seq.r[order], seq.x[order], seq.y[order], _gaps(index, seq.n_beams), seq.step,
+        index,
+        seq.r[order],
+        seq.x[order],
+        seq.y[order],
+        _gaps(index, seq.n_beams),
+        seq.step,
         seq.n_beams,
     )

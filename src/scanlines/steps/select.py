@@ -55,7 +55,7 @@ class Selection:
 
 def threshold_grid(low: float, high: float, step: float, max_evaluations: int) -> np.ndarray:
     """``low, low + step, ...`` up to ``high``, at most ``max_evaluations`` values."""
-    count = min(int(math.floor((high - low) / step + 1e-9)) + 1, max_evaluations)
+    count = min(math.floor((high - low) / step + 1e-9) + 1, max_evaluations)
     return low + step * np.arange(count)
 
 
@@ -89,7 +89,11 @@ def _insert_in_rank_order(
 
 
 def criterion_values(
-    criterion: str, sse: np.ndarray, segments: np.ndarray, n_points: int, sigma: float,
+    criterion: str,
+    sse: np.ndarray,
+    segments: np.ndarray,
+    n_points: int,
+    sigma: float,
     penalty: float,
 ) -> np.ndarray:
     """The criterion for each evaluated segmentation (smaller is better)."""

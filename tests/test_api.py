@@ -1,0 +1,105 @@
+"""The public API: names, registry, parameter validation, result types."""
+
+from __future__ import annotations
+
+import importlib
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import scanlines
+from scanlines import Extraction, Extractor, ParameterError, extract
+from scenes import scan_of, square_room
+
+
+def test_public_names():
+    for name in ("Scan", "Extractor", "extract", "Extraction", "Segment", "ScanError", "methods"):
+        assert hasattr(scanlines, name)
+    assert "adaptive" in scanlines.methods()
+    assert all(isinstance(name, str) for name in scanlines.methods())
+
+
+def test_import_needs_only_numpy():
+    code = (
+        "import sys, scanlines; "
+        "heavy = ('matplotlib', 'typer', 'rich', 'rosbags', 'scipy'); "
+        "heavy = [m for m in heavy if m in sys.modules]; "
+        "print(','.join(heavy))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == ""
+
+
+def test_unknown_method_lists_the_valid_ones():
+    with pytest.raises(ParameterError, match="adaptive"):
+        Extractor(method="nope")
+
+
+def test_unknown_preset_lists_the_valid_ones():
+    with pytest.raises(ParameterError, match="paper"):
+        Extractor(preset="fast")
+
+
+def test_unknown_parameter_lists_the_valid_ones():
+    with pytest.raises(ParameterError, match="window") as info:
+        Extractor(windw=5)
+    assert "windw" in str(info.value)
+
+
+@pytest.mark.parametrize(
+    ("name", "value"),
+    [
+        ("k", -1.0),
+        ("k", "abc"),
+        ("window", 0),
+        ("window", 2.5),
+        ("fit", "ols"),
+        ("dkth_range", (0.5, 0.1)),
+    ],
+)
+def test_bad_parameter_values_are_refused(name, value):
+    with pytest.raises(ParameterError, match=name):
+        Extractor(**{name: value})
+
+
+def test_parameters_from_strings_as_the_cli_passes_them():
+    extractor = Extractor(
+        k="2.5", window="8", merge="false", dkth_range="0,0.1", max_residual="none"
+    )
+    assert extractor.params["k"] == 2.5
+    assert extractor.params["window"] == 8
+    assert extractor.params["merge"] is False
+    assert extractor.params["dkth_range"] == (0.0, 0.1)
+    assert extractor.params["max_residual"] is None
+
+
+def test_extraction_is_cheap_arrays_with_segment_views():
+    scan = scan_of(square_room(), fov_deg=340, step_deg=1 / 3, sigma=0.01, seed=0, start_deg=-170)
+    result = extract(scan)
+    assert isinstance(result, Extraction)
+    assert result.lines.shape == (5, 7)
+    segment = result.segments[1]
+    assert segment.first == result.first[1]
+    assert segment.length == pytest.approx(np.hypot(*(np.subtract(segment.end, segment.start))))
+    assert segment.covariance.shape == (2, 2)
+    assert result.breakpoints.dtype.kind == "i"
+    data = json.loads(json.dumps(result.to_dict()))
+    assert len(data["segments"]) == 5
+    assert data["params"]["fit"] == "tls"
+    with pytest.raises(ValueError, match="read-only"):
+        result.first[0] = 3
+
+
+def test_method_info_documents_every_parameter():
+    info = scanlines.method_info("adaptive")
+    assert set(info["params"]) == set(Extractor().params)
+    assert all(doc for _, doc in info["params"].values())
+    assert "paper" in info["presets"]
+
+
+def test_modules_import_without_cycles():
+    for name in ("scanlines.steps.select", "scanlines.methods.adaptive", "scanlines.extractor"):
+        importlib.import_module(name)

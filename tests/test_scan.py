@@ -1,0 +1,74 @@
+"""The Scan type: validation, immutability, derived arrays."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from scanlines import Scan, ScanError
+
+
+def test_valid_mask_treats_no_return_as_data():
+    ranges = [1.0, 0.0, -1.0, math.inf, math.nan, 0.05, 35.0, 2.0]
+    scan = Scan(ranges, 0.0, 0.1, range_min=0.1, range_max=30.0)
+    assert scan.valid.tolist() == [True, False, False, False, False, False, False, True]
+    assert np.isnan(scan.points[1]).all()
+    assert scan.points[0].tolist() == [1.0, 0.0]
+
+
+def test_points_follow_rep_103():
+    scan = Scan([1.0, 1.0], -math.pi / 2, math.pi / 2)
+    np.testing.assert_allclose(scan.points, [[0.0, -1.0], [1.0, 0.0]], atol=1e-12)
+    np.testing.assert_allclose(scan.angles, [-math.pi / 2, 0.0])
+
+
+def test_input_is_copied_and_scan_is_immutable():
+    ranges = np.array([1.0, 2.0, 3.0])
+    scan = Scan(ranges, 0.0, 0.1)
+    ranges[0] = 99.0
+    assert scan.ranges[0] == 1.0
+    with pytest.raises(ValueError, match="read-only"):
+        scan.ranges[0] = 5.0
+    with pytest.raises(AttributeError):
+        scan.angle_min = 1.0
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "field"),
+    [
+        ({"ranges": [[1.0, 2.0]]}, "ranges"),
+        ({"ranges": ["a", "b"]}, "ranges"),
+        ({"ranges": [1.0, 2.0], "angle_increment": 0.0}, "angle_increment"),
+        ({"ranges": [1.0, 2.0], "angle_increment": math.nan}, "angle_increment"),
+        ({"ranges": [1.0, 2.0], "angle_increment": math.inf}, "angle_increment"),
+        ({"ranges": [1.0, 2.0], "angle_min": "x"}, "angle_min"),
+        ({"ranges": [1.0, 2.0], "intensities": [1.0]}, "intensities"),
+        ({"ranges": [1.0, 2.0], "pose": (1.0, 2.0)}, "pose"),
+        ({"ranges": [1.0, 2.0], "range_min": 5.0, "range_max": 1.0}, "range_min"),
+        ({"ranges": [1.0, 2.0], "timestamp": "noon"}, "timestamp"),
+    ],
+)
+def test_invalid_construction_names_the_field(kwargs, field):
+    arguments = {"angle_min": 0.0, "angle_increment": 0.1, **kwargs}
+    with pytest.raises(ScanError, match=field) as info:
+        Scan(**arguments)
+    assert isinstance(info.value, ValueError)
+
+
+def test_full_circle_rule():
+    step = 2 * math.pi / 360
+    assert Scan(np.ones(360), 0.0, step).full_circle
+    # The seam gap may be up to one and a half increments.
+    assert Scan(np.ones(360), 0.0, 2 * math.pi / 360.4).full_circle
+    assert not Scan(np.ones(359), 0.0, step).full_circle
+    assert Scan(np.ones(360), 0.0, -step).full_circle
+
+
+def test_optional_fields_are_kept():
+    scan = Scan([1.0, 2.0], 0.0, 0.1, timestamp=12.5, intensities=[3, 4], pose=(1, 2, 0.5))
+    assert scan.timestamp == 12.5
+    assert scan.intensities.tolist() == [3.0, 4.0]
+    assert scan.pose == (1.0, 2.0, 0.5)
+    assert len(scan) == 2
