@@ -196,3 +196,13 @@ def test_covariance_matches_monte_carlo():
     correlation_empirical = empirical[0, 1] / math.sqrt(empirical[0, 0] * empirical[1, 1])
     correlation_model = model[0, 1] / math.sqrt(model[0, 0] * model[1, 1])
     assert abs(correlation_empirical - correlation_model) < 0.1
+
+
+def test_grazing_wall_stays_one_cluster():
+    """A corridor wall 1 m to the side, seen out to 75 deg incidence and beyond."""
+    scan = scan_of([((0.3, 1.0), (8.0, 1.0))], fov_deg=180, step_deg=1.0, sigma=SIGMA, seed=1)
+    default = extract(scan)
+    assert len(default.breakpoints) == 0
+    assert len(default.segments) == 1
+    literal = extract(scan, breakpoints="adaptive")  # k = 3: cut beyond 70.5 deg incidence
+    assert len(literal.breakpoints) > 0

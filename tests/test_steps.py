@@ -50,7 +50,7 @@ def test_adaptive_threshold_is_k_rho_dtheta():
 
 
 def test_abd_threshold_matches_borges_aldon():
-    rule = BreakpointRule(name="abd", abd_lambda=math.radians(10), abd_sigma=0.01)
+    rule = BreakpointRule(name="abd", abd_lambda=math.radians(10), noise_margin=0.03)
     dphi = math.radians(1)
     expected = 2.0 * math.sin(dphi) / math.sin(math.radians(10) - dphi) + 0.03
     assert thresholds(rule, np.array([2.0]), np.array([5.0]), np.array([1]), dphi)[

@@ -10,7 +10,12 @@ and still be one cluster (each compares the Cartesian neighbour distance
                 crosses ``k rho dtheta``: at 0.33 deg, 2 m and 1 cm noise, ``D`` is
                 3.5 cm and about one pair in fifty of a plain wall is cut.
 ``"abd"``       the Adaptive Breakpoint Detector [2]_:
-                ``D = rho_i sin(dtheta) / sin(lambda - dtheta) + 3 sigma_r``.
+                ``D = rho_i sin(dtheta) / sin(lambda - dtheta) + noise_k sqrt(2) sigma``:
+                the spacing of returns on a surface seen at the largest
+                incidence ``90 deg - lambda`` (the paper's ``k rho dtheta`` is the
+                spacing on a surface facing the sensor, times ``k``; ``k = 3``
+                tolerates incidence up to 70.5 deg, ``lambda = 10 deg`` up to 80).
+                Borges and Aldon add ``3 sigma_r``: ``noise_k = 2.12``.
 ``"pdbs"``      point-distance-based segmentation [3]_:
                 ``D = C0 + C1 min(rho_i, rho_{i+1})``, ``C1 = sqrt(2 (1 - cos dtheta))``.
 ``"fixed"``     a constant jump distance.
@@ -59,15 +64,14 @@ MAX_BRIDGED_GAP = 2
 RULES = ("adaptive", "abd", "pdbs", "fixed")
 
 BREAKPOINT_PARAMS: dict[str, Param] = {
-    "breakpoints": Param("adaptive", choice(*RULES), "clustering rule: " + ", ".join(RULES)),
+    "breakpoints": Param("abd", choice(*RULES), "clustering rule: " + ", ".join(RULES)),
     "k": Param(3.0, number(low=0.0, low_open=True), "adaptive rule: D = k rho dtheta (eq. 7)"),
     "noise_k": Param(
-        3.0, number(low=0.0), "adaptive rule: noise margin, in standard deviations of d"
+        3.0, number(low=0.0), "adaptive/abd: noise margin in sigmas of a range difference"
     ),
     "abd_lambda": Param(
         10.0, number(low=0.0, high=90.0, low_open=True), "ABD: worst incidence angle, degrees"
     ),
-    "abd_sigma": Param(0.01, number(low=0.0), "ABD: range noise sigma_r in metres"),
     "pdbs_c0": Param(0.1, number(low=0.0), "PDBS: constant C0 in metres"),
     "jump_distance": Param(
         0.3, number(low=0.0, low_open=True), "fixed rule: largest neighbour distance, metres"
@@ -83,7 +87,6 @@ class BreakpointRule:
     k: float = 3.0
     noise_margin: float = 0.0
     abd_lambda: float = math.radians(10.0)
-    abd_sigma: float = 0.01
     pdbs_c0: float = 0.1
     jump_distance: float = 0.3
 
@@ -95,7 +98,6 @@ class BreakpointRule:
             k=params["k"],
             noise_margin=params.get("noise_k", 0.0) * math.sqrt(2.0) * sigma,
             abd_lambda=math.radians(params["abd_lambda"]),
-            abd_sigma=params["abd_sigma"],
             pdbs_c0=params["pdbs_c0"],
             jump_distance=params["jump_distance"],
         )
@@ -133,7 +135,7 @@ def thresholds(
         margin = rule.abd_lambda - dphi
         with np.errstate(divide="ignore", invalid="ignore"):
             reach = np.where(margin > 0.0, r_from * np.sin(dphi) / np.sin(margin), np.inf)
-        return reach + 3.0 * rule.abd_sigma
+        return reach + rule.noise_margin
     if rule.name == "pdbs":
         return rule.pdbs_c0 + np.sqrt(2.0 * (1.0 - np.cos(dphi))) * np.minimum(r_from, r_to)
     return np.full(np.shape(r_from), rule.jump_distance)
