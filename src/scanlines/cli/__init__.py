@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import typer
 
-from scanlines.cli import extract
+from scanlines.cli import extract, logs
 
 app = typer.Typer(
     name="scanlines",
@@ -26,6 +26,7 @@ def root() -> None:
 
 
 extract.register(app)
+logs.register(app)
 
 
 def main() -> None:

@@ -1,0 +1,321 @@
+"""Commands on whole logs: ``info``, ``run``, ``plot`` and ``demo``."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from scanlines.cli.common import guarded, parse_params
+
+LogArgument = Annotated[Path, typer.Argument(help="CARMEN log, ROS bag, .dat, .csv or .npz.")]
+FovOption = Annotated[
+    float | None, typer.Option("--fov", help="CARMEN FLASER: field of view, degrees.")
+]
+ConventionOption = Annotated[
+    str | None,
+    typer.Option("--angle-convention", help="CARMEN FLASER: 'step' or 'linspace' bearings."),
+]
+TopicOption = Annotated[str | None, typer.Option(help="ROS bag: the LaserScan topic.")]
+AngleMinOption = Annotated[
+    float | None, typer.Option("--angle-min", help="CSV: first bearing, degrees.")
+]
+AngleStepOption = Annotated[
+    float | None, typer.Option("--angle-increment", help="CSV: bearing step, degrees.")
+]
+MethodOption = Annotated[str, typer.Option(help="Extraction method.")]
+PresetOption = Annotated[str | None, typer.Option(help="Named parameter set, e.g. paper.")]
+ParamOption = Annotated[list[str] | None, typer.Option("--param", help="NAME=VALUE, repeatable.")]
+ScansOption = Annotated[
+    str | None, typer.Option("--scans", help="Python slice of scan indices, e.g. 100:200.")
+]
+
+
+def register(app: typer.Typer) -> None:
+    app.command("info", help="Describe a log: format, scans, beams, ranges, time span.")(
+        guarded(info_command)
+    )
+    app.command("run", help="Extract features from every scan of a log.")(guarded(run_command))
+    app.command("plot", help="Draw one scan, or a grid of scans, with their features.")(
+        guarded(plot_command)
+    )
+    app.command("demo", help="Run the default method on the shipped Intel excerpt.")(
+        guarded(demo_command)
+    )
+
+
+def reader_options(
+    fov: float | None = None,
+    angle_convention: str | None = None,
+    topic: str | None = None,
+    angle_min: float | None = None,
+    angle_increment: float | None = None,
+    on_error: str | None = None,
+) -> dict[str, Any]:
+    """Only the options the user gave (each reader refuses the ones it does not take)."""
+    options: dict[str, Any] = {
+        "fov": fov,
+        "angle_convention": angle_convention,
+        "topic": topic,
+        "angle_min": None if angle_min is None else math.radians(angle_min),
+        "angle_increment": None if angle_increment is None else math.radians(angle_increment),
+        "on_error": on_error,
+    }
+    return {k: v for k, v in options.items() if v is not None}
+
+
+def info_command(
+    log: LogArgument,
+    fov: FovOption = None,
+    angle_convention: ConventionOption = None,
+    topic: TopicOption = None,
+    angle_min: AngleMinOption = None,
+    angle_increment: AngleStepOption = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print JSON.")] = False,
+) -> None:
+    import json
+
+    from scanlines.io import open_log
+    from scanlines.runner import describe_log
+
+    options = reader_options(fov, angle_convention, topic, angle_min, angle_increment)
+    with open_log(log, **options) as reader:
+        description = describe_log(reader)
+    if as_json:
+        typer.echo(json.dumps(description.to_dict(), indent=2, default=str))
+        return
+    _print_description(description)
+
+
+def _print_description(d) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    table = Table(title=d.path, show_header=False)
+    table.add_column("field", style="bold")
+    table.add_column("value")
+
+    def fmt(value, unit="", digits=3):
+        return "-" if value is None else f"{value:.{digits}f}{unit}"
+
+    reader = d.reader
+    table.add_row("format", d.format)
+    table.add_row("scans", str(d.scans))
+    table.add_row("beams", ", ".join(f"{n} ({c} scans)" for n, c in sorted(d.beams.items())))
+    table.add_row("field of view", ", ".join(f"{v:g} deg" for v in d.field_of_view_deg))
+    table.add_row("resolution", ", ".join(f"{v:g} deg" for v in d.resolution_deg))
+    table.add_row(
+        "valid ranges",
+        f"{fmt(d.range_min, ' m')} min, {fmt(d.range_mean, ' m')} mean, "
+        f"{fmt(d.range_max, ' m')} max",
+    )
+    table.add_row(
+        "no return", fmt(None if d.no_return_share is None else 100 * d.no_return_share, " %", 1)
+    )
+    if d.time_first is not None:
+        table.add_row(
+            "time",
+            f"{fmt(d.time_first, ' s')} .. {fmt(d.time_last, ' s')} "
+            f"(span {fmt(d.time_max - d.time_min, ' s')}, "
+            f"{d.time_backwards_steps} steps backwards)",
+        )
+    else:
+        table.add_row("time", "no timestamps")
+    table.add_row("poses", f"{d.with_pose} of {d.scans} scans")
+    for key in ("topics", "topic"):
+        if reader.get(key):
+            table.add_row(key, str(reader[key]))
+    if reader.get("records"):
+        table.add_row(
+            "records", ", ".join(f"{k} {v}" for k, v in sorted(reader["records"].items()))
+        )
+    if reader.get("skipped"):
+        table.add_row(
+            "skipped lines", ", ".join(f"{k} {v}" for k, v in sorted(reader["skipped"].items()))
+        )
+    table.add_row("options", ", ".join(f"{k}={v}" for k, v in reader.get("options", {}).items()))
+    Console().print(table)
+
+
+def run_command(
+    log: LogArgument,
+    method: MethodOption = "adaptive",
+    preset: PresetOption = None,
+    param: ParamOption = None,
+    scans: ScansOption = None,
+    out: Annotated[
+        Path | None, typer.Option(help="Output: .jsonl, .csv, .mcap, or a ROS 2 bag directory.")
+    ] = None,
+    frame: Annotated[
+        str, typer.Option(help="sensor, or world (needs poses in the log).")
+    ] = "sensor",
+    on_error: Annotated[
+        str, typer.Option("--on-error", help="fail, or skip malformed records.")
+    ] = "fail",
+    fov: FovOption = None,
+    angle_convention: ConventionOption = None,
+    topic: TopicOption = None,
+    angle_min: AngleMinOption = None,
+    angle_increment: AngleStepOption = None,
+) -> None:
+    from scanlines.errors import ParameterError
+    from scanlines.extractor import Extractor
+    from scanlines.io import open_log
+    from scanlines.runner import parse_slice
+
+    if frame not in ("sensor", "world"):
+        raise ParameterError(f"--frame must be sensor or world, got {frame!r}")
+    if on_error not in ("fail", "skip"):
+        raise ParameterError(f"--on-error must be fail or skip, got {on_error!r}")
+    extractor = Extractor(method, preset, **parse_params(param))
+    selection = parse_slice(scans)
+    options = reader_options(fov, angle_convention, topic, angle_min, angle_increment, on_error)
+    with open_log(log, **options) as reader:
+        summary = _run_with_progress(reader, extractor, selection, out, frame, log)
+    _print_summary(summary, out)
+
+
+def _run_with_progress(reader, extractor, selection, out, frame, log):
+    from rich.progress import BarColumn, Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+
+    from scanlines.runner import run_log
+
+    columns = (
+        SpinnerColumn(),
+        TextColumn("{task.description}"),
+        BarColumn(),
+        TextColumn("{task.completed} scans"),
+        TimeElapsedColumn(),
+    )
+    with Progress(*columns, transient=True) as progress:
+        task = progress.add_task(f"extracting {log.name}", total=None)
+
+        def advance(_index: int) -> None:
+            progress.advance(task)
+
+        if out is None:
+            return run_log(reader, extractor, scans=selection, on_scan=advance)
+        from scanlines.io import open_writer
+
+        meta = {
+            "input": str(log),
+            "method": extractor.method,
+            "params": dict(extractor.params),
+            "reader": reader.options(),
+            "scans": _slice_text(selection),
+        }
+        with open_writer(out, meta=meta, frame=frame) as writer:
+            summary = run_log(reader, extractor, writer=writer, scans=selection, on_scan=advance)
+            writer.update_meta(
+                counts={"scans": summary.scans, "skipped_records": summary.skipped_records}
+            )
+        return summary
+
+
+def _slice_text(selection: slice) -> str:
+    parts = [selection.start, selection.stop, selection.step]
+    return ":".join("" if p is None else str(p) for p in parts)
+
+
+def _print_summary(summary, out) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    table = Table(title=f"{summary.method}: {summary.scans} scans", show_header=False)
+    table.add_column("what", style="bold")
+    table.add_column("value", justify="right")
+    table.add_row("segments / scan", f"{summary.per_scan(summary.segments):.2f}")
+    table.add_row("breakpoints / scan", f"{summary.per_scan(summary.breakpoints):.2f}")
+    table.add_row("corners / scan", f"{summary.per_scan(summary.corners):.2f}")
+    table.add_row("extraction, us / scan", f"{summary.microseconds_per_scan:.0f}")
+    table.add_row("end to end, scans / s", f"{summary.scans_per_second:.0f}")
+    table.add_row("skipped records", str(summary.skipped_records))
+    if out is not None:
+        table.add_row("output", str(out))
+    Console().print(table)
+
+
+def plot_command(
+    log: LogArgument,
+    scan: Annotated[int | None, typer.Option("--scan", help="Index of one scan to draw.")] = None,
+    scans: Annotated[
+        str | None, typer.Option("--scans", help="Slice of scans for a grid, e.g. 0:300:50.")
+    ] = None,
+    output: Annotated[Path, typer.Option("-o", "--output", help="Figure file.")] = Path(
+        "scanlines-plot.png"
+    ),
+    method: MethodOption = "adaptive",
+    preset: PresetOption = None,
+    param: ParamOption = None,
+    fov: FovOption = None,
+    angle_convention: ConventionOption = None,
+    topic: TopicOption = None,
+    angle_min: AngleMinOption = None,
+    angle_increment: AngleStepOption = None,
+) -> None:
+    from scanlines.errors import ParameterError
+    from scanlines.extractor import Extractor
+    from scanlines.io import open_log
+    from scanlines.plot import plot_extraction, plot_grid, save
+    from scanlines.runner import parse_slice, select
+
+    if (scan is None) == (scans is None):
+        raise ParameterError("give exactly one of --scan N or --scans START:STOP[:STEP]")
+    selection = slice(scan, scan + 1) if scan is not None else parse_slice(scans)
+    extractor = Extractor(method, preset, **parse_params(param))
+    options = reader_options(fov, angle_convention, topic, angle_min, angle_increment)
+    with open_log(log, **options) as reader:
+        chosen = []
+        for index, item in select(reader.enumerate(), selection):
+            chosen.append((item, extractor(item), f"{log.name} #{index}"))
+            if len(chosen) == MAX_PANELS:
+                break
+    if not chosen:
+        raise ParameterError(f"no scan of {log} falls in the selection")
+    if scan is not None:
+        figure = plot_extraction(*chosen[0][:2], title=chosen[0][2])
+    else:
+        figure = plot_grid(chosen)
+    typer.echo(f"figure: {save(figure, output)}")
+
+
+MAX_PANELS = 12
+
+
+def demo_command(
+    output: Annotated[Path, typer.Option("-o", "--output", help="Folder for the results.")] = Path(
+        "scanlines-demo"
+    ),
+) -> None:
+    from scanlines.data import sample
+    from scanlines.extractor import Extractor
+    from scanlines.io import open_log, open_writer
+    from scanlines.plot import plot_grid, save
+    from scanlines.runner import run_log, select
+
+    log = sample("intel")
+    extractor = Extractor()
+    output.mkdir(parents=True, exist_ok=True)
+    jsonl = output / "intel.jsonl"
+    with open_log(log) as reader:
+        meta = {
+            "input": log.name,
+            "method": extractor.method,
+            "params": dict(extractor.params),
+            "reader": reader.options(),
+        }
+        with open_writer(jsonl, meta=meta) as writer:
+            summary = run_log(reader, extractor, writer=writer)
+            writer.update_meta(
+                counts={"scans": summary.scans, "skipped_records": summary.skipped_records}
+            )
+        panels = [
+            (s, extractor(s), f"Intel #{i}")
+            for i, s in select(reader.enumerate(), slice(0, None, 50))
+        ]
+    figure = save(plot_grid(panels[:6]), output / "intel.png")
+    _print_summary(summary, jsonl)
+    typer.echo(f"features: {jsonl.resolve()}")
+    typer.echo(f"figure:   {figure.resolve()}")

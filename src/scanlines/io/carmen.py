@@ -1,0 +1,521 @@
+"""CARMEN text logs (``.log``, ``.clf``, plain or gzip-compressed).
+
+One message per line: ``NAME field ... ipc_timestamp ipc_hostname
+logger_timestamp``. The reader streams the file line by line and yields one
+:class:`~scanlines.Scan` per laser record of one chosen message type.
+
+Laser messages
+--------------
+``FLASER`` / ``RLASER`` (front / rear laser, old format)
+    ``FLASER n r_0 ... r_{n-1} x y theta odom_x odom_y odom_theta
+    ipc_timestamp ipc_hostname logger_timestamp``. The record holds no beam
+    angles; they follow ``angle_convention`` over ``fov`` degrees:
+
+    * ``"step"`` (default): ``theta_k = -fov/2 + k * fov/n``, so the Intel
+      Research Lab log (180 beams, fov 180) has beams at -90, -89, ..., +89 deg.
+      Convention (a) of the Intel ``PROVENANCE.md`` (MRPT's aperture pi,
+      right-to-left), which A/B tests on that log favour.
+    * ``"linspace"``: ``theta_k = linspace(-fov/2, +fov/2, n)`` (step
+      ``fov/(n-1)``), the convention of the SOT loader and ``carmenread.m``.
+
+    ``fov`` is the option when given, else ``PARAM laser_front_laser_fov``
+    (``laser_rear_laser_fov`` for ``RLASER``) when the log has it, else 180.
+    ``PARAM laser_front_laser_resolution`` is recorded in :attr:`CarmenReader.params`
+    but not used: with the default ``fov`` and ``"step"`` it is implied
+    (Freiburg 079: 360 beams over 180 deg = 0.5 deg).
+
+    The SICK "no return" codes (81.83 in the Intel log, 81.91 in Freiburg 079)
+    become invalid through ``Scan.range_max``: it is the ``max_range`` option
+    when given, else ``PARAM robot_front_laser_max`` (``robot_rear_laser_max``)
+    when the log has one (Freiburg 079: 80.99), else 80.0 m, the SICK LMS
+    maximum. Ranges above it are no return.
+
+    Pose: the first triple, which CARMEN documents as the laser pose (Freiburg
+    079's raw log: the odometry pose shifted by the 0.04 m laser offset); with
+    ``pose="robot"`` the second triple (the robot's odometry).
+
+``ROBOTLASER1`` / ``ROBOTLASER2``
+    ``laser_type start_angle fov angular_resolution maximum_range accuracy
+    remission_mode n r_0 ... r_{n-1} m i_0 ... i_{m-1} laser_x laser_y
+    laser_theta robot_x robot_y robot_theta tv rv forward_safety_dist
+    side_safety_dist turn_axis`` and the three timestamp fields. Angles are
+    radians: ``angle_min = start_angle``, ``angle_increment =
+    angular_resolution``. ``range_max`` is the ``max_range`` option or the
+    record's ``maximum_range`` (unknown, i.e. infinite, when not positive).
+    Remissions become ``Scan.intensities`` when there is one per beam. Pose:
+    the laser pose, or the robot pose with ``pose="robot"``.
+
+``RAWLASER1`` ... ``RAWLASER4``
+    The ``ROBOTLASER`` layout up to the remissions, then the timestamps. No
+    pose in the record: the pose is the robot pose of the latest ``ODOM`` line
+    before it, or ``None`` when there was none.
+
+Which laser message is read: the ``message`` option, else the first of
+``ROBOTLASER1, FLASER, RAWLASER1, ROBOTLASER2, RLASER, RAWLASER2, RAWLASER3,
+RAWLASER4`` seen within 50 lines of the first laser record (CARMEN often logs
+the same sensor as both ``RAWLASER1`` and ``ROBOTLASER1``). The other laser
+messages are skipped.
+
+Other lines
+-----------
+``ODOM x y theta tv rv accel`` + timestamps: validated and counted; its pose is
+used for ``RAWLASER`` records. ``PARAM name value [host time]``: kept in
+:attr:`CarmenReader.params`; the numeric ones named above are validated.
+Comments (``#``), blank lines and every other message (``SYNC``, ``TRUEPOS``,
+``NEFF``, ``VERTEX_SE2``, ``EDGE_SE2``, ...) are skipped and counted per name
+in :attr:`~scanlines.io.base.LogReader.skipped` (``"comment"``, ``"blank"``, and
+``"other"`` for lines that do not start with an upper-case message name).
+
+Timestamps
+----------
+``logger_timestamp`` (the field after the hostname) by default, since it is on
+one clock for the whole log; ``timestamp="ipc"`` takes ``ipc_timestamp``.
+Values are kept as they are, even when they go backwards (the Intel raw log
+does). ``nan`` becomes ``None``.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from scanlines.errors import LogFormatError, ParameterError
+from scanlines.io.base import ErrorPolicy, LogReader
+from scanlines.io.fields import FieldLayout
+from scanlines.io.text import iter_lines, parse_floats, parse_int
+from scanlines.scan import Scan
+
+__all__ = [
+    "DEFAULT_FOV_DEG",
+    "DEFAULT_SICK_MAX_RANGE",
+    "LASER_MESSAGES",
+    "CarmenReader",
+    "looks_like_carmen",
+]
+
+AngleConvention = Literal["step", "linspace"]
+PoseSource = Literal["laser", "robot"]
+TimestampSource = Literal["logger", "ipc"]
+
+#: Field of view assumed for ``FLASER``/``RLASER`` when neither option nor PARAM gives one.
+DEFAULT_FOV_DEG = 180.0
+#: ``range_max`` for ``FLASER``/``RLASER`` without option or PARAM: the SICK LMS maximum.
+DEFAULT_SICK_MAX_RANGE = 80.0
+
+#: Laser message names, in the order of preference used to choose one.
+LASER_MESSAGES = (
+    "ROBOTLASER1",
+    "FLASER",
+    "RAWLASER1",
+    "ROBOTLASER2",
+    "RLASER",
+    "RAWLASER2",
+    "RAWLASER3",
+    "RAWLASER4",
+)
+_DETECT_WINDOW_LINES = 50
+_MESSAGE_NAME = re.compile(r"[A-Z][A-Z0-9_]{0,39}")
+_SIDE = {"FLASER": "front", "RLASER": "rear"}
+_NUMERIC_PARAMS = {
+    "robot_front_laser_max",
+    "robot_rear_laser_max",
+    "laser_front_laser_fov",
+    "laser_rear_laser_fov",
+    "laser_front_laser_resolution",
+    "laser_rear_laser_resolution",
+}
+_LASER_HEADER = (
+    "laser_type",
+    "start_angle",
+    "fov",
+    "angular_resolution",
+    "maximum_range",
+    "accuracy",
+    "remission_mode",
+)
+_ROBOTLASER_TAIL = (
+    "laser_x",
+    "laser_y",
+    "laser_theta",
+    "robot_x",
+    "robot_y",
+    "robot_theta",
+    "tv",
+    "rv",
+    "forward_safety_dist",
+    "side_safety_dist",
+    "turn_axis",
+)
+_FLASER_TAIL = ("x", "y", "theta", "odom_x", "odom_y", "odom_theta")
+_ODOM_FIELDS = ("x", "y", "theta", "tv", "rv", "accel")
+_ODOM_ALL_FIELDS = (*_ODOM_FIELDS, "ipc_timestamp", "ipc_hostname", "logger_timestamp")
+_STAMPS = (("ipc_timestamp", None), ("logger_timestamp", None))
+
+
+def looks_like_carmen(head: bytes) -> bool:
+    """True when the first record line of ``head`` starts with a CARMEN-style message name.
+
+    CARMEN message names are upper-case identifiers (``PARAM``, ``ODOM``,
+    ``FLASER``, ``ROBOTLASER1``, ``NEFF``, ``VERTEX_SE2`` ...).
+    """
+    for raw in head.decode("utf-8", errors="replace").splitlines():
+        line = raw.strip()
+        if not line:
+            continue
+        if line.startswith("#"):
+            continue
+        name = line.split(None, 1)[0]
+        return name[0].isalpha() and name.isupper() and name.replace("_", "").isalnum()
+    text = head.decode("utf-8", errors="replace")
+    return "CARMEN" in text or any(name in text for name in LASER_MESSAGES)
+
+
+class CarmenReader(LogReader):
+    """Stream the laser scans of a CARMEN log (see the module docstring for the rules).
+
+    Parameters
+    ----------
+    path:
+        ``.log``/``.clf`` file, plain or gzip.
+    message:
+        Laser message to read (``"FLASER"``, ``"ROBOTLASER1"``, ...); ``None``
+        chooses one (see the module docstring).
+    fov:
+        Field of view in degrees for ``FLASER``/``RLASER``; ``None``: PARAM or 180.
+    angle_convention:
+        ``"step"`` or ``"linspace"`` for ``FLASER``/``RLASER`` beam angles.
+    max_range:
+        ``Scan.range_max`` in metres; ``None``: PARAM, the record's value, or 80.
+    range_min:
+        ``Scan.range_min`` in metres.
+    pose:
+        ``"laser"`` (default) or ``"robot"`` pose triple of the record.
+    timestamp:
+        ``"logger"`` (default) or ``"ipc"`` timestamp field.
+    on_error:
+        ``"fail"`` or ``"skip"`` malformed records.
+
+    Attributes
+    ----------
+    params : dict
+        ``PARAM`` name -> value (text) of the last iteration.
+    """
+
+    format_name = "carmen"
+
+    def __init__(
+        self,
+        path: str | Path,
+        *,
+        message: str | None = None,
+        fov: float | None = None,
+        angle_convention: AngleConvention = "step",
+        max_range: float | None = None,
+        range_min: float = 0.0,
+        pose: PoseSource = "laser",
+        timestamp: TimestampSource = "logger",
+        on_error: ErrorPolicy = "fail",
+    ) -> None:
+        super().__init__(path, on_error=on_error)
+        _check_choice("message", message, (*LASER_MESSAGES, None))
+        _check_choice("angle_convention", angle_convention, ("step", "linspace"))
+        _check_choice("pose", pose, ("laser", "robot"))
+        _check_choice("timestamp", timestamp, ("logger", "ipc"))
+        if fov is not None and not 0.0 < fov <= 360.0:
+            raise ParameterError(f"fov must be in (0, 360] degrees, got {fov!r}")
+        if max_range is not None and not max_range > 0.0:
+            raise ParameterError(f"max_range must be positive, got {max_range!r}")
+        self._message = message
+        self.fov = fov
+        self.angle_convention: AngleConvention = angle_convention
+        self.max_range = max_range
+        self.range_min = float(range_min)
+        self.pose_source: PoseSource = pose
+        self.timestamp_source: TimestampSource = timestamp
+        self.params: dict[str, str] = {}
+        self._numeric_params: dict[str, float] = {}
+        self._odom_pose: tuple[float, float, float] | None = None
+
+    # -- public metadata ------------------------------------------------------------------
+
+    @property
+    def message(self) -> str:
+        """The laser message type read (detected on first use when not given)."""
+        if self._message is None:
+            self._message = self._detect_message()
+        return self._message
+
+    def options(self) -> dict[str, Any]:
+        """Resolved options (the message type is detected if needed)."""
+        return {
+            **super().options(),
+            "message": self.message,
+            "fov": self.fov,
+            "angle_convention": self.angle_convention,
+            "max_range": self.max_range,
+            "range_min": self.range_min,
+            "pose": self.pose_source,
+            "timestamp": self.timestamp_source,
+        }
+
+    def info(self) -> dict[str, Any]:
+        """Reader metadata plus ``message`` and the PARAM lines of the last iteration."""
+        return {**super().info(), "message": self.message, "params": dict(self.params)}
+
+    # -- streaming ------------------------------------------------------------------------
+
+    def _detect_message(self) -> str:
+        seen: set[str] = set()
+        first_line: int | None = None
+        for line_number, line in iter_lines(self.path):
+            parts = line.split(None, 1)
+            if parts and parts[0] in LASER_MESSAGES:
+                seen.add(parts[0])
+                first_line = first_line or line_number
+            if first_line is not None and line_number - first_line >= _DETECT_WINDOW_LINES:
+                break
+        if not seen:
+            raise LogFormatError(
+                f"no laser records ({', '.join(LASER_MESSAGES)}) in this CARMEN log", path=self.path
+            )
+        return min(seen, key=LASER_MESSAGES.index)
+
+    def _scans(self) -> Iterator[tuple[int, Scan]]:
+        message = self.message
+        self.params = {}
+        self._numeric_params = {}
+        self._odom_pose = None
+        index = 0
+        for line_number, line in iter_lines(self.path):
+            tokens = line.split()
+            name = tokens[0] if tokens else ""
+            if name == message:
+                record_index = index
+                index += 1
+                scan = self._read_or_skip(self._parse_laser, tokens, line_number)
+                if scan is not None:
+                    self.counts[name] += 1
+                    yield record_index, scan
+            elif name in ("ODOM", "PARAM"):
+                parse = self._parse_odom if name == "ODOM" else self._parse_param
+                if self._read_or_skip(parse, tokens, line_number) is not None:
+                    self.counts[name] += 1
+            else:
+                self.skipped[_skip_kind(name)] += 1
+
+    def _read_or_skip(self, parse: Any, tokens: list[str], line_number: int) -> Any:
+        try:
+            return parse(tokens, line_number)
+        except LogFormatError as error:
+            self._bad_record(error)
+            return None
+
+    # -- record parsers -------------------------------------------------------------------
+
+    def _parse_laser(self, tokens: list[str], line_number: int) -> Scan:
+        name = tokens[0]
+        if name in _SIDE:
+            return self._parse_flaser(tokens, line_number)
+        return self._parse_new_laser(tokens, line_number, robot=name.startswith("ROBOT"))
+
+    def _parse_flaser(self, tokens: list[str], line_number: int) -> Scan:
+        side = _SIDE[tokens[0]]
+        n = _count(tokens, 1, "num_readings", self.path, line_number)
+        _expect_length(tokens, n + 11, self.path, line_number, tokens[0], "num_readings", n)
+        layout = FieldLayout([("range", n), *((f, None) for f in _FLASER_TAIL), *_STAMPS])
+        numbers = parse_floats(
+            [*tokens[2 : n + 8], tokens[n + 8], tokens[n + 10]],
+            layout.name,
+            path=self.path,
+            record=line_number,
+        )
+        laser_pose, robot_pose = numbers[n : n + 3], numbers[n + 3 : n + 6]
+        fov = math.radians(self._flaser_fov(side))
+        steps = n if self.angle_convention == "step" else n - 1
+        return self._make_scan(
+            line_number,
+            ranges=numbers[:n],
+            angle_min=-fov / 2.0,
+            angle_increment=fov / max(steps, 1),
+            range_min=self.range_min,
+            range_max=self._flaser_max_range(side),
+            timestamp=self._stamp(numbers[n + 6], numbers[n + 7]),
+            pose=laser_pose if self.pose_source == "laser" else robot_pose,
+        )
+
+    def _parse_new_laser(self, tokens: list[str], line_number: int, *, robot: bool) -> Scan:
+        name = tokens[0]
+        n = _count(tokens, 8, "num_readings", self.path, line_number)
+        if len(tokens) <= 9 + n:
+            raise LogFormatError(
+                f"{name} says num_readings = {n}, but the record ends after "
+                f"{max(len(tokens) - 9, 0)} values",
+                path=self.path,
+                record=line_number,
+                field="num_readings",
+            )
+        m = _count(tokens, 9 + n, "num_remissions", self.path, line_number)
+        tail = _ROBOTLASER_TAIL if robot else ()
+        _expect_length(
+            tokens, n + m + 13 + len(tail), self.path, line_number, name, "num_readings", n
+        )
+        stamps_at = 10 + n + m + len(tail)
+        layout = FieldLayout(
+            [
+                *((f, None) for f in _LASER_HEADER),
+                ("range", n),
+                ("remission", m),
+                *((f, None) for f in tail),
+                *_STAMPS,
+            ]
+        )
+        numbers = parse_floats(
+            [
+                *tokens[1:8],
+                *tokens[9 : 9 + n],
+                *tokens[10 + n : stamps_at],
+                tokens[stamps_at],
+                tokens[stamps_at + 2],
+            ],
+            layout.name,
+            path=self.path,
+            record=line_number,
+        )
+        start_angle, resolution, record_max = numbers[1], numbers[3], numbers[4]
+        ranges, remissions = numbers[7 : 7 + n], numbers[7 + n : 7 + n + m]
+        after = 7 + n + m
+        if robot:
+            pose_at = after if self.pose_source == "laser" else after + 3
+            pose: Any = numbers[pose_at : pose_at + 3]
+        else:
+            pose = self._odom_pose
+        if not math.isfinite(resolution) or resolution == 0.0:
+            raise LogFormatError(
+                f"must be a non-zero number of radians, got {resolution!r}",
+                path=self.path,
+                record=line_number,
+                field="angular_resolution",
+            )
+        return self._make_scan(
+            line_number,
+            ranges=ranges,
+            angle_min=start_angle,
+            angle_increment=resolution,
+            range_min=self.range_min,
+            range_max=self._record_max_range(record_max),
+            timestamp=self._stamp(numbers[-2], numbers[-1]),
+            intensities=remissions if m == n and m > 0 else None,
+            pose=pose,
+        )
+
+    def _parse_odom(self, tokens: list[str], line_number: int) -> bool:
+        expected = len(_ODOM_ALL_FIELDS) + 1
+        if len(tokens) != expected:
+            missing = _ODOM_ALL_FIELDS[len(tokens) - 1] if len(tokens) < expected else None
+            raise LogFormatError(
+                f"ODOM has {len(tokens)} fields, expected {expected} "
+                f"(ODOM {' '.join(_ODOM_ALL_FIELDS)})",
+                path=self.path,
+                record=line_number,
+                field=missing or "logger_timestamp",
+            )
+        layout = FieldLayout([*((f, None) for f in _ODOM_FIELDS), *_STAMPS])
+        numbers = parse_floats(
+            [*tokens[1:7], tokens[7], tokens[9]], layout.name, path=self.path, record=line_number
+        )
+        x, y, theta = (float(v) for v in numbers[:3])
+        self._odom_pose = (x, y, theta) if np.isfinite(numbers[:3]).all() else None
+        return True
+
+    def _parse_param(self, tokens: list[str], line_number: int) -> bool:
+        if len(tokens) < 3:
+            raise LogFormatError(
+                "PARAM needs a name and a value",
+                path=self.path,
+                record=line_number,
+                field="param_value" if len(tokens) == 2 else "param_name",
+            )
+        name, value = tokens[1], tokens[2]
+        if name in _NUMERIC_PARAMS:
+            try:
+                self._numeric_params[name] = float(value)
+            except ValueError:
+                raise LogFormatError(
+                    f"{name} is not a number: {value!r}",
+                    path=self.path,
+                    record=line_number,
+                    field="param_value",
+                ) from None
+        self.params[name] = value
+        return True
+
+    # -- rules ----------------------------------------------------------------------------
+
+    def _flaser_fov(self, side: str) -> float:
+        if self.fov is not None:
+            return self.fov
+        return self._numeric_params.get(f"laser_{side}_laser_fov", DEFAULT_FOV_DEG)
+
+    def _flaser_max_range(self, side: str) -> float:
+        if self.max_range is not None:
+            return self.max_range
+        return self._numeric_params.get(f"robot_{side}_laser_max", DEFAULT_SICK_MAX_RANGE)
+
+    def _record_max_range(self, record_max: float) -> float:
+        if self.max_range is not None:
+            return self.max_range
+        return float(record_max) if record_max > 0.0 else math.inf
+
+    def _stamp(self, ipc: float, logger: float) -> float | None:
+        value = float(logger if self.timestamp_source == "logger" else ipc)
+        return None if math.isnan(value) else value
+
+
+def _skip_kind(name: str) -> str:
+    """The ``skipped`` key of a line: its message name, or a bounded set of catch-alls.
+
+    Only CARMEN-like names (upper-case identifiers) get their own key, so a
+    file of junk cannot grow the counter without bound.
+    """
+    if not name:
+        return "blank"
+    if name.startswith("#"):
+        return "comment"
+    if _MESSAGE_NAME.fullmatch(name):
+        return name
+    return "other"
+
+
+def _count(tokens: list[str], at: int, field: str, path: Path, line_number: int) -> int:
+    if len(tokens) <= at:
+        raise LogFormatError(
+            f"{tokens[0]} record ends before its {field} field ({len(tokens)} fields)",
+            path=path,
+            record=line_number,
+            field=field,
+        )
+    return parse_int(tokens[at], field, path=path, record=line_number)
+
+
+def _expect_length(
+    tokens: list[str], expected: int, path: Path, line_number: int, name: str, field: str, n: int
+) -> None:
+    if len(tokens) != expected:
+        raise LogFormatError(
+            f"{name} says {field} = {n}, so the record has {expected} fields, but it has "
+            f"{len(tokens)}",
+            path=path,
+            record=line_number,
+            field=field,
+        )
+
+
+def _check_choice(option: str, value: Any, choices: tuple[Any, ...]) -> None:
+    if value not in choices:
+        shown = ", ".join(repr(c) for c in choices)
+        raise ParameterError(f"{option} must be one of {shown}; got {value!r}")

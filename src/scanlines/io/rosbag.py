@@ -1,0 +1,230 @@
+"""ROS 1 bags and ROS 2 bags (sqlite3 or mcap storage) with ``sensor_msgs/msg/LaserScan``.
+
+Read with ``rosbags.highlevel.AnyReader``, imported only when a bag is opened
+(``import scanlines.io`` does not import rosbags). Accepted paths: a ROS 1
+``.bag`` file; a ROS 2 bag directory (with ``metadata.yaml``, or holding a
+single ``.db3``/``.mcap`` file); a bare ``.db3`` or ``.mcap`` file.
+
+Topic: the ``topic`` option, else the only ``LaserScan`` topic of the bag. A
+bag with several ``LaserScan`` topics and no ``topic`` option, or with none,
+raises :class:`~scanlines.LogFormatError` listing what is there.
+
+Per message:
+
+* ranges are passed through unchanged (float32 widened exactly to float64),
+  so REP 117's ``-inf`` (too close), ``NaN`` (measurement error) and ``+inf``
+  (no return) all reach :class:`~scanlines.Scan`, which treats them as invalid;
+* ``angle_min``, ``angle_increment``, ``range_min``, ``range_max`` and
+  ``intensities`` (when there is one per beam) come from the message;
+* ``timestamp`` is the header stamp in seconds, or the bag's receive time when
+  the stamp is zero;
+* ``pose`` is ``None`` (TF is not read).
+
+Record numbers in errors are 1-based message numbers within the topic.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from scanlines.errors import LogFormatError
+from scanlines.io.base import ErrorPolicy, LogReader
+from scanlines.scan import Scan
+
+__all__ = ["LASERSCAN_TYPES", "RosbagReader", "is_ros2_bag_dir"]
+
+#: Message type names of ``LaserScan`` in ROS 2 and ROS 1 (as rosbags names them).
+LASERSCAN_TYPES = ("sensor_msgs/msg/LaserScan",)
+_STORAGE_SUFFIXES = (".db3", ".mcap")
+
+
+def is_ros2_bag_dir(path: Path) -> bool:
+    """True for a directory with ``metadata.yaml`` or with ``.db3``/``.mcap`` storage files."""
+    if not path.is_dir():
+        return False
+    return (path / "metadata.yaml").exists() or any(
+        child.suffix in _STORAGE_SUFFIXES for child in path.iterdir()
+    )
+
+
+def _bag_paths(path: Path) -> list[Path]:
+    """The path(s) to hand to AnyReader (a directory without metadata: its storage file)."""
+    if path.is_dir() and not (path / "metadata.yaml").exists():
+        storage = sorted(c for c in path.iterdir() if c.suffix in _STORAGE_SUFFIXES)
+        if len(storage) != 1:
+            raise LogFormatError(
+                f"a ROS 2 bag directory without metadata.yaml must hold exactly one .db3/.mcap "
+                f"file, found {len(storage)}",
+                path=path,
+            )
+        return storage
+    return [path]
+
+
+class RosbagReader(LogReader):
+    """Stream the ``LaserScan`` messages of one topic of a ROS 1 or ROS 2 bag.
+
+    Parameters
+    ----------
+    path:
+        ``.bag`` file, ROS 2 bag directory, or ``.db3``/``.mcap`` file.
+    topic:
+        The ``LaserScan`` topic; ``None`` picks the only one.
+    on_error:
+        ``"fail"`` or ``"skip"`` messages that do not make a valid scan.
+
+    Attributes
+    ----------
+    topics : dict
+        Every topic of the bag: name -> ``(message type, message count)``.
+    topic : str
+        The topic read.
+
+    Raises
+    ------
+    LogFormatError
+        When the bag cannot be opened, holds no ``LaserScan`` topic, holds
+        several and ``topic`` is not given, or ``topic`` is not a ``LaserScan``
+        topic of the bag.
+    """
+
+    format_name = "rosbag"
+
+    def __init__(
+        self, path: str | Path, *, topic: str | None = None, on_error: ErrorPolicy = "fail"
+    ) -> None:
+        super().__init__(path, on_error=on_error)
+        self._paths = _bag_paths(self.path)
+        with self._open() as reader:
+            self.ros_version = 2 if reader.is2 else 1
+            self.topics = _topic_table(reader)
+        self.topic = self._choose_topic(topic)
+
+    @property
+    def laserscan_topics(self) -> list[str]:
+        """The bag's ``LaserScan`` topics, sorted."""
+        return sorted(t for t, (msgtype, _) in self.topics.items() if msgtype in LASERSCAN_TYPES)
+
+    def _choose_topic(self, topic: str | None) -> str:
+        candidates = self.laserscan_topics
+        if topic is not None:
+            if topic not in candidates:
+                raise LogFormatError(
+                    f"topic {topic!r} is not a LaserScan topic of this bag; "
+                    f"LaserScan topics: {', '.join(candidates) or 'none'}",
+                    path=self.path,
+                    field="topic",
+                )
+            return topic
+        if not candidates:
+            listed = ", ".join(f"{t} ({m})" for t, (m, _) in sorted(self.topics.items()))
+            raise LogFormatError(
+                f"no sensor_msgs/msg/LaserScan topic in this bag (topics: {listed or 'none'})",
+                path=self.path,
+            )
+        if len(candidates) > 1:
+            raise LogFormatError(
+                f"several LaserScan topics: {', '.join(candidates)}; choose one with topic=...",
+                path=self.path,
+                field="topic",
+            )
+        return candidates[0]
+
+    @contextmanager
+    def _open(self) -> Iterator[Any]:
+        from rosbags.highlevel import AnyReader, AnyReaderError
+        from rosbags.typesys import Stores, get_typestore
+
+        store = Stores.ROS1_NOETIC if self._paths[0].suffix == ".bag" else Stores.ROS2_HUMBLE
+        try:
+            reader = AnyReader(self._paths, default_typestore=get_typestore(store))
+            reader.open()
+        except (AnyReaderError, OSError, ValueError, KeyError) as exc:
+            raise LogFormatError(f"cannot open the bag ({exc})", path=self.path) from None
+        try:
+            yield reader
+        finally:
+            reader.close()
+
+    def options(self) -> dict[str, Any]:
+        """Resolved options: the topic read."""
+        return {**super().options(), "topic": self.topic}
+
+    def info(self) -> dict[str, Any]:
+        """Reader metadata plus the bag's topics and the scan count of the topic read."""
+        return {
+            **super().info(),
+            "ros_version": self.ros_version,
+            "topic": self.topic,
+            "topics": {t: {"type": m, "messages": n} for t, (m, n) in sorted(self.topics.items())},
+            "scans_in_file": self.topics[self.topic][1],
+        }
+
+    def _scans(self) -> Iterator[tuple[int, Scan]]:
+        from rosbags.highlevel import AnyReaderError
+
+        with self._open() as reader:
+            connections = [c for c in reader.connections if c.topic == self.topic]
+            messages = self._guarded(reader.messages(connections))
+            for index, (connection, bag_time, raw) in enumerate(messages):
+                try:
+                    message = reader.deserialize(raw, connection.msgtype)
+                    scan = self._scan(message, bag_time, index + 1)
+                except AnyReaderError as exc:
+                    self._bad_record(
+                        LogFormatError(f"cannot decode ({exc})", path=self.path, record=index + 1)
+                    )
+                    continue
+                except LogFormatError as error:
+                    self._bad_record(error)
+                    continue
+                self.counts[self.topic] += 1
+                yield index, scan
+            for topic in self.topics:
+                if topic != self.topic:
+                    self.skipped[topic] = self.topics[topic][1]
+
+    def _guarded(self, messages: Iterator[Any]) -> Iterator[Any]:
+        """Pass messages through, turning a storage error mid-stream into a LogFormatError."""
+        count = 0
+        while True:
+            try:
+                item = next(messages)
+            except StopIteration:
+                return
+            except Exception as exc:  # rosbags raises several unrelated types here
+                raise LogFormatError(
+                    f"the bag is damaged after message {count} ({type(exc).__name__}: {exc})",
+                    path=self.path,
+                ) from None
+            count += 1
+            yield item
+
+    def _scan(self, message: Any, bag_time: int, record: int) -> Scan:
+        ranges = np.asarray(message.ranges, dtype=np.float64)
+        intensities = np.asarray(message.intensities, dtype=np.float64)
+        stamp = message.header.stamp
+        seconds = stamp.sec + stamp.nanosec / 1e9
+        return self._make_scan(
+            record,
+            ranges=ranges,
+            angle_min=float(message.angle_min),
+            angle_increment=float(message.angle_increment),
+            range_min=float(message.range_min),
+            range_max=float(message.range_max),
+            timestamp=seconds if (stamp.sec or stamp.nanosec) else bag_time * 1e-9,
+            intensities=intensities if intensities.shape == ranges.shape else None,
+        )
+
+
+def _topic_table(reader: Any) -> dict[str, tuple[str, int]]:
+    table: dict[str, tuple[str, int]] = {}
+    for connection in reader.connections:
+        msgtype, count = table.get(connection.topic, (connection.msgtype, 0))
+        table[connection.topic] = (msgtype, count + max(connection.msgcount, 0))
+    return table

@@ -1,0 +1,229 @@
+"""Scans as rows of a text table (``.csv``, plain or gzip-compressed).
+
+One scan per row; every value of the row is a range in metres. Values are
+separated by commas (when the row has any) or by whitespace. An empty value,
+``nan`` or ``inf`` is a beam with no return. Every row must have the same
+number of values as the first one.
+
+Lines starting with ``#`` are comments. Comments before the first row may
+carry the geometry as ``key=value`` or ``key: value`` pairs, e.g.
+``# angle_min=-1.5708 angle_increment=0.0087266 range_max=30``; keyword
+options override them. ``angle_min`` and ``angle_increment`` (radians) must
+come from one or the other.
+
+An optional header row (the first non-comment row, if it is not numeric) names
+the columns. When its first name is ``timestamp``, ``time``, ``stamp`` or
+``t``, the first column of every row is the timestamp in seconds and the other
+columns are the ranges. ``timestamp_column=True/False`` forces this either way
+(also for headerless files).
+
+Poses: ``None`` (a table of ranges has none).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from scanlines.errors import LogFormatError, ParameterError
+from scanlines.io.base import ErrorPolicy, LogReader
+from scanlines.io.fields import FieldLayout
+from scanlines.io.text import iter_lines, parse_floats
+from scanlines.scan import Scan
+
+__all__ = ["CsvReader", "looks_like_table", "parse_preamble"]
+
+_GEOMETRY_KEYS = ("angle_min", "angle_increment", "range_min", "range_max")
+_TIMESTAMP_NAMES = {"timestamp", "time", "stamp", "t"}
+_PAIR = re.compile(r"([A-Za-z_]+)\s*[=:]\s*([^\s,;]+)")
+
+
+def parse_preamble(comment: str) -> dict[str, float]:
+    """Geometry values found in one comment line (``key=value`` or ``key: value``)."""
+    found: dict[str, float] = {}
+    for key, value in _PAIR.findall(comment):
+        if key in _GEOMETRY_KEYS:
+            try:
+                found[key] = float(value)
+            except ValueError:
+                continue
+    return found
+
+
+def looks_like_table(head: bytes, *, named: bool = False) -> bool:
+    """True when ``head`` looks like a table of ranges.
+
+    Without ``named`` (sniffing a file whose name says nothing), one of the
+    first two non-comment rows must be at least two numbers separated by
+    commas or whitespace. With ``named`` (the name says ``.csv``), any
+    non-comment row will do: the reader reports bad rows by line and field.
+    """
+    rows = 0
+    for raw in head.decode("utf-8", errors="replace").splitlines():
+        line = raw.strip()
+        if not line or line.startswith("#"):
+            continue
+        values = _split(line)
+        if named or (_is_numeric_row(values) and len(values) >= 2):
+            return True
+        rows += 1
+        if rows == 2:
+            break
+    return False
+
+
+def _split(line: str) -> list[str]:
+    if "," in line:
+        return [v.strip() for v in line.split(",")]
+    return line.split()
+
+
+class CsvReader(LogReader):
+    """Stream one scan per row of a CSV or whitespace-separated table.
+
+    Parameters
+    ----------
+    path:
+        The table (plain or gzip).
+    angle_min, angle_increment:
+        Beam geometry in radians; ``None`` takes it from the comment preamble.
+    range_min, range_max:
+        Valid range interval in metres; ``None`` takes it from the preamble,
+        else 0 and infinity.
+    timestamp_column:
+        Whether the first column is a timestamp; ``None`` decides from the header.
+    on_error:
+        ``"fail"`` or ``"skip"`` malformed rows.
+
+    Raises
+    ------
+    ParameterError
+        When the angles are given neither as options nor in the preamble.
+    """
+
+    format_name = "csv"
+
+    def __init__(
+        self,
+        path: str | Path,
+        *,
+        angle_min: float | None = None,
+        angle_increment: float | None = None,
+        range_min: float | None = None,
+        range_max: float | None = None,
+        timestamp_column: bool | None = None,
+        on_error: ErrorPolicy = "fail",
+    ) -> None:
+        super().__init__(path, on_error=on_error)
+        preamble, header = self._read_preamble()
+        given = {
+            "angle_min": angle_min,
+            "angle_increment": angle_increment,
+            "range_min": range_min,
+            "range_max": range_max,
+        }
+        geometry = dict(preamble) | {k: float(v) for k, v in given.items() if v is not None}
+        missing = [k for k in ("angle_min", "angle_increment") if k not in geometry]
+        if missing:
+            raise ParameterError(
+                f"{self.path}: a CSV log needs {' and '.join(missing)} (radians), as options "
+                f"or as '# angle_min=... angle_increment=...' comment lines"
+            )
+        self.angle_min = geometry["angle_min"]
+        self.angle_increment = geometry["angle_increment"]
+        self.range_min = geometry.get("range_min", 0.0)
+        self.range_max = geometry.get("range_max", math.inf)
+        self.header = header
+        if timestamp_column is None:
+            timestamp_column = bool(header) and header[0].lower() in _TIMESTAMP_NAMES
+        self.timestamp_column = timestamp_column
+
+    def options(self) -> dict[str, Any]:
+        """Resolved geometry and column layout."""
+        return {
+            **super().options(),
+            "angle_min": self.angle_min,
+            "angle_increment": self.angle_increment,
+            "range_min": self.range_min,
+            "range_max": self.range_max,
+            "timestamp_column": self.timestamp_column,
+        }
+
+    def _read_preamble(self) -> tuple[dict[str, float], list[str] | None]:
+        """Geometry from the leading comments and the header row, if any."""
+        found: dict[str, float] = {}
+        for _, line in iter_lines(self.path):
+            text = line.strip()
+            if not text:
+                continue
+            if text.startswith("#"):
+                found |= parse_preamble(text)
+                continue
+            values = _split(text)
+            return found, None if _is_numeric_row(values) else values
+        return found, None
+
+    def _scans(self) -> Iterator[tuple[int, Scan]]:
+        width: int | None = None
+        index = 0
+        header_pending = self.header is not None
+        for line_number, line in iter_lines(self.path):
+            text = line.strip()
+            if not text:
+                self.skipped["blank"] += 1
+                continue
+            if text.startswith("#"):
+                self.skipped["comment"] += 1
+                continue
+            if header_pending:
+                header_pending = False
+                self.skipped["header"] += 1
+                continue
+            values = _split(text)
+            width = width or len(values)
+            record_index = index
+            index += 1
+            try:
+                scan = self._parse(values, width, line_number)
+            except LogFormatError as error:
+                self._bad_record(error)
+                continue
+            self.counts["row"] += 1
+            yield record_index, scan
+
+    def _parse(self, values: list[str], width: int, line_number: int) -> Scan:
+        if len(values) != width:
+            raise LogFormatError(
+                f"row has {len(values)} values, the first row has {width}",
+                path=self.path,
+                record=line_number,
+                field="ranges",
+            )
+        has_stamp = self.timestamp_column
+        layout = FieldLayout([("timestamp", None)] * has_stamp + [("range", width - has_stamp)])
+        numbers = parse_floats(
+            [v or "nan" for v in values], layout.name, path=self.path, record=line_number
+        )
+        stamp = float(numbers[0]) if has_stamp and not np.isnan(numbers[0]) else None
+        return self._make_scan(
+            line_number,
+            ranges=numbers[1:] if has_stamp else numbers,
+            angle_min=self.angle_min,
+            angle_increment=self.angle_increment,
+            range_min=self.range_min,
+            range_max=self.range_max,
+            timestamp=stamp,
+        )
+
+
+def _is_numeric_row(values: list[str]) -> bool:
+    try:
+        [float(v) for v in values if v]
+    except ValueError:
+        return False
+    return True

@@ -1,0 +1,746 @@
+"""Writing extraction results: JSON Lines, CSV, and ROS 2 bags with markers.
+
+Use :func:`open_writer`; it picks the format from the output path:
+
+============================  =================================================
+``*.jsonl``                   one JSON object per written scan
+``*.csv``                     one row per segment
+``*.mcap``                    a single MCAP file (ROS 2 messages)
+a path without suffix         a ROS 2 bag directory (``storage="mcap"`` or
+                              ``"sqlite3"``)
+============================  =================================================
+
+Every writer streams (one scan in memory at a time) and is atomic: output
+goes to a hidden temporary file or directory next to the target and is moved
+into place by ``os.replace`` only when the writer is closed without error; an
+exception inside the ``with`` block (or :meth:`ResultWriter.abort`) deletes
+it, leaving neither output nor ``.meta.json`` behind.
+
+Beside every output, ``<output>.meta.json`` (e.g. ``result.jsonl.meta.json``)
+records ``format_version``, ``scanlines_version``, the output format and
+frame, the caller's ``meta`` (input file, method, full parameters, reader
+options...) and ``counts`` (scans, segments, breakpoints, corners written,
+plus caller counts such as skipped records, see
+:meth:`ResultWriter.update_meta`). ``method`` and ``params`` default to those
+of the first extraction written.
+
+Frames
+------
+Pass extractions in the sensor frame, as :func:`scanlines.extract` returns
+them. With ``frame="world"`` the writer moves segments (with
+:func:`scanlines.io.transform.to_world`) and breakpoint/corner points into the
+log's world frame using ``scan.pose``; a scan without a pose is then an error.
+Do not transform beforehand as well.
+
+Record layouts
+--------------
+JSON Lines: ``{"scan", "timestamp", "pose", "segments": [{"first", "last",
+"start", "end", "rho", "alpha", "n_points", "rms"}], "breakpoints",
+"corners"}``, where ``scan`` is the record index in the log, breakpoints and
+corners are beam indices, and missing or non-finite numbers are ``null``.
+
+CSV columns: ``scan,timestamp,first,last,start_x,start_y,end_x,end_y,rho,alpha,n_points,rms``;
+missing or non-finite values are empty cells. A scan without segments writes
+no row.
+
+ROS 2 (``rosbags.rosbag2.Writer``, ``Stores.ROS2_HUMBLE`` types), per scan,
+stamped with the scan time (``index * 0.1`` s when the scan has none):
+
+* the input scan as ``sensor_msgs/msg/LaserScan`` on ``topic`` (``/scan``),
+  frame ``laser_frame`` (``"laser"``), ranges unchanged as float32;
+* a ``visualization_msgs/msg/MarkerArray`` on ``/scanlines/markers``: a
+  ``DELETEALL`` marker, then (only when non-empty) namespace ``segments``
+  (``LINE_LIST``, green, two points per segment), ``breakpoints``
+  (``SPHERE_LIST``, red) and ``corners`` (``SPHERE_LIST``, blue), in frame
+  ``laser_frame`` or, with ``frame="world"``, ``world_frame`` (``"map"``);
+* when the scan has a pose, a ``tf2_msgs/msg/TFMessage`` on ``/tf`` from
+  ``world_frame`` to ``laser_frame``, so Foxglove/RViz can place the scan.
+
+Bag readers return messages in time order, so scans whose timestamps go
+backwards (the Intel raw log) come back sorted by time from the bag. The
+``.mcap`` file and the bag directory get the usual permissions (``0o666``
+less the umask); so do the text outputs and the ``.meta.json``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import json
+import math
+import os
+import shutil
+import tempfile
+from abc import ABC, abstractmethod
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from types import TracebackType
+from typing import IO, Any, ClassVar, Literal, Self
+
+import numpy as np
+
+from scanlines.errors import ParameterError
+from scanlines.extraction import END_X, END_Y, START_X, START_Y, Extraction
+from scanlines.io.transform import points_to_world, to_world
+from scanlines.scan import Scan
+
+__all__ = [
+    "CSV_COLUMNS",
+    "META_FORMAT_VERSION",
+    "CsvWriter",
+    "JsonlWriter",
+    "ResultWriter",
+    "Ros2BagWriter",
+    "meta_path_for",
+    "open_writer",
+]
+
+Frame = Literal["sensor", "world"]
+
+#: Version of the ``.meta.json`` layout.
+META_FORMAT_VERSION = 1
+#: Columns of the CSV output, in order.
+CSV_COLUMNS = (
+    "scan",
+    "timestamp",
+    "first",
+    "last",
+    "start_x",
+    "start_y",
+    "end_x",
+    "end_y",
+    "rho",
+    "alpha",
+    "n_points",
+    "rms",
+)
+#: Bag time step used for scans without a timestamp (seconds per record index).
+UNSTAMPED_PERIOD = 0.1
+
+
+def meta_path_for(path: str | Path) -> Path:
+    """The ``.meta.json`` written beside ``path``: ``<path>.meta.json``."""
+    path = Path(path)
+    return path.with_name(path.name + ".meta.json")
+
+
+@dataclass(frozen=True)
+class ScanFeatures:
+    """What a writer needs from one scan, in the output frame.
+
+    Attributes
+    ----------
+    index, scan:
+        Record index in the log and the scan itself.
+    extraction:
+        Features, transformed to the output frame.
+    breakpoint_points, corner_points:
+        ``K x 2`` positions of the breakpoint and corner beams in the output frame.
+    """
+
+    index: int
+    scan: Scan
+    extraction: Extraction
+    breakpoint_points: np.ndarray
+    corner_points: np.ndarray
+
+
+def _beam_points(scan: Scan, indices: np.ndarray) -> np.ndarray:
+    indices = np.asarray(indices, dtype=np.intp)
+    inside = indices[(indices >= 0) & (indices < len(scan))]
+    points = scan.points[inside]
+    return points[np.isfinite(points).all(axis=1)]
+
+
+def _features(index: int, scan: Scan, extraction: Extraction, frame: Frame) -> ScanFeatures:
+    breakpoints = _beam_points(scan, extraction.breakpoints)
+    corners = _beam_points(scan, extraction.corners)
+    if frame == "world":
+        if scan.pose is None:
+            raise ParameterError(
+                f"frame='world' needs scan poses, but scan {index} has none; use frame='sensor'"
+            )
+        extraction = to_world(extraction, scan.pose)
+        breakpoints = points_to_world(breakpoints, scan.pose)
+        corners = points_to_world(corners, scan.pose)
+    return ScanFeatures(index, scan, extraction, breakpoints, corners)
+
+
+def _number(value: float) -> float | None:
+    value = float(value)
+    return value if math.isfinite(value) else None
+
+
+def _jsonable(value: Any) -> Any:
+    """Parameters and metadata as JSON: NaN -> null, +-inf -> "inf"/"-inf", arrays -> lists."""
+    if isinstance(value, Mapping):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, np.ndarray):
+        return _jsonable(value.tolist())
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, np.generic):
+        return _jsonable(value.item())
+    if isinstance(value, float) and not math.isfinite(value):
+        return None if math.isnan(value) else ("inf" if value > 0 else "-inf")
+    if value is None or isinstance(value, (bool, int, float, str)):
+        return value
+    return str(value)
+
+
+def _atomic_temp_file(target: Path, mode: str) -> IO[Any]:
+    target.parent.mkdir(parents=True, exist_ok=True)
+    return tempfile.NamedTemporaryFile(
+        mode,
+        dir=target.parent,
+        prefix=f".{target.name}.",
+        suffix=".tmp",
+        delete=False,
+        **({"encoding": "utf-8", "newline": ""} if "b" not in mode else {}),
+    )
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def _commit_file(handle: IO[Any], target: Path) -> None:
+    """Flush, give the usual permissions (temporary files are private) and move into place."""
+    handle.flush()
+    os.fsync(handle.fileno())
+    handle.close()
+    os.chmod(handle.name, 0o666 & ~_umask())
+    os.replace(handle.name, target)
+
+
+def _discard_file(handle: IO[Any]) -> None:
+    handle.close()
+    Path(handle.name).unlink(missing_ok=True)
+
+
+def _write_json_atomically(target: Path, content: Mapping[str, Any]) -> None:
+    handle = _atomic_temp_file(target, "w")
+    try:
+        json.dump(content, handle, indent=2, allow_nan=False)
+        handle.write("\n")
+        _commit_file(handle, target)
+    except BaseException:
+        _discard_file(handle)
+        raise
+
+
+class ResultWriter(ABC):
+    """Base of the writers: a context manager with :meth:`write`.
+
+    Parameters
+    ----------
+    path:
+        Output path.
+    meta:
+        Caller metadata for ``.meta.json`` (``input``, ``method``, ``params``,
+        ``reader``, ``counts``...).
+    frame:
+        ``"sensor"`` (as extracted) or ``"world"`` (moved by ``scan.pose``).
+    """
+
+    format_name: ClassVar[str] = "result"
+
+    def __init__(
+        self, path: str | Path, *, meta: Mapping[str, Any] | None = None, frame: Frame = "sensor"
+    ) -> None:
+        if frame not in ("sensor", "world"):
+            raise ParameterError(f"frame must be 'sensor' or 'world', got {frame!r}")
+        self.path = Path(path)
+        self.frame: Frame = frame
+        self.meta: dict[str, Any] = dict(meta or {})
+        self.counts = {"scans": 0, "segments": 0, "breakpoints": 0, "corners": 0}
+        self._first_extraction: Extraction | None = None
+        self._closed = False
+
+    # -- public API -----------------------------------------------------------------------
+
+    def write(self, index: int, scan: Scan, extraction: Extraction) -> None:
+        """Write the features of one scan.
+
+        Parameters
+        ----------
+        index:
+            The scan's record index in the log (``reader.enumerate()``).
+        scan:
+            The scan the features were extracted from.
+        extraction:
+            The features, in the sensor frame.
+        """
+        if self._closed:
+            raise ValueError(f"{self.path}: writer is closed")
+        features = _features(index, scan, extraction, self.frame)
+        self._write(features)
+        if self._first_extraction is None:
+            self._first_extraction = extraction
+        self.counts["scans"] += 1
+        self.counts["segments"] += len(extraction)
+        self.counts["breakpoints"] += len(extraction.breakpoints)
+        self.counts["corners"] += len(extraction.corners)
+
+    def update_meta(self, **fields: Any) -> None:
+        """Add or replace ``.meta.json`` fields before closing; ``counts`` are merged."""
+        counts = fields.pop("counts", None)
+        self.meta.update(fields)
+        if counts:
+            self.meta["counts"] = {**self.meta.get("counts", {}), **counts}
+
+    @property
+    def meta_path(self) -> Path:
+        """Where the ``.meta.json`` goes."""
+        return meta_path_for(self.path)
+
+    def close(self) -> None:
+        """Finish: move the output into place and write the ``.meta.json``."""
+        if self._closed:
+            return
+        self._closed = True
+        try:
+            self._commit()
+        except BaseException:
+            self._abort()
+            raise
+        _write_json_atomically(self.meta_path, self._meta_document())
+
+    def abort(self) -> None:
+        """Discard everything written; no output is left."""
+        if self._closed:
+            return
+        self._closed = True
+        self._abort()
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        if exc_type is None:
+            self.close()
+        else:
+            self.abort()
+
+    # -- format hooks ---------------------------------------------------------------------
+
+    @abstractmethod
+    def _write(self, features: ScanFeatures) -> None:
+        """Write one scan's features to the temporary output."""
+
+    @abstractmethod
+    def _commit(self) -> None:
+        """Move the temporary output into place."""
+
+    @abstractmethod
+    def _abort(self) -> None:
+        """Delete the temporary output."""
+
+    # -- metadata -------------------------------------------------------------------------
+
+    def _meta_document(self) -> dict[str, Any]:
+        from scanlines import __version__
+
+        meta = dict(self.meta)
+        first = self._first_extraction
+        if first is not None:
+            meta.setdefault("method", first.method)
+            meta.setdefault("params", dict(first.params))
+        counts = {**meta.pop("counts", {}), **self.counts}
+        document = {
+            "format_version": META_FORMAT_VERSION,
+            "scanlines_version": __version__,
+            "output": self.path.name,
+            "output_format": self.format_name,
+            "frame": self.frame,
+            "input": None,
+            "method": None,
+            "params": None,
+            **meta,
+            "counts": counts,
+        }
+        return _jsonable(document)
+
+
+class _TextFileWriter(ResultWriter):
+    """Shared atomic temp-file handling of the text writers."""
+
+    def __init__(
+        self, path: str | Path, *, meta: Mapping[str, Any] | None = None, frame: Frame = "sensor"
+    ) -> None:
+        super().__init__(path, meta=meta, frame=frame)
+        if self.path.is_dir():
+            raise ParameterError(f"{self.path} is a directory")
+        self._handle = _atomic_temp_file(self.path, "w")
+
+    def _commit(self) -> None:
+        _commit_file(self._handle, self.path)
+
+    def _abort(self) -> None:
+        _discard_file(self._handle)
+
+
+class JsonlWriter(_TextFileWriter):
+    """One JSON object per written scan (see the module docstring)."""
+
+    format_name = "jsonl"
+
+    def _write(self, features: ScanFeatures) -> None:
+        scan, extraction = features.scan, features.extraction
+        record = {
+            "scan": int(features.index),
+            "timestamp": None if scan.timestamp is None else _number(scan.timestamp),
+            "pose": None if scan.pose is None else [_number(v) for v in scan.pose],
+            "segments": [
+                {
+                    "first": int(extraction.first[k]),
+                    "last": int(extraction.last[k]),
+                    "start": [_number(row[START_X]), _number(row[START_Y])],
+                    "end": [_number(row[END_X]), _number(row[END_Y])],
+                    "rho": _number(row[0]),
+                    "alpha": _number(row[1]),
+                    "n_points": int(extraction.n_points[k]),
+                    "rms": _number(row[6]),
+                }
+                for k, row in enumerate(extraction.lines)
+            ],
+            "breakpoints": [int(i) for i in extraction.breakpoints],
+            "corners": [int(i) for i in extraction.corners],
+        }
+        self._handle.write(json.dumps(record, allow_nan=False, separators=(",", ":")))
+        self._handle.write("\n")
+
+
+class CsvWriter(_TextFileWriter):
+    """One CSV row per segment (see the module docstring)."""
+
+    format_name = "csv"
+
+    def __init__(
+        self, path: str | Path, *, meta: Mapping[str, Any] | None = None, frame: Frame = "sensor"
+    ) -> None:
+        super().__init__(path, meta=meta, frame=frame)
+        self._csv = csv.writer(self._handle, lineterminator="\n")
+        self._csv.writerow(CSV_COLUMNS)
+
+    def _write(self, features: ScanFeatures) -> None:
+        extraction = features.extraction
+        stamp = _cell(features.scan.timestamp)
+        for k, row in enumerate(extraction.lines):
+            self._csv.writerow(
+                (
+                    features.index,
+                    stamp,
+                    int(extraction.first[k]),
+                    int(extraction.last[k]),
+                    _cell(row[START_X]),
+                    _cell(row[START_Y]),
+                    _cell(row[END_X]),
+                    _cell(row[END_Y]),
+                    _cell(row[0]),
+                    _cell(row[1]),
+                    int(extraction.n_points[k]),
+                    _cell(row[6]),
+                )
+            )
+
+
+def _cell(value: float | None) -> str:
+    if value is None or not math.isfinite(value):
+        return ""
+    return repr(float(value))
+
+
+# -- ROS 2 ---------------------------------------------------------------------------------
+
+_COLORS = {
+    "segments": (0.1, 0.8, 0.2, 1.0),
+    "breakpoints": (0.9, 0.1, 0.1, 1.0),
+    "corners": (0.1, 0.3, 1.0, 1.0),
+}
+_SCALES = {"segments": 0.03, "breakpoints": 0.08, "corners": 0.12}
+
+
+class Ros2BagWriter(ResultWriter):
+    """Scans and feature markers as a ROS 2 bag directory or a single ``.mcap`` file.
+
+    Parameters
+    ----------
+    path:
+        ``*.mcap`` (one MCAP file) or a directory path (a ROS 2 bag).
+    meta, frame:
+        See :class:`ResultWriter`.
+    storage:
+        ``"mcap"`` (default) or ``"sqlite3"``, for a bag directory.
+    topic:
+        Topic of the ``LaserScan`` messages.
+    markers_topic:
+        Topic of the ``MarkerArray`` messages.
+    laser_frame, world_frame:
+        ``frame_id`` of the scans and of world-frame markers.
+    overwrite:
+        Replace an existing output (a directory only if it is a ROS 2 bag).
+    """
+
+    format_name = "ros2"
+
+    def __init__(
+        self,
+        path: str | Path,
+        *,
+        meta: Mapping[str, Any] | None = None,
+        frame: Frame = "sensor",
+        storage: Literal["mcap", "sqlite3"] = "mcap",
+        topic: str = "/scan",
+        markers_topic: str = "/scanlines/markers",
+        laser_frame: str = "laser",
+        world_frame: str = "map",
+        overwrite: bool = True,
+    ) -> None:
+        super().__init__(path, meta=meta, frame=frame)
+        from rosbags.rosbag2 import StoragePlugin, Writer
+        from rosbags.typesys import Stores, get_typestore
+
+        self.single_file = self.path.suffix.lower() == ".mcap"
+        if self.single_file:
+            storage = "mcap"
+        if storage not in ("mcap", "sqlite3"):
+            raise ParameterError(f"storage must be 'mcap' or 'sqlite3', got {storage!r}")
+        self._check_target(overwrite)
+        self.storage = storage
+        self.topic = topic
+        self.laser_frame = laser_frame
+        self.marker_frame = world_frame if frame == "world" else laser_frame
+        self.world_frame = world_frame
+        self._types = get_typestore(Stores.ROS2_HUMBLE)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._tmpdir = Path(
+            tempfile.mkdtemp(dir=self.path.parent, prefix=f".{self.path.name}.", suffix=".tmp")
+        )
+        self._bag_dir = self._tmpdir / (self.path.stem if self.single_file else self.path.name)
+        plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
+        self._writer = Writer(self._bag_dir, version=8, storage_plugin=plugin)
+        try:
+            self._writer.open()
+            add = self._writer.add_connection
+            self._scan_conn = add(topic, "sensor_msgs/msg/LaserScan", typestore=self._types)
+            self._marker_conn = add(
+                markers_topic, "visualization_msgs/msg/MarkerArray", typestore=self._types
+            )
+            self._tf_conn = add("/tf", "tf2_msgs/msg/TFMessage", typestore=self._types)
+        except BaseException:
+            self._abort()
+            raise
+
+    def _check_target(self, overwrite: bool) -> None:
+        if not self.path.exists():
+            return
+        if not overwrite:
+            raise FileExistsError(f"{self.path} exists")
+        if self.single_file == self.path.is_dir():
+            wanted = "an .mcap file" if self.single_file else "a bag directory"
+            raise ParameterError(f"{self.path} exists and is not {wanted}; not replacing it")
+        if self.path.is_dir() and not (self.path / "metadata.yaml").exists():
+            raise ParameterError(
+                f"{self.path} is a directory that is not a ROS 2 bag; not replacing it"
+            )
+
+    # -- message construction -------------------------------------------------------------
+
+    def _stamp(self, features: ScanFeatures) -> tuple[Any, int]:
+        seconds = features.scan.timestamp
+        if seconds is None or not math.isfinite(seconds) or seconds < 0:
+            seconds = features.index * UNSTAMPED_PERIOD
+        sec = math.floor(seconds)
+        nanosec = round((seconds - sec) * 1e9)
+        if nanosec >= 1_000_000_000:
+            sec, nanosec = sec + 1, nanosec - 1_000_000_000
+        time = self._types.types["builtin_interfaces/msg/Time"](sec=sec, nanosec=nanosec)
+        return time, sec * 1_000_000_000 + nanosec
+
+    def _header(self, stamp: Any, frame_id: str) -> Any:
+        return self._types.types["std_msgs/msg/Header"](stamp=stamp, frame_id=frame_id)
+
+    def _laser_scan(self, scan: Scan, stamp: Any) -> Any:
+        n = len(scan)
+        intensities = scan.intensities if scan.intensities is not None else np.empty(0)
+        return self._types.types["sensor_msgs/msg/LaserScan"](
+            header=self._header(stamp, self.laser_frame),
+            angle_min=scan.angle_min,
+            angle_max=scan.angle_min + (n - 1) * scan.angle_increment,
+            angle_increment=scan.angle_increment,
+            time_increment=0.0,
+            scan_time=0.0,
+            range_min=scan.range_min,
+            range_max=scan.range_max,
+            ranges=np.asarray(scan.ranges, dtype=np.float32),
+            intensities=np.asarray(intensities, dtype=np.float32),
+        )
+
+    def _marker(self, stamp: Any, namespace: str, marker_id: int, points: np.ndarray) -> Any:
+        t = self._types.types
+        marker_type = t["visualization_msgs/msg/Marker"]
+        if namespace == "":
+            kind, action, scale, color = (
+                marker_type.SPHERE_LIST,
+                marker_type.DELETEALL,
+                1.0,
+                (0,) * 4,
+            )
+        else:
+            kind = marker_type.LINE_LIST if namespace == "segments" else marker_type.SPHERE_LIST
+            action, scale, color = marker_type.ADD, _SCALES[namespace], _COLORS[namespace]
+        header = self._header(stamp, self.marker_frame)
+        return marker_type(
+            header=header,
+            ns=namespace,
+            id=marker_id,
+            type=kind,
+            action=action,
+            pose=t["geometry_msgs/msg/Pose"](
+                position=t["geometry_msgs/msg/Point"](x=0.0, y=0.0, z=0.0),
+                orientation=t["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0),
+            ),
+            scale=t["geometry_msgs/msg/Vector3"](x=scale, y=scale, z=scale),
+            color=t["std_msgs/msg/ColorRGBA"](r=color[0], g=color[1], b=color[2], a=color[3]),
+            lifetime=t["builtin_interfaces/msg/Duration"](sec=0, nanosec=0),
+            frame_locked=False,
+            points=[t["geometry_msgs/msg/Point"](x=float(x), y=float(y), z=0.0) for x, y in points],
+            colors=[],
+            texture_resource="",
+            texture=t["sensor_msgs/msg/CompressedImage"](
+                header=header, format="", data=np.empty(0, dtype=np.uint8)
+            ),
+            uv_coordinates=[],
+            text="",
+            mesh_resource="",
+            mesh_file=t["visualization_msgs/msg/MeshFile"](
+                filename="", data=np.empty(0, dtype=np.uint8)
+            ),
+            mesh_use_embedded_materials=False,
+        )
+
+    def _markers(self, features: ScanFeatures, stamp: Any) -> Any:
+        lines = features.extraction.lines
+        segment_points = lines[:, [START_X, START_Y, END_X, END_Y]].reshape(-1, 2)
+        groups = (
+            ("segments", segment_points),
+            ("breakpoints", features.breakpoint_points),
+            ("corners", features.corner_points),
+        )
+        markers = [self._marker(stamp, "", 0, np.empty((0, 2)))]
+        markers += [
+            self._marker(stamp, name, 0, points) for name, points in groups if len(points) > 0
+        ]
+        return self._types.types["visualization_msgs/msg/MarkerArray"](markers=markers)
+
+    def _transform(self, pose: Sequence[float], stamp: Any) -> Any:
+        t = self._types.types
+        x, y, theta = pose
+        transform = t["geometry_msgs/msg/TransformStamped"](
+            header=self._header(stamp, self.world_frame),
+            child_frame_id=self.laser_frame,
+            transform=t["geometry_msgs/msg/Transform"](
+                translation=t["geometry_msgs/msg/Vector3"](x=x, y=y, z=0.0),
+                rotation=t["geometry_msgs/msg/Quaternion"](
+                    x=0.0, y=0.0, z=math.sin(theta / 2.0), w=math.cos(theta / 2.0)
+                ),
+            ),
+        )
+        return t["tf2_msgs/msg/TFMessage"](transforms=[transform])
+
+    # -- hooks ----------------------------------------------------------------------------
+
+    def _write(self, features: ScanFeatures) -> None:
+        stamp, bag_time = self._stamp(features)
+        serialize = self._types.serialize_cdr
+        scan_msg = self._laser_scan(features.scan, stamp)
+        self._writer.write(
+            self._scan_conn, bag_time, serialize(scan_msg, "sensor_msgs/msg/LaserScan")
+        )
+        markers = self._markers(features, stamp)
+        self._writer.write(
+            self._marker_conn, bag_time, serialize(markers, "visualization_msgs/msg/MarkerArray")
+        )
+        if features.scan.pose is not None:
+            tf = self._transform(features.scan.pose, stamp)
+            self._writer.write(self._tf_conn, bag_time, serialize(tf, "tf2_msgs/msg/TFMessage"))
+
+    def _commit(self) -> None:
+        self._writer.close()
+        source = self._bag_dir / f"{self._bag_dir.name}.mcap" if self.single_file else self._bag_dir
+        if self.path.is_dir():
+            shutil.rmtree(self.path)
+        os.replace(source, self.path)
+        shutil.rmtree(self._tmpdir, ignore_errors=True)
+
+    def _abort(self) -> None:
+        with contextlib.suppress(Exception):
+            self._writer.abort()
+        shutil.rmtree(self._tmpdir, ignore_errors=True)
+
+
+_WRITERS: dict[str, type[ResultWriter]] = {
+    ".jsonl": JsonlWriter,
+    ".csv": CsvWriter,
+    ".mcap": Ros2BagWriter,
+}
+
+
+def open_writer(
+    path: str | Path,
+    *,
+    meta: Mapping[str, Any] | None = None,
+    frame: Frame = "sensor",
+    **options: Any,
+) -> ResultWriter:
+    """Open a result writer, choosing the format from the path.
+
+    Parameters
+    ----------
+    path:
+        ``*.jsonl``, ``*.csv``, ``*.mcap``, or a path without suffix (or an
+        existing ROS 2 bag directory) for a ROS 2 bag directory.
+    meta:
+        Metadata for ``<path>.meta.json``: typically ``input``, ``method``,
+        ``params``, ``reader`` (the reader's :meth:`~scanlines.io.base.LogReader.options`).
+    frame:
+        ``"sensor"`` or ``"world"`` (see the module docstring).
+    **options:
+        Format options (``Ros2BagWriter``: ``storage``, ``topic``,
+        ``markers_topic``, ``laser_frame``, ``world_frame``, ``overwrite``).
+
+    Returns
+    -------
+    ResultWriter
+        A context manager; call ``write(index, scan, extraction)`` per scan.
+
+    Examples
+    --------
+    >>> with open_log("run.clf") as reader, open_writer("out.jsonl") as writer:  # doctest: +SKIP
+    ...     for index, scan in reader.enumerate():
+    ...         writer.write(index, scan, extract(scan))
+    ...     writer.update_meta(counts={"skipped_records": reader.error_count})
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix in _WRITERS:
+        cls = _WRITERS[suffix]
+    elif suffix == "" or (path.is_dir() and (path / "metadata.yaml").exists()):
+        cls = Ros2BagWriter
+    else:
+        raise ParameterError(
+            f"{path}: unknown output format {suffix!r}; use .jsonl, .csv, .mcap or a directory "
+            f"path without suffix (ROS 2 bag)"
+        )
+    if options and cls is not Ros2BagWriter:
+        raise ParameterError(f"{path}: options {sorted(options)} apply only to ROS 2 bag output")
+    return cls(path, meta=meta, frame=frame, **options)

@@ -1,0 +1,461 @@
+"""Random indoor scenes, reproducible from a seed.
+
+:func:`random_scene` builds a room or a corridor, places the sensor in it and fills it
+with the things line extractors get wrong: doors with walls behind them, boxes,
+square and round pillars, thin partitions, walls at arbitrary angles, a grazing wall
+(seen at 70-84 deg incidence) and short walls (3-12 beams long). Every scene is
+checked with a noise-free scan before it is returned: the grazing wall and a short
+wall must be visible, or the scene is drawn again. Mixed pixels and outliers come
+from the sensor's noise model when the scene is scanned (:meth:`Scene.scan`).
+
+All randomness comes from ``numpy.random.default_rng(seed)``; the same seed and
+sensor give the same scene on every platform numpy supports.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import NamedTuple
+
+import numpy as np
+
+from scanlines.sim.noise import NoiseModel
+from scanlines.sim.sensors import SensorSpec, get_sensor
+from scanlines.sim.simulate import SimScan, as_rng, simulate
+from scanlines.sim.world import Shape, World, box, polygon, polyline, round_pillar, wall
+
+__all__ = ["SCENE_KINDS", "Scene", "random_scene"]
+
+SCENE_KINDS = ("room", "corridor")
+"""The kinds of scene :func:`random_scene` builds."""
+
+# Incidence range of the grazing wall, and the smallest incidence that counts as grazing.
+GRAZING_INCIDENCE = (math.radians(70.0), math.radians(84.0))
+# Beam count range of the short walls.
+SHORT_WALL_BEAMS = (3, 12)
+# Largest distance the scene generator uses, as a cap on the sensor's range.
+_REACH_CAP = 10.0
+# Clearances in metres: obstacle to wall, obstacle to obstacle, sensor to anything.
+_WALL_GAP, _OBSTACLE_GAP, _SENSOR_GAP = 0.15, 0.1, 0.4
+_ATTEMPTS = 60
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """A world and a sensor pose in it.
+
+    Attributes
+    ----------
+    world:
+        The world.
+    pose:
+        Sensor pose ``(x, y, theta)``.
+    kind:
+        ``"room"`` or ``"corridor"``.
+    sensor:
+        The sensor the scene was laid out for (its field of view and range).
+    """
+
+    world: World
+    pose: tuple[float, float, float]
+    kind: str
+    sensor: SensorSpec
+
+    @property
+    def shape_kinds(self) -> frozenset[str]:
+        """The ``kind`` tags of the shapes in the scene."""
+        return frozenset(s.kind for s in self.world.shapes)
+
+    def scan(
+        self,
+        seed: int | np.random.Generator | None = None,
+        *,
+        noise: NoiseModel | None = None,
+        sensor: str | SensorSpec | None = None,
+    ) -> SimScan:
+        """Simulate a scan of the scene from its pose (see :func:`~scanlines.sim.simulate`)."""
+        return simulate(self.world, sensor or self.sensor, self.pose, seed=seed, noise=noise)
+
+
+# --------------------------------------------------------------------------- geometry
+
+
+def _segment_distance(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.ndarray) -> np.ndarray:
+    """Distance between segments ``p0 p1`` (rows) and ``q0 q1`` (columns), 0 if they cross."""
+    p0, p1 = p0[:, None, :], p1[:, None, :]
+    q0, q1 = q0[None, :, :], q1[None, :, :]
+
+    def point_to_segment(x: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        ab = b - a
+        t = np.clip(((x - a) * ab).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-300), 0.0, 1.0)
+        return np.hypot(*np.moveaxis(x - (a + t[..., None] * ab), -1, 0))
+
+    def orient(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+        return np.sign(
+            (b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1])
+            - (b[..., 1] - a[..., 1]) * (c[..., 0] - a[..., 0])
+        )
+
+    cross = (orient(p0, p1, q0) * orient(p0, p1, q1) < 0) & (
+        orient(q0, q1, p0) * orient(q0, q1, p1) < 0
+    )
+    dist = np.minimum.reduce(
+        [
+            point_to_segment(p0, q0, q1),
+            point_to_segment(p1, q0, q1),
+            point_to_segment(q0, p0, p1),
+            point_to_segment(q1, p0, p1),
+        ]
+    )
+    return np.where(cross, 0.0, dist)
+
+
+def _shape_distance(a: Shape, b: Shape) -> float:
+    return float(_segment_distance(a.edge_start, a.edge_end, b.edge_start, b.edge_end).min())
+
+
+def _point_distance(point: np.ndarray, shape: Shape) -> float:
+    p = np.asarray(point, dtype=np.float64).reshape(1, 2)
+    return float(_segment_distance(p, p, shape.edge_start, shape.edge_end).min())
+
+
+def _inside(point: np.ndarray, shape: Shape) -> bool:
+    """Point in a closed shape (even-odd rule); never inside an open one."""
+    if not shape.closed:
+        return False
+    x, y = point
+    a, b = shape.edge_start, shape.edge_end
+    straddle = (a[:, 1] > y) != (b[:, 1] > y)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x_cross = a[:, 0] + (y - a[:, 1]) * (b[:, 0] - a[:, 0]) / (b[:, 1] - a[:, 1])
+    return bool(np.count_nonzero(straddle & (x_cross > x)) % 2)
+
+
+def _inset_inside(point: np.ndarray, convex_ccw: np.ndarray, margin: float) -> bool:
+    """Point at least ``margin`` inside a counter-clockwise convex polygon."""
+    a = convex_ccw
+    d = np.roll(a, -1, axis=0) - a
+    normal = np.column_stack((-d[:, 1], d[:, 0])) / np.hypot(d[:, 0], d[:, 1])[:, None]
+    return bool(np.all(((np.asarray(point) - a) * normal).sum(1) >= margin))
+
+
+def _transform(shape: Shape, angle: float, offset: np.ndarray) -> Shape:
+    c, s = math.cos(angle), math.sin(angle)
+    pts = shape.vertices @ np.array([[c, s], [-s, c]]) + offset
+    return Shape(pts, closed=shape.closed, is_line=shape.is_line, kind=shape.kind)
+
+
+class _Door(NamedTuple):
+    """A door on edge ``edge`` between the fractions ``t0 < t1`` of its length.
+
+    ``depth == 0``: an opening. ``depth > 0``: a closed door in a niche that deep.
+    """
+
+    edge: int
+    t0: float
+    t1: float
+    depth: float = 0.0
+
+
+def _outline_with_doors(vertices: np.ndarray, doors: Sequence[_Door], kind: str) -> list[Shape]:
+    """The outline of a counter-clockwise polygon as polylines, doors cut or recessed.
+
+    Doors on one edge must not overlap. Niches go outwards.
+    """
+    k = len(vertices)
+    chains: list[np.ndarray] = []
+    current = [vertices[0]]
+    for e in range(k):
+        a, b = vertices[e], vertices[(e + 1) % k]
+        outward = np.array([b[1] - a[1], a[0] - b[0]]) / np.hypot(*(b - a))
+        for door in sorted(d for d in doors if d.edge == e):
+            p0, p1 = a + door.t0 * (b - a), a + door.t1 * (b - a)
+            if door.depth > 0:
+                current.extend([p0, p0 + door.depth * outward, p1 + door.depth * outward, p1])
+            else:
+                chains.append(np.array([*current, p0]))
+                current = [p1]
+        current.append(b)
+    if not chains:
+        return [polygon(np.array(current[:-1]), kind=kind)]
+    # the last chain ends at vertex 0, where the first one starts: join them
+    chains[0] = np.vstack([np.array(current[:-1]), chains[0]])
+    return [polyline(c, kind=kind) for c in chains]
+
+
+# --------------------------------------------------------------------------- layout
+
+
+@dataclass
+class _Layout:
+    """A scene under construction, in its local frame."""
+
+    rng: np.random.Generator
+    sensor: SensorSpec
+    reach: float
+    free: np.ndarray  # convex CCW polygon the sensor and obstacles must stay inside
+    walls: list[Shape]
+    pose: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    obstacles: list[Shape] = field(default_factory=list)
+
+    def uniform(self, low: float, high: float) -> float:
+        return float(self.rng.uniform(low, high))
+
+    def bearing(self) -> float:
+        """A bearing well inside the field of view (sensor frame)."""
+        lo, hi = sorted((self.sensor.angle_min, self.sensor.angle_max))
+        span = hi - lo
+        return self.uniform(lo + 0.12 * span, hi - 0.12 * span)
+
+    def fits(self, shape: Shape, wall_gap: float = _WALL_GAP) -> bool:
+        """Inside the free area, clear of the walls, the other obstacles and the sensor."""
+        centre = shape.vertices.mean(axis=0)
+        sensor = np.array(self.pose[:2])
+        return (
+            _inset_inside(centre, self.free, 0.0)
+            and all(_shape_distance(shape, w) >= wall_gap for w in self.walls)
+            and all(_shape_distance(shape, o) >= _OBSTACLE_GAP for o in self.obstacles)
+            and _point_distance(sensor, shape) >= _SENSOR_GAP
+            and not _inside(sensor, shape)
+        )
+
+    def place(self, make: Callable[[], Shape], tries: int = 40) -> bool:
+        """Draw shapes from ``make`` until one fits; keep it. False when none did."""
+        for _ in range(tries):
+            shape = make()
+            if self.fits(shape):
+                self.obstacles.append(shape)
+                return True
+        return False
+
+    def random_point(self, margin: float) -> np.ndarray:
+        lo, hi = self.free.min(axis=0), self.free.max(axis=0)
+        for _ in range(200):
+            p = self.rng.uniform(lo, hi)
+            if _inset_inside(p, self.free, margin):
+                return p
+        return self.free.mean(axis=0)
+
+    def ray_point(self, bearing: float, distance: float) -> np.ndarray:
+        x, y, theta = self.pose
+        return np.array(
+            [x + distance * math.cos(theta + bearing), y + distance * math.sin(theta + bearing)]
+        )
+
+
+def _grazing_wall(lay: _Layout) -> Shape:
+    """A wall crossing a beam at 70-84 deg incidence (a grazing wall)."""
+    bearing = lay.bearing()
+    d = lay.uniform(1.2, max(1.5, 0.5 * lay.reach))
+    gamma = math.pi / 2 - lay.uniform(*GRAZING_INCIDENCE)  # angle between wall and beam
+    direction = lay.pose[2] + bearing + (gamma if lay.rng.random() < 0.5 else -gamma)
+    u = np.array([math.cos(direction), math.sin(direction)])
+    hit = lay.ray_point(bearing, d)
+    back, ahead = lay.uniform(0.3, 0.6) * d, lay.uniform(0.5, 1.5) * d
+    return wall(hit - back * u, hit + ahead * u, kind="grazing wall")
+
+
+def _short_wall(lay: _Layout) -> Shape:
+    """A wall 3-12 beams long at its distance, facing the sensor within 50 deg."""
+    bearing = lay.bearing()
+    d = lay.uniform(0.8, max(1.0, 0.6 * lay.reach))
+    beams = lay.rng.integers(SHORT_WALL_BEAMS[0], SHORT_WALL_BEAMS[1] + 1)
+    incidence = lay.uniform(-math.radians(50), math.radians(50))
+    length = beams * d * abs(lay.sensor.angle_increment) / math.cos(incidence)
+    direction = lay.pose[2] + bearing + math.pi / 2 + incidence
+    u = np.array([math.cos(direction), math.sin(direction)]) * length / 2
+    hit = lay.ray_point(bearing, d)
+    return wall(hit - u, hit + u, kind="short wall")
+
+
+def _box(lay: _Layout, low: float, high: float, kind: str) -> Shape:
+    centre = lay.random_point(0.3)
+    return box(
+        centre, lay.uniform(low, high), lay.uniform(low, high), lay.uniform(0, math.pi), kind=kind
+    )
+
+
+def _partition(lay: _Layout) -> Shape:
+    centre = lay.random_point(0.5)
+    length = lay.uniform(0.8, min(2.5, 0.4 * lay.reach))
+    return box(centre, length, lay.uniform(0.02, 0.06), lay.uniform(0, math.pi), kind="partition")
+
+
+def _round(lay: _Layout) -> Shape:
+    sides = int(lay.rng.integers(24, 49))
+    return round_pillar(lay.random_point(0.4), lay.uniform(0.1, 0.35), sides=sides)
+
+
+def _furnish(lay: _Layout, n_boxes: int, n_pillars: int, n_round: int, n_partitions: int) -> None:
+    """Place the grazing wall and short walls first, then the rest."""
+    lay.place(lambda: _grazing_wall(lay))
+    for _ in range(int(lay.rng.integers(1, 3))):
+        lay.place(lambda: _short_wall(lay))
+    for _ in range(n_boxes):
+        lay.place(lambda: _box(lay, 0.3, min(1.2, 0.2 * lay.reach), "box"))
+    for _ in range(n_pillars):
+        lay.place(lambda: _box(lay, 0.2, 0.5, "pillar"))
+    for _ in range(n_round):
+        lay.place(lambda: _round(lay))
+    for _ in range(n_partitions):
+        lay.place(lambda: _partition(lay))
+
+
+def _door_depth(rng: np.random.Generator) -> float:
+    """Half the doors are openings, half closed doors in a 0.1-0.4 m niche."""
+    return float(rng.uniform(0.1, 0.4)) if rng.random() < 0.5 else 0.0
+
+
+def _with_an_opening(doors: list[_Door]) -> list[_Door]:
+    """Make sure at least one door is an opening (a door gap with a wall behind)."""
+    if doors and all(d.depth > 0 for d in doors):
+        doors[0] = doors[0]._replace(depth=0.0)
+    return doors
+
+
+def _room_doors(vertices: np.ndarray, rng: np.random.Generator) -> list[_Door]:
+    """1-3 doors, 0.8-1.0 m wide, on distinct walls long enough to hold them."""
+    lengths = np.hypot(*(np.roll(vertices, -1, axis=0) - vertices).T)
+    eligible = np.flatnonzero(lengths >= 1.8)
+    count = min(int(rng.integers(1, 4)), len(eligible))
+    doors = []
+    for e in sorted(rng.choice(eligible, size=count, replace=False).tolist()):
+        length, width = float(lengths[e]), float(rng.uniform(0.8, 1.0))
+        start = float(rng.uniform(0.4, length - 0.4 - width))
+        doors.append(_Door(e, start / length, (start + width) / length, _door_depth(rng)))
+    return _with_an_opening(doors)
+
+
+def _room(rng: np.random.Generator, sensor: SensorSpec, reach: float) -> _Layout:
+    w, h = reach * rng.uniform(0.6, 1.5), reach * rng.uniform(0.5, 1.2)
+    vertices = _chamfered_rectangle(w, h, rng)
+    doors = _room_doors(vertices, rng)
+    margin = rng.uniform(1.0, 2.5, size=4)
+    outer = box(
+        ((margin[1] - margin[0]) / 2, (margin[3] - margin[2]) / 2),
+        w + margin[0] + margin[1],
+        h + margin[2] + margin[3],
+        kind="outer wall",
+    )
+    lay = _Layout(
+        rng, sensor, reach, vertices, [*_outline_with_doors(vertices, doors, "room wall"), outer]
+    )
+    p = lay.random_point(0.6)
+    lay.pose = (float(p[0]), float(p[1]), float(rng.uniform(-math.pi, math.pi)))
+    _furnish(lay, int(rng.integers(1, 4)), int(rng.integers(0, 3)), int(rng.integers(1, 3)), 1)
+    return lay
+
+
+def _chamfered_rectangle(w: float, h: float, rng: np.random.Generator) -> np.ndarray:
+    """A ``w`` x ``h`` rectangle (CCW) with 0-2 corners cut off at arbitrary angles."""
+    rect = np.array([(-w / 2, -h / 2), (w / 2, -h / 2), (w / 2, h / 2), (-w / 2, h / 2)])
+    cut = set(rng.choice(4, size=int(rng.integers(0, 3)), replace=False).tolist())
+    out = []
+    for i, pt in enumerate(rect):
+        if i not in cut:
+            out.append(pt)
+            continue
+        to_prev, to_next = rect[i - 1] - pt, rect[(i + 1) % 4] - pt
+        to_prev /= np.hypot(*to_prev)
+        to_next /= np.hypot(*to_next)
+        cut_a, cut_b = rng.uniform(0.12, 0.35, size=2) * min(w, h)
+        out.extend([pt + cut_a * to_prev, pt + cut_b * to_next])
+    return np.array(out)
+
+
+def _corridor(rng: np.random.Generator, sensor: SensorSpec, reach: float) -> _Layout:
+    length, width = reach * rng.uniform(1.2, 2.5), rng.uniform(1.6, 3.0)
+    vertices = np.array(
+        [(0.0, -width / 2), (length, -width / 2), (length, width / 2), (0.0, width / 2)]
+    )
+    doors: list[_Door] = []
+    for side in (0, 2):
+        n = int(rng.integers(1, 3))
+        slots = np.sort(rng.choice(np.array([1, 3, 5]), size=n, replace=False))
+        for slot in slots:
+            t0 = slot / 6 - 0.08 + rng.uniform(-0.03, 0.03)  # the door ends before 0.95
+            doors.append(_Door(side, t0, t0 + rng.uniform(0.8, 1.0) / length, _door_depth(rng)))
+    walls = _outline_with_doors(vertices, _with_an_opening(doors), "corridor wall")
+    behind = rng.uniform(2.0, 4.0, size=2)
+    outer = box(
+        (length / 2, (behind[1] - behind[0]) / 2),
+        length + 1.0,
+        width + behind.sum(),
+        kind="outer wall",
+    )
+    lay = _Layout(rng, sensor, reach, vertices, [*walls, outer])
+    y = rng.uniform(-width / 2 + 0.5, width / 2 - 0.5)
+    heading = rng.uniform(-math.radians(25), math.radians(25))
+    lay.pose = (float(rng.uniform(0.5, 0.25 * length)), float(y), float(heading))
+    _furnish(lay, 1, int(rng.integers(0, 2)), 1, 0)
+    return lay
+
+
+# --------------------------------------------------------------------------- checks
+
+
+def _visible_features(world: World, sensor: SensorSpec, pose: tuple[float, float, float]) -> bool:
+    """Noise-free check: a grazing line edge with >= 5 beams and a visible short wall."""
+    sim = simulate(world, sensor, pose, noise=NoiseModel())
+    truth = sim.truth
+    returned = truth.true_return
+    grazing = returned & (truth.incidence >= GRAZING_INCIDENCE[0]) & ~truth.on_curve
+    edges, counts = np.unique(truth.edge[grazing], return_counts=True)
+    short_ids = [i for i, s in enumerate(world.shapes) if s.kind == "short wall"]
+    short_edges = np.flatnonzero(np.isin(world.edge_shape, short_ids))
+    short_hits = np.count_nonzero(np.isin(truth.edge[returned], short_edges))
+    return bool(len(edges) and counts.max() >= 5 and short_hits >= 2)
+
+
+def random_scene(
+    seed: int | np.random.Generator | None = None,
+    sensor: str | SensorSpec = "lms_1deg",
+    kind: str | None = None,
+) -> Scene:
+    """A random room or corridor scene laid out for ``sensor``.
+
+    Parameters
+    ----------
+    seed:
+        Seed or generator (``numpy.random.default_rng(seed)``): the same seed and
+        sensor give the same scene.
+    sensor:
+        Preset name or spec; the scene's size follows its range (capped at 10 m) and
+        its short walls its angular step.
+    kind:
+        ``"room"`` or ``"corridor"``; ``None`` picks one at random.
+
+    Returns
+    -------
+    Scene
+        The world is turned by a random angle and shifted, so walls run at arbitrary
+        angles in the world frame.
+
+    Raises
+    ------
+    ValueError
+        For an unknown ``kind``, or when no scene with the required features could be
+        drawn (not seen in practice).
+    """
+    rng = as_rng(seed)
+    spec = get_sensor(sensor)
+    if kind is not None and kind not in SCENE_KINDS:
+        raise ValueError(f"unknown scene kind {kind!r}; known: {', '.join(SCENE_KINDS)}")
+    chosen = kind or str(rng.choice(SCENE_KINDS))
+    reach = min(spec.range_max, _REACH_CAP)
+    for _ in range(_ATTEMPTS):
+        lay = (_room if chosen == "room" else _corridor)(rng, spec, reach)
+        angle, offset = float(rng.uniform(-math.pi, math.pi)), rng.uniform(-20.0, 20.0, size=2)
+        world = World(_transform(s, angle, offset) for s in [*lay.walls, *lay.obstacles])
+        x, y, theta = lay.pose
+        c, s = math.cos(angle), math.sin(angle)
+        pose = (c * x - s * y + offset[0], s * x + c * y + offset[1], _wrap(theta + angle))
+        if _visible_features(world, spec, pose):
+            return Scene(world=world, pose=pose, kind=chosen, sensor=spec)
+    raise ValueError("could not draw a scene with a visible grazing wall and short wall")
+
+
+def _wrap(angle: float) -> float:
+    return float(math.remainder(angle, 2.0 * math.pi))

@@ -1,0 +1,433 @@
+"""Exact ground truth of a simulated scan: breakpoints, corners and true segments.
+
+Conventions (they follow the project's, see ``METHOD.md``):
+
+* A beam is a **true return** when its measured range is a return of the surface the
+  beam hits (:attr:`BeamStatus.HIT`). Beams with no return (nothing hit, dropout,
+  out of range) and beams whose return belongs to no surface (outliers, mixed pixels)
+  are all *missing* for the truth events; outliers and mixed pixels are listed
+  separately (:attr:`Truth.outliers`, :attr:`Truth.mixed_pixels`).
+* Surfaces: every edge of a line shape is its own surface; all edges of a curved
+  shape (a round pillar, ``is_line=False``) together form one surface.
+* For consecutive true returns ``i < j`` (skipping missing beams):
+
+  - two or more missing beams between them: a **breakpoint** at ``i``;
+  - else the same surface: continuous (so one missing beam inside a wall is bridged);
+  - else two adjacent edges of one line shape (sharing a vertex): a **corner**, at
+    ``i`` or ``j``, whichever hit point is nearer the shared vertex (``i`` on a tie);
+  - else (different surfaces that do not meet): a **breakpoint** at ``i``.
+
+* The first and last beams of a partial scan are not events. In a full-circle scan
+  (:func:`scanlines.scan.is_full_circle`) the last true return is followed by the
+  first, across the seam, like any other pair.
+* **True segments** are the maximal runs of true returns between events on line
+  edges (runs on curved surfaces are not segments). A segment's ``first``/``last``
+  are its first/last beam (``first > last`` for the one run that crosses the seam of
+  a full-circle scan), ``rho``/``alpha`` the Hesse form of the true edge line in the
+  sensor frame (``rho >= 0``), ``start``/``end`` the exact hit points of its
+  first/last beam.
+* Every event records the number of true returns in the run before and after it
+  (``*_runs``), so that scoring can treat events next to tiny runs as "don't care".
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from scanlines.sim.noise import BeamStatus
+from scanlines.sim.world import World
+
+__all__ = ["TrueSegments", "Truth", "compute_truth", "hesse_line"]
+
+_NONE, _BREAK, _CORNER = 0, 1, 2
+
+
+def _readonly(values: np.ndarray) -> np.ndarray:
+    values.setflags(write=False)
+    return values
+
+
+@dataclass(frozen=True, eq=False)
+class TrueSegments:
+    """The true segments of one scan, as parallel arrays (one row per segment).
+
+    Attributes
+    ----------
+    first, last:
+        Inclusive beam indices (``first > last`` only across the seam).
+    edge:
+        Edge id of the world edge the segment lies on.
+    n_returns:
+        True returns in the segment.
+    rho, alpha:
+        Hesse normal form of the true edge line in the sensor frame.
+    start, end:
+        ``M x 2`` exact hit points of the first and last beam (sensor frame).
+    """
+
+    first: np.ndarray
+    last: np.ndarray
+    edge: np.ndarray
+    n_returns: np.ndarray
+    rho: np.ndarray
+    alpha: np.ndarray
+    start: np.ndarray
+    end: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.first)
+
+    @property
+    def lines(self) -> np.ndarray:
+        """``M x 7`` rows like :attr:`scanlines.Extraction.lines` (rms is 0)."""
+        return np.column_stack(
+            (self.rho, self.alpha, self.start, self.end, np.zeros(len(self)))
+        ).reshape(-1, 7)
+
+
+@dataclass(frozen=True, eq=False)
+class Truth:
+    """Ground truth of one simulated scan (see the module docstring for the rules).
+
+    Attributes
+    ----------
+    n_beams:
+        Number of beams.
+    full_circle:
+        Whether the scan closes the circle (its seam is crossed like any pair).
+    pose:
+        Sensor pose ``(x, y, theta)`` in the world frame.
+    edge:
+        Edge each beam's ray hits (at any distance), ``-1`` for none.
+    true_ranges:
+        Exact range to that edge, ``inf`` for none.
+    hit_points:
+        ``N x 2`` exact hit points in the sensor frame (NaN for none).
+    incidence:
+        Angle in radians between each beam and the normal of the surface it hits
+        (0 = head-on, near pi/2 = grazing; NaN for none).
+    on_curve:
+        Beams whose ray hits a curved shape (not a line).
+    status:
+        :class:`BeamStatus` code of each beam.
+    breakpoints:
+        Sorted beam indices of the true breakpoints.
+    breakpoint_runs:
+        ``B x 2``: true returns in the run before and after each breakpoint.
+    corners:
+        Sorted beam indices of the true corners.
+    corner_points:
+        ``C x 2`` corner vertices in the sensor frame.
+    corner_runs:
+        ``C x 2``: true returns in the run before and after each corner.
+    segments:
+        The true segments.
+    """
+
+    n_beams: int
+    full_circle: bool
+    pose: tuple[float, float, float]
+    edge: np.ndarray
+    true_ranges: np.ndarray
+    hit_points: np.ndarray
+    incidence: np.ndarray
+    on_curve: np.ndarray
+    status: np.ndarray
+    breakpoints: np.ndarray
+    breakpoint_runs: np.ndarray
+    corners: np.ndarray
+    corner_points: np.ndarray
+    corner_runs: np.ndarray
+    segments: TrueSegments
+
+    @property
+    def true_return(self) -> np.ndarray:
+        """Beams whose measured range is a return of the surface they hit."""
+        return self.status == BeamStatus.HIT
+
+    @property
+    def outliers(self) -> np.ndarray:
+        """Beam indices of injected outliers (spurious short returns)."""
+        return np.flatnonzero(self.status == BeamStatus.OUTLIER)
+
+    @property
+    def mixed_pixels(self) -> np.ndarray:
+        """Beam indices of mixed pixels (returns between two surfaces)."""
+        return np.flatnonzero(self.status == BeamStatus.MIXED)
+
+    @property
+    def dropouts(self) -> np.ndarray:
+        """Beam indices of random dropouts."""
+        return np.flatnonzero(self.status == BeamStatus.DROPOUT)
+
+    def hit_points_world(self) -> np.ndarray:
+        """``N x 2`` exact hit points in the world frame (NaN for none)."""
+        return sensor_to_world(self.hit_points, self.pose)
+
+    def corner_points_world(self) -> np.ndarray:
+        """``C x 2`` corner vertices in the world frame."""
+        return sensor_to_world(self.corner_points, self.pose)
+
+    def to_dict(self) -> dict[str, object]:
+        """Plain-Python form of the events and segments (JSON-serialisable)."""
+        seg = self.segments
+        return {
+            "n_beams": self.n_beams,
+            "full_circle": self.full_circle,
+            "pose": list(self.pose),
+            "breakpoints": self.breakpoints.tolist(),
+            "corners": self.corners.tolist(),
+            "corner_points": self.corner_points.tolist(),
+            "segments": [
+                {
+                    "first": int(seg.first[k]),
+                    "last": int(seg.last[k]),
+                    "edge": int(seg.edge[k]),
+                    "n_returns": int(seg.n_returns[k]),
+                    "rho": float(seg.rho[k]),
+                    "alpha": float(seg.alpha[k]),
+                    "start": seg.start[k].tolist(),
+                    "end": seg.end[k].tolist(),
+                }
+                for k in range(len(seg))
+            ],
+            "outliers": self.outliers.tolist(),
+            "mixed_pixels": self.mixed_pixels.tolist(),
+            "dropouts": self.dropouts.tolist(),
+        }
+
+
+def sensor_to_world(points: np.ndarray, pose: tuple[float, float, float]) -> np.ndarray:
+    """Map ``K x 2`` sensor-frame points to the world frame."""
+    x, y, theta = pose
+    c, s = math.cos(theta), math.sin(theta)
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    return np.column_stack((x + c * p[:, 0] - s * p[:, 1], y + s * p[:, 0] + c * p[:, 1]))
+
+
+def world_to_sensor(points: np.ndarray, pose: tuple[float, float, float]) -> np.ndarray:
+    """Map ``K x 2`` world-frame points to the sensor frame."""
+    x, y, theta = pose
+    c, s = math.cos(theta), math.sin(theta)
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 2) - (x, y)
+    return np.column_stack((c * p[:, 0] + s * p[:, 1], -s * p[:, 0] + c * p[:, 1]))
+
+
+def hesse_line(start: np.ndarray, end: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Hesse form ``(rho, alpha)`` of the lines through ``start[k]`` and ``end[k]``.
+
+    ``x cos(alpha) + y sin(alpha) = rho`` with ``rho >= 0`` and ``alpha`` in
+    ``(-pi, pi]``.
+    """
+    a = np.asarray(start, dtype=np.float64).reshape(-1, 2)
+    b = np.asarray(end, dtype=np.float64).reshape(-1, 2)
+    d = b - a
+    normal = np.column_stack((-d[:, 1], d[:, 0])) / np.hypot(d[:, 0], d[:, 1])[:, None]
+    rho = np.einsum("ij,ij->i", normal, a)
+    flip = rho < 0
+    normal[flip] *= -1.0
+    rho = np.abs(rho)
+    alpha = np.arctan2(normal[:, 1], normal[:, 0])
+    alpha = np.where(alpha <= -math.pi, alpha + 2 * math.pi, alpha) + 0.0  # no -0.0
+    return rho, alpha
+
+
+@dataclass(frozen=True)
+class _Pairs:
+    """Consecutive true returns ``left[k] -> right[k]`` and what lies between them."""
+
+    left: np.ndarray
+    right: np.ndarray
+    kind: np.ndarray
+
+
+def _classify_pairs(
+    world: World, returns: np.ndarray, edge: np.ndarray, n: int, circle: bool
+) -> _Pairs:
+    if circle and len(returns) >= 1:
+        left, right = returns, np.roll(returns, -1)
+    else:
+        left, right = returns[:-1], returns[1:]
+    missing = (right - left - 1) % n
+    key = world.surface_key(edge)
+    same = key[left] == key[right]
+    adjacent = world.adjacent(edge[left], edge[right]) & world.edge_is_line[edge[left]]
+    adjacent &= world.edge_is_line[edge[right]]
+    kind = np.where(same, _NONE, np.where(adjacent, _CORNER, _BREAK))
+    kind = np.where(missing >= 2, _BREAK, kind)
+    return _Pairs(left, right, kind.astype(np.int8))
+
+
+def _runs(n_returns: int, event_pos: np.ndarray, circle: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Start position and length (in true returns) of each run between events.
+
+    ``event_pos[k]`` is the position (in the list of true returns) after which event
+    ``k`` occurs. Run ``k`` is the one after event ``k - 1`` (linear: run 0 starts the
+    scan); in a circle run ``k`` is the one after event ``k``.
+    """
+    if circle:
+        if len(event_pos) == 0:
+            return np.array([0]), np.array([n_returns])
+        starts = (event_pos + 1) % n_returns
+        lengths = np.diff(np.append(event_pos, event_pos[0] + n_returns))
+        return starts, lengths
+    starts = np.concatenate(([0], event_pos + 1))
+    ends = np.append(event_pos, n_returns - 1)
+    return starts, ends - starts + 1
+
+
+def _event_runs(lengths: np.ndarray, n_events: int, circle: bool) -> np.ndarray:
+    """``K x 2`` run length before and after each event."""
+    if circle:
+        if n_events == 0:
+            return np.empty((0, 2), np.intp)
+        return np.column_stack((np.roll(lengths, 1), lengths)).reshape(-1, 2)
+    return np.column_stack((lengths[:-1], lengths[1:])).reshape(-1, 2)
+
+
+def _true_segments(
+    world: World,
+    pose: tuple[float, float, float],
+    returns: np.ndarray,
+    edge: np.ndarray,
+    hit_points: np.ndarray,
+    run_starts: np.ndarray,
+    run_lengths: np.ndarray,
+) -> TrueSegments:
+    """The runs on line edges, as segments."""
+    m = len(returns)
+    if m == 0:
+        run_starts = run_lengths = np.empty(0, np.intp)
+    first = returns[run_starts % max(m, 1)] if m else np.empty(0, np.intp)
+    last = returns[(run_starts + run_lengths - 1) % max(m, 1)] if m else np.empty(0, np.intp)
+    on_line = world.edge_is_line[edge[first]] if m else np.empty(0, bool)
+    first, last, n_ret = first[on_line], last[on_line], run_lengths[on_line]
+    seg_edge = edge[first]
+    a = world_to_sensor(world.edge_start[seg_edge], pose)
+    b = world_to_sensor(world.edge_end[seg_edge], pose)
+    rho, alpha = hesse_line(a, b)
+    return TrueSegments(
+        first=_readonly(first.astype(np.intp)),
+        last=_readonly(last.astype(np.intp)),
+        edge=_readonly(seg_edge.astype(np.intp)),
+        n_returns=_readonly(n_ret.astype(np.intp)),
+        rho=_readonly(rho),
+        alpha=_readonly(alpha),
+        start=_readonly(hit_points[first].reshape(-1, 2).copy()),
+        end=_readonly(hit_points[last].reshape(-1, 2).copy()),
+    )
+
+
+def _corner_beams(
+    world: World,
+    pose: tuple[float, float, float],
+    edge: np.ndarray,
+    hit_points: np.ndarray,
+    left: np.ndarray,
+    right: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Beam of each corner (``left`` or ``right``, whichever hit is nearer the vertex).
+
+    Returns the beams and the ``C x 2`` shared vertices in the sensor frame.
+    """
+    vertices = world_to_sensor(world.shared_vertex(edge[left], edge[right]), pose)
+    d_left = np.hypot(*(hit_points[left] - vertices).T).reshape(-1)
+    d_right = np.hypot(*(hit_points[right] - vertices).T).reshape(-1)
+    return np.where(d_left <= d_right, left, right), vertices
+
+
+def _incidence(world: World, edge: np.ndarray, world_angles: np.ndarray) -> np.ndarray:
+    out = np.full(len(edge), np.nan)
+    hit = edge >= 0
+    if not hit.any():
+        return out
+    normals = world.edge_normals()[edge[hit]]
+    cos_inc = np.abs(
+        np.cos(world_angles[hit]) * normals[:, 0] + np.sin(world_angles[hit]) * normals[:, 1]
+    )
+    out[hit] = np.arccos(np.clip(cos_inc, 0.0, 1.0))
+    return out
+
+
+def compute_truth(
+    world: World,
+    pose: tuple[float, float, float],
+    angles: np.ndarray,
+    edge: np.ndarray,
+    true_ranges: np.ndarray,
+    status: np.ndarray,
+    *,
+    full_circle: bool,
+) -> Truth:
+    """Ground truth of one scan from its exact hits and beam statuses.
+
+    Parameters
+    ----------
+    world:
+        The world the scan was taken in.
+    pose:
+        Sensor pose ``(x, y, theta)`` in the world frame.
+    angles:
+        Beam bearings in the sensor frame.
+    edge, true_ranges:
+        Edge hit by each beam and the exact range (``-1`` / ``inf`` for none).
+    status:
+        :class:`BeamStatus` of each beam.
+    full_circle:
+        Whether the scan closes the circle.
+
+    Returns
+    -------
+    Truth
+    """
+    pose = (float(pose[0]), float(pose[1]), float(pose[2]))
+    edge = np.asarray(edge, dtype=np.intp)
+    r = np.asarray(true_ranges, dtype=np.float64)
+    theta = np.asarray(angles, dtype=np.float64)
+    n = len(edge)
+    with np.errstate(invalid="ignore"):
+        hit_points = np.where(
+            (edge >= 0)[:, None], np.column_stack((r * np.cos(theta), r * np.sin(theta))), np.nan
+        ).reshape(n, 2)
+    status = np.asarray(status, dtype=np.int8)
+    returns = np.flatnonzero((status == BeamStatus.HIT) & (edge >= 0))
+
+    pairs = _classify_pairs(world, returns, edge, n, full_circle)
+    event_pos = np.flatnonzero(pairs.kind != _NONE)
+    run_starts, run_lengths = _runs(len(returns), event_pos, full_circle)
+    runs = (
+        _event_runs(run_lengths, len(event_pos), full_circle)
+        if len(returns)
+        else np.empty((0, 2), np.intp)
+    )
+
+    kinds = pairs.kind[event_pos]
+    is_break, is_corner = kinds == _BREAK, kinds == _CORNER
+    left, right = pairs.left[event_pos], pairs.right[event_pos]
+
+    corner_beam, vertices = _corner_beams(
+        world, pose, edge, hit_points, left[is_corner], right[is_corner]
+    )
+
+    bp_order = np.argsort(left[is_break], kind="stable")
+    c_order = np.argsort(corner_beam, kind="stable")
+    return Truth(
+        n_beams=n,
+        full_circle=bool(full_circle),
+        pose=pose,
+        edge=_readonly(edge.copy()),
+        true_ranges=_readonly(r.copy()),
+        hit_points=_readonly(hit_points),
+        incidence=_readonly(_incidence(world, edge, theta + pose[2])),
+        on_curve=_readonly(world.surface_key(edge) >= world.n_edges),
+        status=_readonly(status.copy()),
+        breakpoints=_readonly(left[is_break][bp_order].astype(np.intp)),
+        breakpoint_runs=_readonly(runs[is_break][bp_order].astype(np.intp)),
+        corners=_readonly(corner_beam[c_order].astype(np.intp)),
+        corner_points=_readonly(vertices[c_order]),
+        corner_runs=_readonly(runs[is_corner][c_order].astype(np.intp)),
+        segments=_true_segments(world, pose, returns, edge, hit_points, run_starts, run_lengths),
+    )
