@@ -15,7 +15,14 @@ from scanlines.errors import ParameterError
 from scanlines.extractor import Extractor
 from scanlines.scan import Scan
 
-__all__ = ["LogDescription", "RunSummary", "describe_log", "parse_slice", "run_log"]
+__all__ = [
+    "LogDescription",
+    "RunSummary",
+    "describe_log",
+    "parse_slice",
+    "run_log",
+    "run_log_to_file",
+]
 
 
 def parse_slice(text: str | None) -> slice:
@@ -175,4 +182,37 @@ def run_log(
             on_scan(index)
     summary.skipped_records = int(getattr(reader, "error_count", 0))
     summary.total_seconds = clock() - started
+    return summary
+
+
+def run_log_to_file(
+    reader: Any,
+    extractor: Extractor,
+    out: Any,
+    *,
+    frame: str = "sensor",
+    scans: slice = slice(None),
+    on_scan: Callable[[int], None] | None = None,
+    input_name: str | None = None,
+) -> RunSummary:
+    """:func:`run_log`, writing to ``out`` (format by extension: :func:`scanlines.io.open_writer`).
+
+    The output appears complete, with its ``.meta.json``, or not at all.
+    """
+    from scanlines.io import open_writer
+
+    meta = {
+        "input": input_name or str(reader.path),
+        "method": extractor.method,
+        "params": dict(extractor.params),
+        "reader": reader.options(),
+        "scans": ":".join(
+            "" if v is None else str(v) for v in (scans.start, scans.stop, scans.step)
+        ),
+    }
+    with open_writer(out, meta=meta, frame=frame) as writer:
+        summary = run_log(reader, extractor, writer=writer, scans=scans, on_scan=on_scan)
+        writer.update_meta(
+            counts={"scans": summary.scans, "skipped_records": summary.skipped_records}
+        )
     return summary

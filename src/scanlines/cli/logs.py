@@ -180,7 +180,7 @@ def run_command(
 def _run_with_progress(reader, extractor, selection, out, frame, log):
     from rich.progress import BarColumn, Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
-    from scanlines.runner import run_log
+    from scanlines.runner import run_log, run_log_to_file
 
     columns = (
         SpinnerColumn(),
@@ -197,26 +197,15 @@ def _run_with_progress(reader, extractor, selection, out, frame, log):
 
         if out is None:
             return run_log(reader, extractor, scans=selection, on_scan=advance)
-        from scanlines.io import open_writer
-
-        meta = {
-            "input": str(log),
-            "method": extractor.method,
-            "params": dict(extractor.params),
-            "reader": reader.options(),
-            "scans": _slice_text(selection),
-        }
-        with open_writer(out, meta=meta, frame=frame) as writer:
-            summary = run_log(reader, extractor, writer=writer, scans=selection, on_scan=advance)
-            writer.update_meta(
-                counts={"scans": summary.scans, "skipped_records": summary.skipped_records}
-            )
-        return summary
-
-
-def _slice_text(selection: slice) -> str:
-    parts = [selection.start, selection.stop, selection.step]
-    return ":".join("" if p is None else str(p) for p in parts)
+        return run_log_to_file(
+            reader,
+            extractor,
+            out,
+            frame=frame,
+            scans=selection,
+            on_scan=advance,
+            input_name=str(log),
+        )
 
 
 def _print_summary(summary, out) -> None:
@@ -291,26 +280,16 @@ def demo_command(
 ) -> None:
     from scanlines.data import sample
     from scanlines.extractor import Extractor
-    from scanlines.io import open_log, open_writer
+    from scanlines.io import open_log
     from scanlines.plot import plot_grid, save
-    from scanlines.runner import run_log, select
+    from scanlines.runner import run_log_to_file, select
 
     log = sample("intel")
     extractor = Extractor()
     output.mkdir(parents=True, exist_ok=True)
     jsonl = output / "intel.jsonl"
     with open_log(log) as reader:
-        meta = {
-            "input": log.name,
-            "method": extractor.method,
-            "params": dict(extractor.params),
-            "reader": reader.options(),
-        }
-        with open_writer(jsonl, meta=meta) as writer:
-            summary = run_log(reader, extractor, writer=writer)
-            writer.update_meta(
-                counts={"scans": summary.scans, "skipped_records": summary.skipped_records}
-            )
+        summary = run_log_to_file(reader, extractor, jsonl, input_name=log.name)
         panels = [
             (s, extractor(s), f"Intel #{i}")
             for i, s in select(reader.enumerate(), slice(0, None, 50))
