@@ -103,8 +103,9 @@ from scanlines.steps.denoise import (
     isolated_noise,
     literal_noise,
     replace_by_window_mean,
+    small_clusters,
 )
-from scanlines.steps.fit import FITS, Moments, fit_runs, point_residuals, run_labels
+from scanlines.steps.fit import FITS, Moments, fit_runs
 from scanlines.steps.merge import merge_collinear, split_by_residual
 from scanlines.steps.points import Sequence, rotate
 from scanlines.steps.select import CRITERIA, sweep, threshold_grid
@@ -138,6 +139,9 @@ PARAMS: dict[str, Param] = {
         0.1, optional(number(low=0.0, low_open=True)), "largest point-to-line distance (m)"
     ),
     "min_points": Param(3, int_at_least(2), "fewest points of a segment"),
+    "min_cluster_points": Param(
+        3, int_at_least(1), "isolated denoising: smaller clusters are dropped as noise"
+    ),
     "min_length": Param(0.0, number(low=0.0), "shortest segment (m)"),
     "range_sigma": Param(0.01, number(low=0.0), "range noise for the covariance (m)"),
 }
@@ -147,6 +151,7 @@ PRESETS: dict[str, dict[str, Any]] = {
         "breakpoints": "adaptive",
         "k": 3.0,
         "noise_k": 0.0,
+        "line_k": 0.0,
         "denoise": "paper",
         "window": 10,
         "corner_score": "dk",
@@ -159,6 +164,7 @@ PRESETS: dict[str, dict[str, Any]] = {
         "merge": False,
         "max_residual": None,
         "min_points": 2,
+        "min_cluster_points": 1,
         "min_length": 0.0,
     },
 }
@@ -200,7 +206,7 @@ def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extractio
     if params["noise_sigma"] == "auto" and params["criterion"] == "bic":
         # Second pass with the noise measured on the lines of the first choice.
         a, b, _ = _cut(clusters, selection.corners, shared)
-        sigma = _residual_sigma(seq, moments, params["fit"], a, b, sigma)
+        sigma = _residual_sigma(moments, params["fit"], a, b, sigma)
         selection = cuts.choose(params["criterion"], sigma, params["penalty"])
     a, b, owner = _cut(clusters, selection.corners, shared)
     if not shared:
@@ -254,16 +260,26 @@ def _noise_sigma(seq: Sequence, params: Mapping[str, Any]) -> float:
 
 
 def _residual_sigma(
-    seq: Sequence, moments: Moments, fit: str, a: np.ndarray, b: np.ndarray, fallback: float
+    moments: Moments, fit: str, a: np.ndarray, b: np.ndarray, fallback: float
 ) -> float:
-    """Robust noise from the orthogonal residuals of the runs ``[a, b]``."""
-    lines = fit_runs(fit, moments, a, b)
-    position, run = run_labels(a, b, len(seq))
-    residual = np.abs(point_residuals(seq.x, seq.y, lines.rho, lines.alpha, position, run))
-    residual = residual[np.isfinite(residual)]
-    if residual.size < 3:
+    """Noise from the fits of the runs ``[a, b]``: the median of ``sqrt(SSE / (n - 2))``.
+
+    Only runs of :data:`MIN_RUN_FOR_NOISE` points or more count (short runs fit
+    their own noise); the median ignores the few runs that still hide a corner.
+    """
+    long_enough = b - a + 1 >= MIN_RUN_FOR_NOISE
+    if not long_enough.any():
         return fallback
-    return max(float(np.median(residual)) / 0.6745, MIN_NOISE_SIGMA)
+    a, b = a[long_enough], b[long_enough]
+    sse = fit_runs(fit, moments, a, b).sse
+    per_run = np.sqrt(sse / (b - a - 1))
+    per_run = per_run[np.isfinite(per_run)]
+    if per_run.size == 0:
+        return fallback
+    return max(float(np.median(per_run)), MIN_NOISE_SIGMA)
+
+
+MIN_RUN_FOR_NOISE = 8
 
 
 def _denoise(
@@ -279,6 +295,17 @@ def _denoise(
         noise = literal_noise(d)
         return replace_by_window_mean(seq, noise, params["window"], raw_breaks), none
     noise = isolated_noise(seq, rule, raw_breaks)
+    if params["min_cluster_points"] > 1:
+        kept = seq.subset(~noise)
+        joined = (
+            is_full_circle(seq.n_beams, seq.step)
+            and len(kept) >= 3
+            and not seam_is_break(kept, rule)
+        )
+        small = small_clusters(
+            is_break(kept, rule), params["min_cluster_points"], seam_joined=joined
+        )
+        noise[np.flatnonzero(~noise)[small]] = True
     if not noise.any():
         return seq, none
     return seq.subset(~noise), seq.index[noise]

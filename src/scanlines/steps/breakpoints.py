@@ -69,6 +69,11 @@ BREAKPOINT_PARAMS: dict[str, Param] = {
     "noise_k": Param(
         3.0, number(low=0.0), "adaptive/abd: noise margin in sigmas of a range difference"
     ),
+    "line_k": Param(
+        3.0,
+        number(low=0.0),
+        "continuing a line bridges any step: tolerance in sigmas of an extrapolation (0: off)",
+    ),
     "abd_lambda": Param(
         10.0, number(low=0.0, high=90.0, low_open=True), "ABD: worst incidence angle, degrees"
     ),
@@ -86,6 +91,7 @@ class BreakpointRule:
     name: str = "adaptive"
     k: float = 3.0
     noise_margin: float = 0.0
+    line_tolerance: float = 0.0
     abd_lambda: float = math.radians(10.0)
     pdbs_c0: float = 0.1
     jump_distance: float = 0.3
@@ -97,6 +103,7 @@ class BreakpointRule:
             name=params["breakpoints"],
             k=params["k"],
             noise_margin=params.get("noise_k", 0.0) * math.sqrt(2.0) * sigma,
+            line_tolerance=params.get("line_k", 0.0) * math.sqrt(5.0) * sigma,
             abd_lambda=math.radians(params["abd_lambda"]),
             pdbs_c0=params["pdbs_c0"],
             jump_distance=params["jump_distance"],
@@ -145,7 +152,50 @@ def is_break(seq: Sequence, rule: BreakpointRule) -> np.ndarray:
     """For each pair of consecutive positions, True where a cluster ends."""
     d = neighbour_distances(seq.x, seq.y)
     limit = thresholds(rule, seq.r[:-1], seq.r[1:], seq.gap, seq.step)
-    return (seq.gap > MAX_BRIDGED_GAP) | ~(d < limit)
+    apart = ~(d < limit)
+    if rule.line_tolerance > 0.0:
+        apart &= ~continues_line(seq, d, rule.line_tolerance)
+    return (seq.gap > MAX_BRIDGED_GAP) | apart
+
+
+def continues_line(seq: Sequence, d: np.ndarray, tolerance: float) -> np.ndarray:
+    """Pairs ``(p, p+1)`` that continue the line of the pair before *and* of the pair after.
+
+    ``P_{p+1}`` lies within ``tolerance`` of the line through ``P_{p-1}, P_p``, ``P_p``
+    within ``tolerance`` of the line through ``P_{p+1}, P_{p+2}``, both neighbouring
+    steps are longer than ``tolerance`` (shorter ones give a line direction that is
+    mostly noise), and ``d_p`` is at most :data:`MAX_STEP_GROWTH` times the
+    shorter neighbouring step. Returns on a wall seen at grazing incidence are far
+    apart but collinear and evenly spaced, so a distance threshold alone cuts the
+    wall; a depth jump or a spike is neither.
+    """
+    n = len(seq)
+    out = np.zeros(max(n - 1, 0), dtype=bool)
+    if n < 4:
+        return out
+    p = np.arange(1, n - 2)
+    x, y = seq.x, seq.y
+    before = _distance_to_line(x[p - 1], y[p - 1], x[p], y[p], x[p + 1], y[p + 1])
+    after = _distance_to_line(x[p + 2], y[p + 2], x[p + 1], y[p + 1], x[p], y[p])
+    neighbours_close = (seq.gap[p - 1] <= MAX_BRIDGED_GAP) & (seq.gap[p + 1] <= MAX_BRIDGED_GAP)
+    shorter = np.minimum(d[p - 1], d[p + 1])
+    steady = (d[p] <= MAX_STEP_GROWTH * shorter) & (shorter > tolerance)
+    out[p] = (before < tolerance) & (after < tolerance) & neighbours_close & steady
+    return out
+
+
+MAX_STEP_GROWTH = 2.5
+"""Largest ratio of a step to its neighbours' on a continued line (grazing walls
+grow their spacing smoothly; a jump does not)."""
+
+
+def _distance_to_line(ax, ay, bx, by, px, py):
+    """Distance of ``P`` from the line through ``A`` and ``B`` (inf when ``A == B``)."""
+    ux, uy = bx - ax, by - ay
+    length = np.hypot(ux, uy)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        distance = np.abs(ux * (py - ay) - uy * (px - ax)) / length
+    return np.where(length > 0.0, distance, np.inf)
 
 
 def seam_is_break(seq: Sequence, rule: BreakpointRule) -> bool:

@@ -41,6 +41,7 @@ __all__ = [
     "literal_noise",
     "replace_by_window_mean",
     "run_ids",
+    "small_clusters",
 ]
 
 
@@ -139,3 +140,19 @@ def estimate_noise(seq: Sequence, cluster_start: np.ndarray, cluster_end: np.nda
     second = np.abs(seq.r[i + 1] - 2.0 * seq.r[i] + seq.r[i - 1])
     sigma = float(np.median(second)) / (0.6745 * math.sqrt(6.0))
     return max(sigma, MIN_NOISE_SIGMA)
+
+
+def small_clusters(breaks: np.ndarray, min_points: int, *, seam_joined: bool = False) -> np.ndarray:
+    """Mask of the points of clusters with fewer than ``min_points`` returns.
+
+    A cluster of one or two returns between two jumps is, far more often than a
+    real object, a mixed pixel (a return between two surfaces) or a spurious
+    echo. ``seam_joined`` counts the first and last clusters of a full circle
+    whose seam is continuous as one.
+    """
+    n = breaks.shape[0] + 1
+    ids = run_ids(breaks)
+    sizes = np.bincount(ids)
+    if seam_joined and sizes.size > 1:
+        sizes[0] = sizes[-1] = sizes[0] + sizes[-1]
+    return sizes[ids] < min_points if n else np.zeros(0, dtype=bool)
