@@ -72,3 +72,14 @@ def test_optional_fields_are_kept():
     assert scan.intensities.tolist() == [3.0, 4.0]
     assert scan.pose == (1.0, 2.0, 0.5)
     assert len(scan) == 2
+
+
+def test_scan_pickles_for_worker_processes():
+    import pickle
+
+    scan = Scan([1.0, math.nan, 2.0], -0.5, 0.25, range_max=30.0, timestamp=3.0, pose=(1, 2, 3))
+    copy = pickle.loads(pickle.dumps(scan))
+    assert np.array_equal(copy.ranges, scan.ranges, equal_nan=True)
+    assert (copy.angle_min, copy.angle_increment, copy.range_max) == (-0.5, 0.25, 30.0)
+    assert copy.pose == scan.pose
+    assert copy.valid.tolist() == [True, False, True]

@@ -22,7 +22,14 @@ from scanlines.steps.denoise import (
     literal_noise,
     replace_by_window_mean,
 )
-from scanlines.steps.fit import Moments, line_covariances, paper_lines, run_labels, tls_lines
+from scanlines.steps.fit import (
+    Moments,
+    RunCost,
+    line_covariances,
+    paper_lines,
+    run_labels,
+    tls_lines,
+)
 from scanlines.steps.points import make_sequence
 from scanlines.steps.select import sweep, threshold_grid
 from scenes import cast, scan_of, square_room
@@ -174,8 +181,7 @@ def noisy_room_sweep(seed: int):
     score = turn_angle(seq, clusters, 5, moments)
     candidates = peak_candidates(score, clusters)
     return sweep(
-        moments,
-        "tls",
+        RunCost(moments, "tls"),
         clusters,
         candidates,
         score[candidates],

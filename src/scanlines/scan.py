@@ -161,6 +161,22 @@ class Scan:
     def __len__(self) -> int:
         return int(self.ranges.shape[0])
 
+    def __reduce__(self) -> tuple:
+        # Pickle by the constructor's arguments (for multiprocessing); caches are rebuilt.
+        return (
+            Scan,
+            (
+                self.ranges,
+                self.angle_min,
+                self.angle_increment,
+                self.range_min,
+                self.range_max,
+                self.timestamp,
+                self.intensities,
+                self.pose,
+            ),
+        )
+
     def __repr__(self) -> str:
         return (
             f"Scan({len(self)} beams, angle_min={self.angle_min:.6g}, "

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import typer
 
-from scanlines.cli import extract, logs
+from scanlines.cli import evaluate, extract, logs
 
 app = typer.Typer(
     name="scanlines",
@@ -27,6 +27,7 @@ def root() -> None:
 
 extract.register(app)
 logs.register(app)
+evaluate.register(app)
 
 
 def main() -> None:

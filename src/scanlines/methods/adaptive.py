@@ -105,7 +105,7 @@ from scanlines.steps.denoise import (
     replace_by_window_mean,
     small_clusters,
 )
-from scanlines.steps.fit import FITS, Moments, fit_runs
+from scanlines.steps.fit import FITS, Moments, RunCost, fit_runs
 from scanlines.steps.merge import merge_collinear, split_by_residual
 from scanlines.steps.points import Sequence, rotate
 from scanlines.steps.select import CRITERIA, sweep, threshold_grid
@@ -192,9 +192,9 @@ def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extractio
         low, high = params["dkth_range"]
         grid = threshold_grid(low, high, params["dkth_step"], params["max_evaluations"])
     n_points = len(seq)
+    cost = RunCost(moments, params["fit"], seq.r if params["criterion"] == "bic" else None)
     cuts = sweep(
-        moments,
-        params["fit"],
+        cost,
         clusters,
         candidates,
         scores[candidates],
@@ -206,15 +206,14 @@ def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extractio
     if params["noise_sigma"] == "auto" and params["criterion"] == "bic":
         # Second pass with the noise measured on the lines of the first choice.
         a, b, _ = _cut(clusters, selection.corners, shared)
-        sigma = _residual_sigma(moments, params["fit"], a, b, sigma)
+        sigma = _residual_sigma(cost, a, b, sigma)
         selection = cuts.choose(params["criterion"], sigma, params["penalty"])
     a, b, owner = _cut(clusters, selection.corners, shared)
     if not shared:
-        b, a = _refine_splits(moments, params["fit"], a, b, owner)
+        b, a = _refine_splits(cost, a, b, owner)
     if params["merge"]:
         a, b, owner = merge_collinear(
-            moments,
-            params["fit"],
+            cost,
             a,
             b,
             owner,
@@ -259,10 +258,8 @@ def _noise_sigma(seq: Sequence, params: Mapping[str, Any]) -> float:
     return estimate_noise(seq, np.array([0]), np.array([len(seq) - 1]))
 
 
-def _residual_sigma(
-    moments: Moments, fit: str, a: np.ndarray, b: np.ndarray, fallback: float
-) -> float:
-    """Noise from the fits of the runs ``[a, b]``: the median of ``sqrt(SSE / (n - 2))``.
+def _residual_sigma(cost: RunCost, a: np.ndarray, b: np.ndarray, fallback: float) -> float:
+    """Range noise from the fits of the runs ``[a, b]``: the median of ``sqrt(cost / (n - 2))``.
 
     Only runs of :data:`MIN_RUN_FOR_NOISE` points or more count (short runs fit
     their own noise); the median ignores the few runs that still hide a corner.
@@ -271,8 +268,7 @@ def _residual_sigma(
     if not long_enough.any():
         return fallback
     a, b = a[long_enough], b[long_enough]
-    sse = fit_runs(fit, moments, a, b).sse
-    per_run = np.sqrt(sse / (b - a - 1))
+    per_run = np.sqrt(cost(a, b) / (b - a - 1))
     per_run = per_run[np.isfinite(per_run)]
     if per_run.size == 0:
         return fallback
@@ -368,7 +364,7 @@ def _cut(
 
 
 def _refine_splits(
-    moments: Moments, fit: str, a: np.ndarray, b: np.ndarray, owner: np.ndarray
+    cost: RunCost, a: np.ndarray, b: np.ndarray, owner: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """Move each cut (end ``b[k]`` / start ``a[k+1]``) by one position where that fits better."""
     b, a = b.copy(), a.copy()
@@ -380,10 +376,10 @@ def _refine_splits(
     for shift in (0, -1, 1):
         end = b[k] + shift
         ok = (end - a[k] >= 1) & (b[k + 1] - end - 1 >= 1)
-        cost = fit_runs(fit, moments, a[k], end).sse + fit_runs(fit, moments, end + 1, b[k + 1]).sse
-        cost = np.where(ok & ~np.isnan(cost), cost, np.inf)
-        better = cost < best_cost - 1e-15
-        best_cost = np.where(better, cost, best_cost)
+        total = cost(a[k], end) + cost(end + 1, b[k + 1])
+        total = np.where(ok & ~np.isnan(total), total, np.inf)
+        better = total < best_cost - 1e-15
+        best_cost = np.where(better, total, best_cost)
         best_shift = np.where(better, shift, best_shift)
     # Two cuts moving towards each other could leave a run of one point: keep those still.
     new_b = b.copy()

@@ -53,12 +53,19 @@ from scanlines.steps.assemble import empty_extraction
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS
 from scanlines.steps.fit import Moments
 from scanlines.steps.points import Sequence
-from scanlines.steps.segments import EVENT_PARAMS, cluster_sequence, finish, split_runs
+from scanlines.steps.segments import (
+    EVENT_PARAMS,
+    LITERAL_LINE_K,
+    cluster_sequence,
+    finish,
+    split_runs,
+)
 
 NAME = "iepf"
 
 PARAMS: dict[str, Param] = {
     **BREAKPOINT_PARAMS,
+    **LITERAL_LINE_K,
     "breakpoints": Param(
         "fixed",
         BREAKPOINT_PARAMS["breakpoints"].check,

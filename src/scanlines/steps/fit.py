@@ -28,6 +28,7 @@ import numpy as np
 
 __all__ = [
     "FITS",
+    "RunCost",
     "Lines",
     "Moments",
     "line_covariances",
@@ -154,6 +155,42 @@ def paper_lines(moments: Moments, a: np.ndarray, b: np.ndarray) -> Lines:
 def fit_runs(fit: str, moments: Moments, a: np.ndarray, b: np.ndarray) -> Lines:
     """Dispatch to :func:`tls_lines` or :func:`paper_lines` by name."""
     return paper_lines(moments, a, b) if fit == "paper" else tls_lines(moments, a, b)
+
+
+MIN_INCIDENCE_WEIGHT = 0.1
+"""Floor of :class:`RunCost`'s weight ``cos^2`` of the incidence (72 deg): on a wall
+seen closer to grazing, model errors, not range noise, dominate the residuals."""
+
+
+class RunCost:
+    """Fitting error of runs ``[a, b]``, optionally in units of their expected noise.
+
+    Range noise moves a return along its beam; on a line at incidence ``beta``
+    only ``cos(beta)`` of it shows as an orthogonal residual. With ``r`` given,
+    each run's error is divided by the mean ``cos^2(beta_i) = (rho / r_i)^2`` of its
+    points, so one radial noise level serves walls seen head-on and slanted
+    alike. Without ``r`` it is the plain error of the fit.
+    """
+
+    __slots__ = ("fit", "moments", "sum_inv_r2")
+
+    def __init__(self, moments: Moments, fit: str, r: np.ndarray | None = None) -> None:
+        self.moments = moments
+        self.fit = fit
+        if r is None:
+            self.sum_inv_r2 = None
+        else:  # a micrometre floor keeps one absurd range from poisoning the running sum
+            inverse = 1.0 / np.maximum(r, 1e-6) ** 2
+            self.sum_inv_r2 = np.concatenate(([0.0], np.cumsum(inverse)))
+
+    def __call__(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        lines = fit_runs(self.fit, self.moments, a, b)
+        if self.sum_inv_r2 is None:
+            return lines.sse
+        mean_inv_r2 = (self.sum_inv_r2[b + 1] - self.sum_inv_r2[a]) / (b - a + 1)
+        with np.errstate(invalid="ignore", over="ignore"):
+            weight = np.clip(lines.rho * lines.rho * mean_inv_r2, MIN_INCIDENCE_WEIGHT, 1.0)
+        return lines.sse / weight
 
 
 def run_labels(a: np.ndarray, b: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:

@@ -16,14 +16,13 @@ import math
 
 import numpy as np
 
-from scanlines.steps.fit import Moments, fit_runs, point_residuals, run_labels
+from scanlines.steps.fit import Moments, RunCost, fit_runs, point_residuals, run_labels
 
 __all__ = ["merge_collinear", "split_by_residual"]
 
 
 def merge_collinear(
-    moments: Moments,
-    fit: str,
+    cost: RunCost,
     a: np.ndarray,
     b: np.ndarray,
     cluster: np.ndarray,
@@ -34,14 +33,14 @@ def merge_collinear(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Greedily merge the neighbour pair that lowers the criterion most, until none does."""
     a, b, cluster = a.copy(), b.copy(), cluster.copy()
-    cost = penalty * math.log(max(n_points, 2)) * sigma * sigma
+    segment_cost = penalty * math.log(max(n_points, 2)) * sigma * sigma
     while a.size >= 2:
         pair = np.flatnonzero(cluster[:-1] == cluster[1:])
         if pair.size == 0:
             break
-        joined = fit_runs(fit, moments, a[pair], b[pair + 1]).sse
-        parts = fit_runs(fit, moments, a, b).sse
-        change = joined - parts[pair] - parts[pair + 1] - cost
+        joined = cost(a[pair], b[pair + 1])
+        parts = cost(a, b)
+        change = joined - parts[pair] - parts[pair + 1] - segment_cost
         change = np.where(np.isnan(change), np.inf, change)
         best = int(np.argmin(change))
         if not change[best] < 0.0:

@@ -6,12 +6,13 @@ came from. Everything here works on many runs at once.
 
 Splitting
     :func:`split_runs` is the recursive split of iterative end-point fit [1]_ [2]_
-    (``reference="chord"``: distance to the chord from the run's first to its last
-    point) and of split-and-merge [3]_ (``reference="fit"``: distance to the run's
-    total-least-squares line). One pass handles every run of one recursion level;
-    the loop is over levels. A run is split at its farthest *interior* point while
-    that distance exceeds the threshold; the split point joins the part whose line
-    (fitted without it) it is nearer, so no point is lost.
+    (``reference="chord"``: a run is split while a point is farther than the
+    threshold from the chord from its first to its last point) and of
+    split-and-merge [3]_ (``reference="fit"``: ... from the run's
+    total-least-squares line). Either way the cut is at the interior point
+    farthest from the chord (see :func:`split_runs`). One pass handles every run
+    of one recursion level; the loop is over levels. The split point joins the
+    part whose line (fitted without it) it is nearer, so no point is lost.
 Runs from inlier masks
     :func:`inlier_runs` turns the consensus set of one line (RANSAC, Hough) into
     runs that are contiguous in beam order: consecutive inliers stay in one run
@@ -83,7 +84,12 @@ from scanlines.extraction import Extraction
 from scanlines.params import Param, int_at_least, number
 from scanlines.scan import is_full_circle
 from scanlines.steps.assemble import assemble
-from scanlines.steps.breakpoints import MAX_BRIDGED_GAP, BreakpointRule, Clusters
+from scanlines.steps.breakpoints import (
+    BREAKPOINT_PARAMS,
+    MAX_BRIDGED_GAP,
+    BreakpointRule,
+    Clusters,
+)
 from scanlines.steps.denoise import estimate_noise
 from scanlines.steps.fit import (
     Lines,
@@ -97,6 +103,7 @@ from scanlines.steps.points import Sequence
 
 __all__ = [
     "EVENT_PARAMS",
+    "LITERAL_LINE_K",
     "cluster_sequence",
     "drop_small",
     "finish",
@@ -124,6 +131,16 @@ EVENT_PARAMS: dict[str, Param] = {
     ),
 }
 """Parameters of the shared corner/breakpoint rule (:func:`segment_events`)."""
+
+LITERAL_LINE_K: dict[str, Param] = {
+    "line_k": Param(
+        0.0,
+        BREAKPOINT_PARAMS["line_k"].check,
+        BREAKPOINT_PARAMS["line_k"].doc + "; off for the published rules",
+    ),
+}
+"""Override of :data:`~scanlines.steps.breakpoints.BREAKPOINT_PARAMS`: the published
+clustering rules have no line-continuation bridge."""
 
 NO_CLUSTERING = "none"
 """The ``breakpoints`` value of a method that works on the whole scan."""
@@ -159,7 +176,8 @@ def cluster_sequence(seq: Sequence, params: Mapping[str, Any]) -> tuple[Sequence
         whole = Clusters(np.array([0], dtype=np.intp), np.array([len(seq) - 1]), _EMPTY)
         return seq, whole, ring
     sigma = 0.0
-    if name in ("adaptive", "abd") and params.get("noise_k", 0.0) > 0.0:
+    noisy_rule = name in ("adaptive", "abd") and params.get("noise_k", 0.0) > 0.0
+    if noisy_rule or params.get("line_k", 0.0) > 0.0:
         sigma = estimate_noise(seq, np.array([0]), np.array([len(seq) - 1]))
     rule = BreakpointRule.from_params(dict(params), sigma)
     return _clusters(seq, rule, _RING_ANCHOR)
@@ -228,7 +246,14 @@ def split_runs(
     threshold: float,
     reference: str = "chord",
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Split runs recursively at their farthest interior point while it is beyond ``threshold``.
+    """Split runs recursively at the point farthest from their chord while needed.
+
+    A run is split while one of its interior points is farther than
+    ``threshold`` from its ``reference``: the chord (iterative end-point fit) or
+    its total-least-squares line (split-and-merge). The cut is always at the
+    interior point farthest from the chord: on an L-shaped run the fitted line
+    is as far from the two ends as from the corner, and cutting where it is
+    farthest would split the end points off one by one.
 
     Parameters
     ----------
@@ -255,7 +280,9 @@ def split_runs(
         a, b, group = a[splittable], b[splittable], group[splittable]
         if a.size == 0:
             break
-        worst, at = _worst_points(seq, moments, a, b, reference)
+        worst, at = _worst_points(seq, moments, a, b, "chord")
+        if reference == "fit":
+            worst, _ = _worst_points(seq, moments, a, b, "fit")
         split = worst > threshold
         done.append((a[~split], b[~split], group[~split]))
         a, b, group, at = a[split], b[split], group[split], at[split]

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from scanlines.steps.breakpoints import Clusters
-from scanlines.steps.fit import Moments, fit_runs
+from scanlines.steps.fit import RunCost
 
 __all__ = ["CRITERIA", "Selection", "Sweep", "criterion_values", "sweep", "threshold_grid"]
 
@@ -140,8 +140,7 @@ class Sweep:
 
 
 def sweep(
-    moments: Moments,
-    fit: str,
+    cost: RunCost,
     clusters: Clusters,
     candidates: np.ndarray,
     scores: np.ndarray,
@@ -151,6 +150,8 @@ def sweep(
     shared: bool,
 ) -> Sweep:
     """Score every cut of ``clusters`` at ``candidates`` (positions) that a threshold makes.
+
+    ``cost`` gives the fitting error of runs (eq. 14, or in noise units).
 
     ``grid`` is the list of thresholds to try; ``None`` tries the candidates' own
     scores (every distinct segmentation, best first, at most ``max_evaluations``).
@@ -163,15 +164,11 @@ def sweep(
     ranked, ranked_score = candidates[order], magnitude[order]
     accepted, parent_a, parent_b, second = _insert_in_rank_order(clusters, ranked, shared)
 
-    base = fit_runs(fit, moments, clusters.start, clusters.end).sse.sum() if len(clusters) else 0.0
+    base = cost(clusters.start, clusters.end).sum() if len(clusters) else 0.0
     gain = np.zeros(len(ranked))
     if accepted.any():
         a, b, c, c2 = parent_a[accepted], parent_b[accepted], ranked[accepted], second[accepted]
-        gain[accepted] = (
-            fit_runs(fit, moments, a, c).sse
-            + fit_runs(fit, moments, c2, b).sse
-            - fit_runs(fit, moments, a, b).sse
-        )
+        gain[accepted] = cost(a, c) + cost(c2, b) - cost(a, b)
     if grid is None:
         levels = np.arange(min(len(ranked), max_evaluations) + 1)
         thresholds = np.r_[ranked_score, 0.0][levels]

@@ -1,0 +1,223 @@
+"""``scanlines eval``: benchmark method specs on simulated scans with exact truth."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated
+
+import typer
+
+from scanlines.cli.common import guarded
+
+if TYPE_CHECKING:
+    from scanlines.evaluate import EvalResult, SceneSet
+    from scanlines.metrics import Tolerances
+
+SPEC_HELP = (
+    "Method spec METHOD[:PRESET][?NAME=VALUE&...][@LABEL], e.g. adaptive, adaptive:paper, "
+    "'adaptive?k=4&fit=paper@k4'. Repeatable; default adaptive."
+)
+
+
+def register(app: typer.Typer) -> None:
+    app.command(
+        "eval",
+        help="Score methods on simulated scenes with exact ground truth: tables, CSV/JSON, plots.",
+    )(guarded(eval_command))
+
+
+def eval_command(
+    method: Annotated[list[str] | None, typer.Option("--method", "-m", help=SPEC_HELP)] = None,
+    sensor: Annotated[
+        list[str] | None,
+        typer.Option("--sensor", "-s", help="Sensor preset, repeatable; default all four."),
+    ] = None,
+    scenes_per_sensor: Annotated[
+        int | None,
+        typer.Option(
+            "--scenes-per-sensor", "-n", help="Scenes per sensor (default 100; with --scenes: all)."
+        ),
+    ] = None,
+    seed: Annotated[int | None, typer.Option(help="Base seed of the scenes (default 0).")] = None,
+    scenes: Annotated[
+        Path | None, typer.Option("--scenes", help="Evaluate on a saved scene set (.npz).")
+    ] = None,
+    save_scenes: Annotated[
+        Path | None, typer.Option("--save-scenes", help="Also save the generated scenes (.npz).")
+    ] = None,
+    out: Annotated[Path, typer.Option(help="Folder for CSV, JSON and figures.")] = Path(
+        "scanlines-eval"
+    ),
+    noise: Annotated[
+        str | None, typer.Option(help="realistic (the preset's noise, default) or exact.")
+    ] = None,
+    tol_beams: Annotated[
+        int, typer.Option("--tol-beams", help="Event match tolerance, beams.")
+    ] = 2,
+    tol_rho: Annotated[
+        float, typer.Option("--tol-rho", help="Segment match |drho| tolerance, metres.")
+    ] = 0.05,
+    tol_alpha: Annotated[
+        float, typer.Option("--tol-alpha", help="Segment match |dalpha| tolerance, degrees.")
+    ] = 4.0,
+    workers: Annotated[int, typer.Option(help="Processes.")] = 1,
+    worst: Annotated[int, typer.Option(help="Scans in worst.png.")] = 4,
+    plots: Annotated[bool, typer.Option(help="Write bars.png and worst.png.")] = True,
+) -> None:
+    from scanlines import evaluate as ev
+
+    specs = ev.parse_specs(method or ["adaptive"])
+    tol = _tolerances(tol_beams, tol_rho, tol_alpha)
+    scene_set = _scene_set(scenes, save_scenes, sensor, scenes_per_sensor, seed, noise)
+    result = _evaluate_with_progress(
+        specs,
+        sensor,
+        scenes_per_sensor,
+        0 if seed is None else seed,
+        noise or "realistic",
+        tol,
+        scene_set,
+        workers,
+    )
+    _print_tables(result)
+    paths = _write_outputs(result, out, worst if plots else None)
+    if save_scenes is not None:
+        paths.append(save_scenes)
+    for path in paths:
+        typer.echo(f"wrote {path}")
+
+
+def _tolerances(beams: int, rho: float, alpha_deg: float) -> Tolerances:
+    import math
+
+    from scanlines.errors import ParameterError
+    from scanlines.metrics import Tolerances
+
+    try:
+        return Tolerances(event_beams=beams, rho=rho, alpha=math.radians(alpha_deg))
+    except ValueError as error:
+        raise ParameterError(f"bad tolerance: {error}") from None
+
+
+def _scene_set(
+    scenes: Path | None,
+    save_scenes: Path | None,
+    sensors: list[str] | None,
+    n: int | None,
+    seed: int | None,
+    noise: str | None,
+) -> SceneSet | None:
+    """The scene set to evaluate on: loaded, generated and saved, or none (generate)."""
+    from scanlines import evaluate as ev
+    from scanlines.errors import ParameterError
+
+    if scenes is not None:
+        if save_scenes is not None:
+            raise ParameterError("--scenes and --save-scenes exclude each other")
+        if seed is not None or noise is not None:
+            raise ParameterError("--seed and --noise describe generated scenes, not --scenes")
+        return ev.load_scene_set(scenes)
+    if save_scenes is None:
+        return None
+    with _progress("generating scenes") as advance:
+        generated = ev.generate_scene_set(
+            sensors,
+            ev.DEFAULT_SCENES if n is None else n,
+            0 if seed is None else seed,
+            noise or "realistic",
+            on_scene=advance,
+        )
+    generated.save(save_scenes)
+    return generated
+
+
+def _evaluate_with_progress(specs, sensors, n, seed, noise, tol, scene_set, workers) -> EvalResult:
+    from scanlines import evaluate as ev
+
+    with _progress("evaluating") as advance:
+        return ev.evaluate(
+            specs,
+            sensors,
+            n,
+            seed,
+            tol=tol,
+            noise=noise,
+            scenes=scene_set,
+            workers=workers,
+            on_scene=advance,
+        )
+
+
+class _progress:
+    """A transient rich progress bar over scenes (on stderr); gives ``advance(done, total)``."""
+
+    def __init__(self, description: str) -> None:
+        self.description = description
+
+    def __enter__(self):
+        from rich.console import Console
+        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
+
+        self.bar = Progress(
+            "{task.description}",
+            BarColumn(),
+            MofNCompleteColumn(),
+            "scenes",
+            TimeElapsedColumn(),
+            transient=True,
+            console=Console(stderr=True),
+        )
+        self.bar.__enter__()
+        self.task = self.bar.add_task(self.description, total=None)
+        return self.advance
+
+    def advance(self, done: int, total: int) -> None:
+        self.bar.update(self.task, completed=done, total=total)
+
+    def __exit__(self, *exc: object) -> None:
+        self.bar.__exit__(*exc)
+
+
+def _print_tables(result: EvalResult) -> None:
+    from rich.box import SIMPLE_HEAD
+    from rich.console import Console
+    from rich.table import Table
+
+    from scanlines.evaluate import TABLE_COLUMNS, tolerance_caption
+
+    config = result.config
+    caption = (
+        f"{tolerance_caption(config.tol)}. Rates pooled over scans; split/merge totals; "
+        "accuracy: mean per-scan rate; us/scan: median extraction time."
+    )
+    console = Console()
+    if not console.is_terminal:
+        console = Console(width=TABLE_WIDTH)
+    for sensor in dict.fromkeys(r.sensor for r in result.summaries):
+        first = next(r for r in result.summaries if r.sensor == sensor)
+        title = (
+            f"{sensor}: {first.summary.n_scans} scans, noise {config.noise}, seed {config.seed}"
+            + (f", {config.source}" if config.source != "generated" else "")
+        )
+        table = Table(title=title, caption=caption, caption_justify="left", box=SIMPLE_HEAD)
+        table.add_column("method", style="bold", no_wrap=True)
+        for header, _, _ in TABLE_COLUMNS:
+            table.add_column(header.replace(" ", "\n", 1), justify="right", no_wrap=True)
+        for row in result.table(sensor):
+            table.add_row(*row)
+        console.print(table)
+
+
+TABLE_WIDTH = 180
+"""Console width when the output is not a terminal (the tables are wide)."""
+
+
+def _write_outputs(result: EvalResult, out: Path, worst: int | None) -> list[Path]:
+    paths = [*result.to_csv(out), result.to_json(out / "summary.json")]
+    if worst is not None:
+        from scanlines.evaluate import plot_bars, plot_worst
+        from scanlines.plot import save
+
+        paths.append(save(plot_bars(result), out / "bars.png"))
+        paths.append(save(plot_worst(result, worst), out / "worst.png"))
+    return paths

@@ -1,0 +1,152 @@
+"""Line tracking (incremental): grow a line point by point, start anew when a point leaves it.
+
+Algorithm (Siadat et al. [1]_; "Incremental", Algorithm 2 of Nguyen et al. [2]_):
+
+1. cluster the returns by a fixed jump distance (``breakpoints="fixed"``,
+   ``jump_distance = 0.3`` m; Nguyen et al. run every algorithm on such
+   clusters) -- :mod:`scanlines.steps.breakpoints`;
+2. in each cluster, start a line with its first two points;
+3. take the next point: if it lies within ``track_distance`` of the current
+   line (the total-least-squares line of the points so far), add it and refit;
+   otherwise the current segment ends before it, and a new line starts with it
+   and the point after it;
+4. segments with fewer than ``min_points`` (5) points or shorter than
+   ``min_length`` (0 m) are dropped; corners between consecutive segments of one
+   cluster by the shared rule of :func:`scanlines.steps.segments.segment_events`;
+   breakpoints from step 1.
+
+Default ``track_distance = 0.1`` m: with 1-2 cm range noise a point of a
+straight wall is practically never that far from the line fitted so far (more
+than 5 standard deviations; the line itself is uncertain where it starts, two
+points give only a direction of noise).
+
+Known limits (Li et al. [3]_, sec. 1; Nguyen et al. [2]_): the test only sees
+the distance of the *next* point, so a segment absorbs the first points past a
+corner until they drift ``track_distance`` off the line (at a right angle, about
+``track_distance`` of the next wall); and there is no merging, so a wall cut
+by one noisy point stays cut.
+
+Implementation: the refit after each point costs O(1) with prefix sums
+(:class:`scanlines.steps.fit.Moments`); the lines of all candidate end points of
+one segment are evaluated at once, so Python loops once per *segment*, not per
+point (in chunks that double in length: O(n) work per scan).
+
+References
+----------
+.. [1] A. Siadat, A. Kaske, S. Klausmann, M. Dufaut and R. Husson, "An optimized
+   segmentation method for a 2D laser-scanner applied to mobile robot
+   navigation", IFAC Symposium on Intelligent Components and Instruments for
+   Control Applications, 1997.
+.. [2] V. Nguyen, A. Martinelli, N. Tomatis and R. Siegwart, "A comparison of
+   line extraction algorithms using 2D laser rangefinder for indoor mobile
+   robotics", IEEE/RSJ IROS 2005.
+.. [3] Y. Li, J. Liu, Z. Zhang, et al., "Adaptive threshold-based feature
+   extraction method for environmental line segments", Electronics 11(11),
+   1759, 2022.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from scanlines.extraction import Extraction
+from scanlines.params import Param, int_at_least, number
+from scanlines.steps.assemble import empty_extraction
+from scanlines.steps.breakpoints import BREAKPOINT_PARAMS
+from scanlines.steps.fit import Moments, tls_lines
+from scanlines.steps.points import Sequence
+from scanlines.steps.segments import EVENT_PARAMS, LITERAL_LINE_K, cluster_sequence, finish
+
+NAME = "line_tracking"
+
+PARAMS: dict[str, Param] = {
+    **BREAKPOINT_PARAMS,
+    **LITERAL_LINE_K,
+    "breakpoints": Param(
+        "fixed",
+        BREAKPOINT_PARAMS["breakpoints"].check,
+        BREAKPOINT_PARAMS["breakpoints"].doc + " (line tracking: fixed jump distance)",
+    ),
+    "track_distance": Param(
+        0.1,
+        number(low=0.0, low_open=True),
+        "a point farther than this from the current line starts a new one (m)",
+    ),
+    **EVENT_PARAMS,
+    "min_points": Param(5, int_at_least(2), "fewest points of a segment"),
+    "min_length": Param(0.0, number(low=0.0), "shortest segment (m)"),
+    "range_sigma": Param(0.01, number(low=0.0), "range noise for the covariance (m)"),
+}
+
+PRESETS: dict[str, dict[str, Any]] = {}
+
+_FIRST_CHUNK = 32
+
+
+def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extraction:
+    """Extract features from the valid returns ``seq`` of one scan."""
+    if len(seq) == 0:
+        return empty_extraction(NAME, params)
+    seq, clusters, ring = cluster_sequence(seq, params)
+    moments = Moments(seq.x, seq.y)
+    starts: list[int] = []
+    ends: list[int] = []
+    groups: list[int] = []
+    for c, (first, last) in enumerate(
+        zip(clusters.start.tolist(), clusters.end.tolist(), strict=True)
+    ):
+        for a, b in _track(seq, moments, first, last, params["track_distance"]):
+            starts.append(a)
+            ends.append(b)
+            groups.append(c)
+    return finish(
+        seq,
+        np.array(starts, dtype=np.intp),
+        np.array(ends, dtype=np.intp),
+        np.array(groups, dtype=np.intp),
+        clusters=clusters,
+        ring=ring,
+        outliers=np.zeros(0, dtype=np.intp),
+        angle_min=angle_min,
+        method=NAME,
+        params=params,
+    )
+
+
+def _track(
+    seq: Sequence, moments: Moments, first: int, last: int, threshold: float
+) -> list[tuple[int, int]]:
+    """Segments ``(a, b)`` of the cluster ``[first, last]``, in order."""
+    runs = []
+    start = first
+    while start <= last:
+        end = _segment_end(seq, moments, start, last, threshold)
+        runs.append((start, end))
+        start = end + 1
+    return runs
+
+
+def _segment_end(seq: Sequence, moments: Moments, start: int, last: int, threshold: float) -> int:
+    """Last point of the segment that starts at ``start``.
+
+    The line of ``[start, e]`` (``e >= start + 1``) is tested against point
+    ``e + 1``; the first point that fails ends the segment at ``e``.
+    """
+    low, chunk = start + 1, _FIRST_CHUNK
+    while low < last:
+        end = np.arange(low, min(low + chunk, last), dtype=np.intp)
+        lines = tls_lines(moments, np.full(end.size, start, dtype=np.intp), end)
+        following = end + 1
+        off = np.abs(
+            seq.x[following] * np.cos(lines.alpha)
+            + seq.y[following] * np.sin(lines.alpha)
+            - lines.rho
+        )
+        fails = np.flatnonzero(~(off <= threshold))
+        if fails.size:
+            return int(end[fails[0]])
+        low, chunk = low + chunk, 2 * chunk
+    return last

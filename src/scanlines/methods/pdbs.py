@@ -1,0 +1,66 @@
+"""Point-distance-based segmentation (PDBS) followed by end-point-fit splitting.
+
+The "PDBS algorithm" Li et al. compare against [1]_ (sec. 4.3, Fig. 12a and 13a):
+
+1. cluster by the point-distance rule of Premebida and Nunes [2]_: consecutive
+   returns ``P_{n-1}``, ``P_n`` are one cluster while
+   ``|P_n - P_{n-1}| < C0 + C1 min(r_n, r_{n-1})`` with
+   ``C1 = sqrt(2 (1 - cos(dalpha)))`` (``dalpha`` the angle between the two
+   beams; ``C1 min(r)`` is the chord between the beams at the nearer range) and
+   ``C0 = 0.1`` m for the noise (``breakpoints="pdbs"``, ``pdbs_c0``) --
+   :mod:`scanlines.steps.breakpoints`;
+2. split every cluster at a fixed threshold, IEPF-style (Duda and Hart [3]_):
+   at the point farthest from the chord between the cluster's end points, while
+   that distance exceeds ``split_distance`` (0.1 m, as :mod:`~scanlines.methods.iepf`)
+   -- :func:`scanlines.steps.segments.split_runs`;
+3. total-least-squares line per part, parts with fewer than ``min_points`` (5)
+   points or shorter than ``min_length`` (0 m) dropped;
+4. corners between consecutive parts of one cluster by the shared rule of
+   :func:`scanlines.steps.segments.segment_events`; breakpoints from step 1.
+
+It is :mod:`~scanlines.methods.iepf` with the PDBS clustering rule: the
+threshold grows with range like the beam spacing on a surface facing the sensor
+but, unlike the adaptive rules, not with the incidence angle, so walls seen at
+grazing incidence are cut (Li et al.'s under/over-segmentation, Fig. 12a).
+
+References
+----------
+.. [1] Y. Li, J. Liu, Z. Zhang, et al., "Adaptive threshold-based feature
+   extraction method for environmental line segments", Electronics 11(11),
+   1759, 2022.
+.. [2] C. Premebida and U. Nunes, "Segmentation and geometric primitives
+   extraction from 2D laser range data for mobile robot applications",
+   Robotica 2005 (Actas do Encontro Cientifico), Coimbra, 2005.
+.. [3] R. O. Duda and P. E. Hart, *Pattern Classification and Scene Analysis*,
+   Wiley, 1973.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from scanlines.extraction import Extraction
+from scanlines.methods.iepf import PARAMS as IEPF_PARAMS
+from scanlines.methods.iepf import split_extraction
+from scanlines.params import Param
+from scanlines.steps.breakpoints import BREAKPOINT_PARAMS
+from scanlines.steps.points import Sequence
+
+NAME = "pdbs"
+
+PARAMS: dict[str, Param] = {
+    **IEPF_PARAMS,
+    "breakpoints": Param(
+        "pdbs",
+        BREAKPOINT_PARAMS["breakpoints"].check,
+        BREAKPOINT_PARAMS["breakpoints"].doc + " (PDBS: Premebida and Nunes)",
+    ),
+}
+
+PRESETS: dict[str, dict[str, Any]] = {}
+
+
+def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extraction:
+    """Extract features from the valid returns ``seq`` of one scan."""
+    return split_extraction(seq, angle_min, params, method=NAME, reference="chord")
