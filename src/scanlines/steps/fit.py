@@ -28,9 +28,9 @@ import numpy as np
 
 __all__ = [
     "FITS",
-    "RunCost",
     "Lines",
     "Moments",
+    "RunCost",
     "line_covariances",
     "paper_lines",
     "point_residuals",
