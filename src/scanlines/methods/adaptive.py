@@ -79,6 +79,7 @@ References
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from typing import Any
 
@@ -371,9 +372,8 @@ def _slope_window(seq: Sequence, sigma: float, setting: Any) -> int:
     if steps.size == 0:
         return 3
     spacing = float(np.median(steps))
-    if spacing <= 0.0:
-        return SLOPE_WINDOW_MAX
-    return int(np.clip(round(3 + 6 * sigma / spacing), 3, SLOPE_WINDOW_MAX))
+    wanted = 3 + 6 * sigma / spacing if spacing > 0.0 else math.inf
+    return round(min(max(wanted, 3), SLOPE_WINDOW_MAX))
 
 
 SLOPE_WINDOW_MAX = 15

@@ -162,6 +162,12 @@ def sweep(
     magnitude = np.abs(scores)
     order = np.argsort(-magnitude, kind="stable")
     ranked, ranked_score = candidates[order], magnitude[order]
+    # Only candidates that some tried threshold keeps can change a cut.
+    if grid is None:
+        useful = min(len(ranked), max_evaluations)
+    else:
+        useful = int(np.count_nonzero(ranked_score > np.min(grid))) if len(grid) else 0
+    ranked, ranked_score = ranked[:useful], ranked_score[:useful]
     accepted, parent_a, parent_b, second = _insert_in_rank_order(clusters, ranked, shared)
 
     base = cost(clusters.start, clusters.end).sum() if len(clusters) else 0.0
