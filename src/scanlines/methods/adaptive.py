@@ -1,4 +1,4 @@
-"""The adaptive-threshold line-segment extractor of Li et al. (2022) [1]_.
+"""The adaptive-threshold line-segment extractor of the Electronics 2022 paper [1]_.
 
 Steps (the paper's numbering, sec. 3):
 
@@ -19,60 +19,64 @@ Steps (the paper's numbering, sec. 3):
 ``dkth`` in ``(0, 0.052)`` in steps of 0.01, ``W_i = 1``, the smallest SSE, the
 5-point OLS fit, the corner point shared by both segments.
 
-Deviations of the default, each a parameter (the evidence is in the tests named
-in brackets and in ``docs/``):
+Deviations of the default, each a parameter. The evidence: the tests named in
+brackets, and ``docs/decisions/`` (300 simulated scenes per sensor preset).
 
-``breakpoints="abd"``, ``noise_k=3``
+``breakpoints="abd"``, ``noise_k=3``, ``line_k=3``
     ``D = k rho dtheta`` is ``k`` times the spacing of returns on a surface
     facing the sensor; on a wall seen at incidence ``beta`` the spacing is
-    ``rho dtheta / cos(beta)``, so ``k = 3`` cuts every wall beyond 70.5 deg, as
-    corridor walls are for most of their length. The default bounds the
-    incidence instead (80 deg, Borges and Aldon's detector [2]_, the same
-    range-proportional threshold made exact for slanted surfaces): on the
-    shipped Intel excerpt breakpoints per scan fall from 20.5 to 10.0. Both rules
-    add ``noise_k`` standard deviations of a range difference (noise estimated
-    from the scan): at 0.33 deg, 2 m and 1 cm noise, ``3 rho dtheta`` is 3.5 cm and
-    noise alone cuts about one pair in fifty.
-    [test_adaptive.py::test_grazing_wall_stays_one_cluster]
-``denoise="isolated"``
+    ``rho dtheta / cos(beta)``, so ``k = 3`` cuts every wall beyond 70.5 deg.
+    The default bounds the incidence instead (80 deg: Borges and Aldon's
+    detector [2]_, the same range-proportional threshold made exact for slanted
+    surfaces), adds ``noise_k`` standard deviations of a range difference (noise
+    estimated from the scan; at 0.33 deg, 2 m and 1 cm noise ``3 rho dtheta`` is
+    3.5 cm and noise alone cuts about one pair in fifty), and does not cut a step
+    that continues the lines on both sides (walls at grazing incidence).
+    [test_adaptive.py::test_grazing_wall_stays_one_cluster, docs/decisions/breakpoints.md]
+``denoise="isolated"``, ``min_cluster_points=3``
     Step 2 as printed (``d_{i-1} > d_{i-2}`` and ``d_i > d_{i+1}``) flags any local
     bump of the neighbour distance: about a quarter of the points of a straight
-    noisy wall. The default flags only a point that the breakpoint test cuts from
-    both neighbours while the neighbours stay continuous (a spike), and drops it
-    instead of averaging: a window mean next to a corner is on neither wall.
+    noisy wall. The default drops a point that the breakpoint test cuts from both
+    neighbours while the neighbours stay continuous (a spike), and clusters of
+    fewer than three returns (stray echoes, mixed pixels between two surfaces);
+    dropped points are reported in ``Extraction.outliers``. No point is moved.
     [test_adaptive.py::test_spike_outlier_in_wall_is_dropped,
     test_steps.py::test_literal_noise_rule_fires_on_ordinary_wall_points]
-``corner_score="turn"``
+``corner_score="turn"``, ``slope_window="auto"``
     ``Dk`` from raw ranges is dominated by range noise at fine resolution (at
     0.33 deg and 1 cm noise one noisy pair gives ``|Dk|`` near 0.8), and with the
     printed absolute values a corner seen symmetrically scores zero. The default
-    scores the turn angle between lines fitted to ``slope_window`` points on each
-    side. [test_steps.py::test_dk_as_printed_misses_a_symmetric_corner]
-``criterion="bic"``, ``dkth_range="auto"``
+    scores the turn angle between lines fitted to ``w`` points on each side,
+    ``w = 3 + 6 sigma / spacing`` (3..15).
+    [test_steps.py::test_dk_as_printed_misses_a_symmetric_corner]
+``criterion="bic"``, ``penalty=4``, ``dkth_range="auto"``
     The smallest SSE always picks the lowest threshold (more cuts never raise a
     least-squares error). The default charges each segment ``penalty ln(n)``
-    noise variances (BIC), with the noise estimated from the scan. ``(0, 0.052)``
-    is the range of ``|Dk|`` in the paper's own scan; the default tries every
-    distinct cut the candidates allow (at most ``max_evaluations``).
+    noise variances (BIC); each run's error is divided by the mean ``cos^2`` of
+    its incidence, since range noise shows only partly as an orthogonal
+    residual, and the noise is re-estimated from the runs of a first choice.
+    ``(0, 0.052)`` is the range of ``|Dk|`` in the paper's own scan; the default
+    tries every distinct cut the candidates allow (at most ``max_evaluations``).
     [test_steps.py::test_min_sse_picks_the_lowest_threshold]
 ``fit="tls"``
-    ``y = kx + b`` cannot describe a wall parallel to the y axis and its error is
-    measured vertically; total least squares in Hesse form has neither fault.
-    [test_adaptive.py::test_vertical_wall_paper_fit_has_no_slope]
-``corner_split="refine"``, ``merge=True``, ``max_residual=0.1``
+    ``y = kx + b`` cannot describe a wall parallel to the y axis (the paper fit
+    returns NaN there) and its error is measured vertically; total least squares
+    in Hesse form has neither fault. [test_adaptive.py::test_vertical_wall_paper_fit_has_no_slope]
+``corner_split="refine"``, ``merge=True``, ``max_residual=0.1``, ``min_points=3``
     The corner point goes to the side whose fit it suits (among the three beams
     around the peak), collinear neighbours that a global threshold cut apart are
     merged by the same criterion, and no point of a segment is farther than
     ``max_residual`` from its line.
 
-Missing beams: one missing beam is bridged, two or more end a cluster
-(``docs/conventions``); full-circle scans join across the seam.
+Missing beams: one missing beam is bridged, two or more end a cluster; full-circle
+scans join across the seam. The paper preset's window mean can replace three
+returns by one point; runs of identical points have no paper-fit line (NaN).
 
 References
 ----------
-.. [1] Y. Li, J. Liu, Z. Zhang, et al., "Adaptive threshold-based feature
-   extraction method for environmental line segments", Electronics 11(11),
-   1759, 2022. doi:10.3390/electronics11111759
+.. [1] "An adaptive threshold line segment feature extraction algorithm for laser
+   radar scanning environments", Electronics 11(11), 1759, 2022.
+   doi:10.3390/electronics11111759
 .. [2] G. A. Borges and M.-J. Aldon, "Line extraction in 2D range images for
    mobile robotics", J. Intelligent and Robotic Systems 40, 267-297, 2004.
 """

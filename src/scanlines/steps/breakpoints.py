@@ -27,8 +27,9 @@ the gap.
 
 References
 ----------
-.. [1] Y. Li et al., "Adaptive threshold-based feature extraction method for
-   environmental line segments", Electronics 11(11), 1759, 2022.
+.. [1] "An adaptive threshold line segment feature extraction algorithm for laser
+   radar scanning environments", Electronics 11(11), 1759, 2022.
+   doi:10.3390/electronics11111759
 .. [2] G. A. Borges and M.-J. Aldon, "Line extraction in 2D range images for
    mobile robotics", J. Intelligent and Robotic Systems 40, 267-297, 2004.
 .. [3] C. Premebida and U. Nunes, "Segmentation and geometric primitives

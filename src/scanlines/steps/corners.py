@@ -19,7 +19,7 @@ decides which candidates are corners.
 
 References
 ----------
-.. [1] Y. Li et al., Electronics 11(11), 1759, 2022.
+.. [1] Electronics 11(11), 1759, 2022 (doi:10.3390/electronics11111759).
 """
 
 from __future__ import annotations

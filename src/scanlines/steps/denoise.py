@@ -18,7 +18,7 @@ counts as one missing beam, which clustering bridges): no point is invented.
 
 References
 ----------
-.. [1] Y. Li et al., Electronics 11(11), 1759, 2022, sec. 2.1 and sec. 3.
+.. [1] Electronics 11(11), 1759, 2022 (doi:10.3390/electronics11111759), sec. 2.1 and sec. 3.
 """
 
 from __future__ import annotations

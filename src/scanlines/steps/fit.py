@@ -14,7 +14,7 @@ threshold sweep can score a whole segmentation in a few array operations:
 
 References
 ----------
-.. [1] Y. Li et al., Electronics 11(11), 1759, 2022.
+.. [1] Electronics 11(11), 1759, 2022 (doi:10.3390/electronics11111759).
 .. [2] K. O. Arras and R. Siegwart, "Feature extraction and scene interpretation
    for map-based navigation and map building", SPIE Mobile Robotics XII, 1997
    (covariance of a line fitted to range readings).

@@ -75,8 +75,8 @@ References
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from typing import Any
+from collections.abc import Callable, Mapping
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -102,9 +102,13 @@ from scanlines.steps.fit import (
 from scanlines.steps.points import Sequence
 
 __all__ = [
+    "BRIDGE_RETURNS",
     "EVENT_PARAMS",
     "LITERAL_LINE_K",
+    "LineFinder",
     "cluster_sequence",
+    "consensus_extraction",
+    "consensus_segments",
     "drop_small",
     "finish",
     "inlier_runs",
@@ -149,7 +153,8 @@ _EMPTY = np.zeros(0, dtype=np.intp)
 
 # The ring anchor (a full circle without any gap) is the strongest turn-angle corner,
 # scored as the adaptive method scores corners.
-_RING_ANCHOR: Mapping[str, Any] = {"corner_score": "turn", "slope_window": 5}
+_RING_WINDOW = 5
+_RING_ANCHOR: Mapping[str, Any] = {"corner_score": "turn", "slope_window": _RING_WINDOW}
 
 
 # --------------------------------------------------------------------------- clustering
@@ -172,7 +177,7 @@ def cluster_sequence(seq: Sequence, params: Mapping[str, Any]) -> tuple[Sequence
     name = params["breakpoints"]
     if name == NO_CLUSTERING:
         rule = BreakpointRule(name="fixed", jump_distance=math.inf)
-        seq, _, ring = _clusters(seq, rule, _RING_ANCHOR)
+        seq, _, ring = _clusters(seq, rule, _RING_ANCHOR, _RING_WINDOW)
         whole = Clusters(np.array([0], dtype=np.intp), np.array([len(seq) - 1]), _EMPTY)
         return seq, whole, ring
     sigma = 0.0
@@ -180,7 +185,7 @@ def cluster_sequence(seq: Sequence, params: Mapping[str, Any]) -> tuple[Sequence
     if noisy_rule or params.get("line_k", 0.0) > 0.0:
         sigma = estimate_noise(seq, np.array([0]), np.array([len(seq) - 1]))
     rule = BreakpointRule.from_params(dict(params), sigma)
-    return _clusters(seq, rule, _RING_ANCHOR)
+    return _clusters(seq, rule, _RING_ANCHOR, _RING_WINDOW)
 
 
 def run_owner(clusters: Clusters, a: np.ndarray) -> np.ndarray:
@@ -201,18 +206,20 @@ def chord_distances(
 ) -> np.ndarray:
     """Distance of each labelled point to the chord from its run's first to last point.
 
-    A run whose first and last points coincide measures the distance to that point.
+    The chord is the segment between the two points: a point whose foot lies
+    beyond an end is measured to that end. For a cluster that nearly closes on
+    itself (a room seen all round) the chord is short and its line points
+    anywhere; measured to the segment, the farthest point is the far corner,
+    not an arbitrary point of the side opposite the chord.
     """
-    dx, dy = x[b] - x[a], y[b] - y[a]
-    length = np.hypot(dx, dy)
-    flat = ~(length > 0.0)
+    ax, ay = x[a][run], y[a][run]
+    dx, dy = (x[b] - x[a])[run], (y[b] - y[a])[run]
+    px, py = x[position] - ax, y[position] - ay
+    length2 = dx * dx + dy * dy
     with np.errstate(invalid="ignore", divide="ignore"):
-        nx = np.where(flat, 0.0, -dy / length)
-        ny = np.where(flat, 0.0, dx / length)
-    px = x[position] - x[a][run]
-    py = y[position] - y[a][run]
-    across = np.abs(px * nx[run] + py * ny[run])
-    return np.where(flat[run], np.hypot(px, py), across)
+        t = np.clip((px * dx + py * dy) / length2, 0.0, 1.0)
+    t = np.where(length2 > 0.0, t, 0.0)
+    return np.hypot(px - t * dx, py - t * dy)
 
 
 def line_distances(
@@ -388,10 +395,7 @@ def inlier_runs(
     cut = np.flatnonzero(~joined)
     a = found[np.r_[0, cut + 1]]
     b = found[np.r_[cut, found.size - 1]]
-    inside = np.zeros(len(seq) + 1, dtype=np.intp)
-    np.add.at(inside, a, 1)
-    np.add.at(inside, b + 1, -1)
-    covered = np.cumsum(inside[:-1]) > 0
+    covered = _covered(len(seq), a, b)
     return a.astype(np.intp), b.astype(np.intp), np.flatnonzero(covered & ~inlier)
 
 
@@ -408,6 +412,170 @@ def remove_positions(
     keep[drop] = False
     new_position = np.cumsum(keep) - 1
     return seq.subset(keep), new_position[a], new_position[b]
+
+
+BRIDGE_RETURNS = 1
+"""Most returns between two consecutive inliers of one consensus run (:func:`inlier_runs`):
+one return off the line (a noise peak, a spurious echo) does not cut a wall."""
+
+
+class LineFinder(Protocol):
+    """The search of one consensus method (RANSAC, Hough) for its next line."""
+
+    def best_line(self, free: np.ndarray) -> tuple[float, float] | None:
+        """``(rho, alpha)`` of the best line through the ``free`` positions, or ``None``."""
+        ...
+
+    def remove(self, positions: np.ndarray) -> None:
+        """Forget the points at ``positions`` (they belong to a segment now)."""
+        ...
+
+
+def consensus_segments(
+    seq: Sequence,
+    member: np.ndarray,
+    finder: LineFinder,
+    *,
+    inlier_distance: float,
+    min_points: int,
+    max_gap: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Segments of one set of points found line by line (sequential RANSAC, Hough).
+
+    Repeatedly: the finder proposes a line through the free points of ``member``;
+    its inliers (within ``inlier_distance``) are refitted by total least squares
+    and collected again; the consensus set is cut into runs contiguous in beam
+    order (:func:`inlier_runs`); runs of at least ``min_points`` inliers become
+    segments and their points leave the set. When no run is long enough the
+    whole consensus set leaves instead, so every round removes points. Stops
+    when fewer than ``min_points`` free points remain or a line has fewer
+    inliers.
+
+    Returns
+    -------
+    a, b:
+        Segments (unordered).
+    bridged:
+        Positions inside segments that are off their line (outliers).
+    """
+    free = member.copy()
+    runs_a: list[np.ndarray] = []
+    runs_b: list[np.ndarray] = []
+    bridged_all: list[np.ndarray] = []
+    while np.count_nonzero(free) >= min_points:
+        proposal = finder.best_line(free)
+        if proposal is None:
+            break
+        inlier = _refitted_inliers(seq, free, proposal, inlier_distance)
+        if np.count_nonzero(inlier) < min_points:
+            break
+        a, b, bridged = inlier_runs(seq, inlier, free, max_bridge=BRIDGE_RETURNS, max_gap=max_gap)
+        long_enough = _run_inlier_counts(inlier, a, b) >= min_points
+        taken = _covered(len(seq), a[long_enough], b[long_enough])
+        if not long_enough.any():
+            taken = inlier
+        runs_a.append(a[long_enough])
+        runs_b.append(b[long_enough])
+        bridged_all.append(bridged[taken[bridged]])
+        free &= ~taken
+        finder.remove(np.flatnonzero(taken))
+    if not runs_a:
+        return _EMPTY, _EMPTY, _EMPTY
+    return (
+        np.concatenate(runs_a).astype(np.intp),
+        np.concatenate(runs_b).astype(np.intp),
+        np.concatenate(bridged_all).astype(np.intp),
+    )
+
+
+def consensus_extraction(
+    seq: Sequence,
+    angle_min: float,
+    params: Mapping[str, Any],
+    *,
+    method: str,
+    finder: Callable[[Sequence, np.ndarray], LineFinder],
+) -> Extraction:
+    """A consensus method (RANSAC, Hough) from clustering to the extraction.
+
+    ``finder(seq, member)`` makes the line search for the points ``member`` of
+    one cluster (``breakpoints="none"``: one cluster of every point). Clusters
+    with fewer than ``min_points`` points are skipped; the returns bridged inside
+    segments are dropped as outliers before the segments are fitted.
+    """
+    seq, clusters, ring = cluster_sequence(seq, params)
+    found_a, found_b, found_group, found_bridged = [], [], [], []
+    for c, (first, last) in enumerate(zip(clusters.start, clusters.end, strict=True)):
+        if last - first + 1 < params["min_points"]:
+            continue
+        member = np.zeros(len(seq), dtype=bool)
+        member[first : last + 1] = True
+        a, b, bridged = consensus_segments(
+            seq,
+            member,
+            finder(seq, member),
+            inlier_distance=params["inlier_distance"],
+            min_points=params["min_points"],
+            max_gap=params["max_gap"],
+        )
+        found_a.append(a)
+        found_b.append(b)
+        found_group.append(np.full(a.size, c, dtype=np.intp))
+        found_bridged.append(bridged)
+    a, b, group, bridged = (
+        np.concatenate(part).astype(np.intp) if part else _EMPTY
+        for part in (found_a, found_b, found_group, found_bridged)
+    )
+    order = np.argsort(a, kind="stable")
+    outliers = seq.index[bridged]
+    seq, a, b = remove_positions(seq, a[order], b[order], bridged)
+    return finish(
+        seq,
+        a,
+        b,
+        group[order],
+        clusters=None if params["breakpoints"] == NO_CLUSTERING else clusters,
+        ring=ring,
+        outliers=outliers,
+        angle_min=angle_min,
+        method=method,
+        params=params,
+    )
+
+
+def _refitted_inliers(
+    seq: Sequence, free: np.ndarray, line: tuple[float, float], inlier_distance: float
+) -> np.ndarray:
+    """Free points near ``line``, collected again around their own TLS line.
+
+    Falls back to the first set when the refitted line keeps fewer points.
+    """
+    rho, alpha = line
+    first = free & (
+        np.abs(seq.x * math.cos(alpha) + seq.y * math.sin(alpha) - rho) <= inlier_distance
+    )
+    chosen = np.flatnonzero(first)
+    if chosen.size < 2:
+        return first
+    fitted = tls_lines(
+        Moments(seq.x[chosen], seq.y[chosen]), np.array([0]), np.array([chosen.size - 1])
+    )
+    off = np.abs(seq.x * np.cos(fitted.alpha[0]) + seq.y * np.sin(fitted.alpha[0]) - fitted.rho[0])
+    second = free & (off <= inlier_distance)
+    return second if np.count_nonzero(second) >= chosen.size else first
+
+
+def _run_inlier_counts(inlier: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    total = np.r_[0, np.cumsum(inlier)]
+    return total[b + 1] - total[a]
+
+
+def _covered(n: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Mask of the positions inside runs ``[a, b]``."""
+    edge = np.zeros(n + 1, dtype=np.intp)
+    np.add.at(edge, a, 1)
+    np.add.at(edge, b + 1, -1)
+    return np.cumsum(edge[:-1]) > 0
 
 
 # --------------------------------------------------------------------------- merging
@@ -439,9 +607,9 @@ def pair_chi_square(
     d_rho, d_alpha = line_difference(
         lines.rho[first], lines.alpha[first], lines.rho[second], lines.alpha[second]
     )
-    total = covariance[first] + covariance[second]
-    p, q, s = total[:, 0, 0], total[:, 0, 1], total[:, 1, 1]
-    with np.errstate(all="ignore"):
+    with np.errstate(all="ignore"):  # degenerate runs carry inf/NaN covariances
+        total = covariance[first] + covariance[second]
+        p, q, s = total[:, 0, 0], total[:, 0, 1], total[:, 1, 1]
         det = p * s - q * q
         value = (s * d_rho * d_rho - 2.0 * q * d_rho * d_alpha + p * d_alpha * d_alpha) / det
     return np.where(det > 0.0, value, np.nan)

@@ -18,7 +18,7 @@ Criteria
 
 References
 ----------
-.. [1] Y. Li et al., Electronics 11(11), 1759, 2022, sec. 2.3 and sec. 3.
+.. [1] Electronics 11(11), 1759, 2022 (doi:10.3390/electronics11111759), sec. 2.3 and sec. 3.
 .. [2] G. Schwarz, "Estimating the dimension of a model", Annals of
    Statistics 6(2), 461-464, 1978.
 """
