@@ -37,12 +37,9 @@ SCORES = ("turn", "dk", "dk_signed")
 
 def _interior(clusters: Clusters, n: int) -> np.ndarray:
     """Mask of positions with a neighbour on both sides inside their cluster."""
-    inside = np.zeros(n, dtype=bool)
-    is_start = np.zeros(n, dtype=bool)
-    is_end = np.zeros(n, dtype=bool)
-    is_start[clusters.start] = True
-    is_end[clusters.end] = True
-    inside[:] = ~(is_start | is_end)
+    inside = np.ones(n, dtype=bool)
+    inside[clusters.start] = False
+    inside[clusters.end] = False
     return inside
 
 
