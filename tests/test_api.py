@@ -93,11 +93,16 @@ def test_extraction_is_cheap_arrays_with_segment_views():
         result.first[0] = 3
 
 
-def test_method_info_documents_every_parameter():
-    info = scanlines.method_info("adaptive")
-    assert set(info["params"]) == set(Extractor().params)
+@pytest.mark.parametrize("method", scanlines.methods())
+def test_method_info_documents_every_parameter(method):
+    info = scanlines.method_info(method)
+    assert set(info["params"]) == set(Extractor(method).params)
     assert all(doc for _, doc in info["params"].values())
-    assert "paper" in info["presets"]
+    assert info["doc"]
+
+
+def test_paper_preset_exists():
+    assert "paper" in scanlines.method_info("adaptive")["presets"]
 
 
 def test_modules_import_without_cycles():

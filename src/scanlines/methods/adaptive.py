@@ -97,11 +97,17 @@ from scanlines.steps.breakpoints import (
     BREAKPOINT_PARAMS,
     BreakpointRule,
     Clusters,
-    cluster,
+    cluster_scan,
     is_break,
     seam_is_break,
 )
-from scanlines.steps.corners import SCORES, peak_candidates, slope_difference, turn_angle
+from scanlines.steps.corners import (
+    SCORES,
+    peak_candidates,
+    slope_difference,
+    strongest_turn,
+    turn_angle,
+)
 from scanlines.steps.denoise import (
     MIN_NOISE_SIGMA,
     estimate_noise,
@@ -112,7 +118,8 @@ from scanlines.steps.denoise import (
 )
 from scanlines.steps.fit import FITS, Moments, RunCost, fit_runs
 from scanlines.steps.merge import merge_collinear, split_by_residual
-from scanlines.steps.points import Sequence, rotate
+from scanlines.steps.points import Sequence
+from scanlines.steps.segments import line_intersections
 from scanlines.steps.select import CRITERIA, sweep, threshold_grid
 
 NAME = "adaptive"
@@ -190,7 +197,7 @@ def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extractio
     window = _slope_window(seq, sigma, params["slope_window"])
     if len(seq) == 0:
         return empty_extraction(NAME, params, outliers=outliers)
-    seq, clusters, ring = _clusters(seq, rule, params, window)
+    seq, clusters, ring = cluster_scan(seq, rule, lambda ring: strongest_turn(ring, window))
     shared = params["corner_split"] == "shared"
     moments = Moments(seq.x, seq.y)
     scores = _scores(seq, clusters, moments, params, window)
@@ -315,43 +322,6 @@ def _denoise(
     return seq.subset(~noise), seq.index[noise]
 
 
-def _clusters(
-    seq: Sequence, rule: BreakpointRule, params: Mapping[str, Any], window: int
-) -> tuple[Sequence, Clusters, bool]:
-    """Step 4, with the seam of a full circle joined when it is continuous.
-
-    Returns the (possibly rotated) sequence, its clusters and whether the scan
-    is one closed ring (no gap anywhere).
-    """
-    breaks = is_break(seq, rule)
-    if not is_full_circle(seq.n_beams, seq.step) or len(seq) < 3:
-        return seq, cluster(seq, breaks), False
-    if seam_is_break(seq, rule):
-        return seq, cluster(seq, breaks, seam_break=True), False
-    cut = np.flatnonzero(breaks)
-    if cut.size:
-        seq = rotate(seq, int(cut[0]) + 1)
-        return seq, cluster(seq, is_break(seq, rule), seam_break=True), False
-    seq = rotate(seq, _ring_anchor(seq, params, window))
-    return seq, cluster(seq, np.zeros(len(seq) - 1, dtype=bool)), True
-
-
-def _ring_anchor(seq: Sequence, params: Mapping[str, Any], window: int) -> int:
-    """Position of the strongest corner score of a closed ring, scored cyclically."""
-    n = len(seq)
-    half = n // 2
-    whole = Clusters(np.array([0]), np.array([n - 1]), np.zeros(0, dtype=np.intp))
-    direct = np.abs(_scores(seq, whole, Moments(seq.x, seq.y), params, window))
-    turned_seq = rotate(seq, half)
-    turned = np.abs(_scores(turned_seq, whole, Moments(turned_seq.x, turned_seq.y), params, window))
-    p = np.arange(n)
-    shifted = (p - half) % n
-    from_end = np.minimum(p, n - 1 - p)
-    from_end_turned = np.minimum(shifted, n - 1 - shifted)
-    combined = np.where(from_end >= from_end_turned, direct, turned[shifted])
-    return int(np.argmax(combined))
-
-
 def _scores(
     seq: Sequence, clusters: Clusters, moments: Moments, params: Mapping[str, Any], window: int
 ) -> np.ndarray:
@@ -459,20 +429,8 @@ def _corner_beams(
         return seq.index[starts]
     lines = fit_runs(fit, moments, a, b)
     right = (left + 1) % a.size
-    corner_x, corner_y = _intersections(lines.rho, lines.alpha, left, right)
+    corner_x, corner_y = line_intersections(lines, left, right)
     before_dist = np.hypot(seq.x[ends] - corner_x, seq.y[ends] - corner_y)
     after_dist = np.hypot(seq.x[starts] - corner_x, seq.y[starts] - corner_y)
     pick = np.where(after_dist < before_dist, starts, ends)
     return seq.index[pick]
-
-
-def _intersections(
-    rho: np.ndarray, alpha: np.ndarray, i: np.ndarray, j: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Intersection of lines ``i`` and ``j`` (NaN for parallel lines)."""
-    det = np.sin(alpha[j] - alpha[i])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        x = (rho[i] * np.sin(alpha[j]) - rho[j] * np.sin(alpha[i])) / det
-        y = (rho[j] * np.cos(alpha[i]) - rho[i] * np.cos(alpha[j])) / det
-    parallel = np.abs(det) < 1e-9
-    return np.where(parallel, np.nan, x), np.where(parallel, np.nan, y)

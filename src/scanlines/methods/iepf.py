@@ -1,12 +1,14 @@
 """Iterative end-point fit (IEPF): split clusters at the point farthest from their chord.
 
 Algorithm (Duda and Hart [1]_, sec. 9.2; the recursive split of Pavlidis and
-Horowitz [2]_; as compared by Li et al. [3]_, sec. 4.3-4.5):
+Horowitz [2]_; as compared by the paper [3]_, sec. 4.3-4.5):
 
 1. cluster the returns by a fixed jump distance (``breakpoints="fixed"``,
    ``jump_distance = 0.3`` m) -- :mod:`scanlines.steps.breakpoints`;
 2. in every cluster, find the point farthest from the chord between the
-   cluster's first and last point; if that distance exceeds ``split_distance``,
+   cluster's first and last point (measured to the chord as a segment, so that
+   a cluster closing on itself is first cut at its far corner); if that distance
+   exceeds ``split_distance``,
    split there and repeat on both parts (one vectorised pass per recursion level,
    :func:`scanlines.steps.segments.split_runs`); the split point joins the part
    whose line it is nearer;
@@ -15,16 +17,16 @@ Horowitz [2]_; as compared by Li et al. [3]_, sec. 4.3-4.5):
 4. corners where consecutive parts of one cluster meet (the shared rule of
    :func:`scanlines.steps.segments.segment_events`); breakpoints from step 1.
 
-Defaults: ``split_distance = 0.1`` m, the split threshold usual for indoor
-laser scans (Nguyen et al. [4]_ discuss the split-and-merge family with
-thresholds of this order; with 1-2 cm range noise it is 5 to 10 standard
-deviations, so noise alone rarely splits a wall, yet a 90 deg corner is cut as
-soon as each side is longer than about 10 cm). ``min_points = 5``,
+Defaults: ``split_distance = 0.1`` m: with the 1-2 cm range noise of indoor
+laser scanners it is 5 to 10 standard deviations, so noise alone rarely splits
+a wall, yet a 90 deg corner is cut as soon as each side is longer than about
+10 cm. ``min_points = 5``,
 ``min_length = 0``, ``range_sigma = 0.01`` m (covariances only).
 
-The chord, not a fitted line, decides the split: at fine angular resolution the
-farthest point of a noisy wall is a noise peak, which is the over-segmentation
-Li et al. show for IEPF (their Fig. 10a).
+There is no denoising and the threshold is fixed: at fine angular resolution the
+farthest point of a noisy wall is a noise peak, and a threshold near the noise
+cuts the wall there -- the over-segmentation the paper shows for IEPF (its
+Fig. 10a).
 
 References
 ----------
@@ -32,12 +34,9 @@ References
    Wiley, 1973.
 .. [2] T. Pavlidis and S. L. Horowitz, "Segmentation of plane curves", IEEE
    Trans. Computers C-23(8), 860-870, 1974.
-.. [3] Y. Li, J. Liu, Z. Zhang, et al., "Adaptive threshold-based feature
-   extraction method for environmental line segments", Electronics 11(11),
-   1759, 2022.
-.. [4] V. Nguyen, A. Martinelli, N. Tomatis and R. Siegwart, "A comparison of
-   line extraction algorithms using 2D laser rangefinder for indoor mobile
-   robotics", IEEE/RSJ IROS 2005.
+.. [3] "An adaptive threshold line segment feature extraction algorithm for laser
+   radar scanning environments", Electronics 11(11), 1759, 2022.
+   doi:10.3390/electronics11111759
 """
 
 from __future__ import annotations

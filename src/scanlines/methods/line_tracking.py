@@ -1,10 +1,10 @@
 """Line tracking (incremental): grow a line point by point, start anew when a point leaves it.
 
-Algorithm (Siadat et al. [1]_; "Incremental", Algorithm 2 of Nguyen et al. [2]_):
+Algorithm (Siadat et al. [1]_; the "Incremental" algorithm as described by
+Nguyen et al. [2]_):
 
 1. cluster the returns by a fixed jump distance (``breakpoints="fixed"``,
-   ``jump_distance = 0.3`` m; Nguyen et al. run every algorithm on such
-   clusters) -- :mod:`scanlines.steps.breakpoints`;
+   ``jump_distance = 0.3`` m) -- :mod:`scanlines.steps.breakpoints`;
 2. in each cluster, start a line with its first two points;
 3. take the next point: if it lies within ``track_distance`` of the current
    line (the total-least-squares line of the points so far), add it and refit;
@@ -20,7 +20,7 @@ straight wall is practically never that far from the line fitted so far (more
 than 5 standard deviations; the line itself is uncertain where it starts, two
 points give only a direction of noise).
 
-Known limits (Li et al. [3]_, sec. 1; Nguyen et al. [2]_): the test only sees
+Known limits (the paper [3]_, sec. 1): the test only sees
 the distance of the *next* point, so a segment absorbs the first points past a
 corner until they drift ``track_distance`` off the line (at a right angle, about
 ``track_distance`` of the next wall); and there is no merging, so a wall cut
@@ -40,9 +40,9 @@ References
 .. [2] V. Nguyen, A. Martinelli, N. Tomatis and R. Siegwart, "A comparison of
    line extraction algorithms using 2D laser rangefinder for indoor mobile
    robotics", IEEE/RSJ IROS 2005.
-.. [3] Y. Li, J. Liu, Z. Zhang, et al., "Adaptive threshold-based feature
-   extraction method for environmental line segments", Electronics 11(11),
-   1759, 2022.
+.. [3] "An adaptive threshold line segment feature extraction algorithm for laser
+   radar scanning environments", Electronics 11(11), 1759, 2022.
+   doi:10.3390/electronics11111759
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Split-and-merge with a chi-square merge, after laser_line_extraction.
 
-Algorithm (Pavlidis and Horowitz [1]_; as described by Nguyen et al. [2]_,
-Algorithm 1; the parameters and their meaning as documented by the ROS package
+Algorithm (Pavlidis and Horowitz [1]_, as described by Nguyen et al. [2]_; the
+parameters and their meaning as documented by the ROS package
 laser_line_extraction [3]_):
 
 1. outlier filter: a return whose range differs by more than ``outlier_distance``
@@ -16,26 +16,30 @@ laser_line_extraction [3]_):
    (0.05 m, the package's ``min_split_dist``), one vectorised pass per level
    (:func:`scanlines.steps.segments.split_runs`, ``reference="fit"``); the split
    point joins the part whose line it is nearer, so no point is lost;
-4. merge: neighbouring runs of one cluster whose ``(rho, alpha)`` agree,
+4. filter: runs with fewer than ``min_points`` (9, ``min_line_points``) points or
+   shorter than ``min_length`` (0.5 m, ``min_line_length``) are dropped, as the
+   package does before merging (the line of a fragment of a few returns is
+   mostly noise, and its first-order covariance understates that, so a fragment
+   left between two halves of a wall would keep them apart);
+5. merge: neighbouring runs of one cluster whose ``(rho, alpha)`` agree,
    ``dL^T (P_1 + P_2)^-1 dL < merge_chi2`` (3, the package's bound), with
    covariances propagated from ``range_sigma`` (0.02 m, the package's
    ``range_std_dev``) and the angle difference wrapped to ``(-pi, pi]``; the most
-   similar pair first, refitted, until none passes
-   (:func:`scanlines.steps.segments.merge_chi_square`);
-5. segments with fewer than ``min_points`` (9, ``min_line_points``) points or
-   shorter than ``min_length`` (0.5 m, ``min_line_length``) are dropped; corners by
-   the shared rule of :func:`scanlines.steps.segments.segment_events`,
+   similar pair first, refitted over everything from the first's start to the
+   second's end (returns of a dropped fragment between them included), until
+   none passes (:func:`scanlines.steps.segments.merge_chi_square`);
+6. corners by the shared rule of :func:`scanlines.steps.segments.segment_events`,
    breakpoints from step 2.
 
 Differences from the package, on purpose: its split drops the point before the
-split and the last point of every part (no point is lost here); its merge
-compares angles without wrapping, so two halves of a wall seen at ``alpha``
-near ``+-pi`` never merge (wrapped here); it merges across gaps (here only
-within a cluster, which keeps the breakpoints consistent with the segments); it
-filters short lines before merging (after, here, so fragments can merge into a
-long line first); its lines come from Pfister et al.'s weighted fit with bearing
-noise (total least squares and range noise only, here); its ``min_range`` is the
-scan's ``range_min``.
+split and the last point of every part (no point is lost here, and a merged
+line takes the returns between its parts); its merge compares angles without
+wrapping, so two halves of a wall seen at ``alpha`` near ``+-pi`` never merge
+(wrapped here); it merges across gaps (here only within a cluster, which keeps
+the breakpoints consistent with the segments); it merges left to right (here
+the most similar pair first); its lines come from Pfister et al.'s weighted fit
+with bearing noise (total least squares and range noise only, here); its
+``min_range`` is the scan's ``range_min``.
 
 References
 ----------
@@ -65,6 +69,7 @@ from scanlines.steps.segments import (
     EVENT_PARAMS,
     LITERAL_LINE_K,
     cluster_sequence,
+    drop_small,
     finish,
     merge_chi_square,
     split_runs,
@@ -124,6 +129,9 @@ def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extractio
         np.arange(len(clusters)),
         threshold=params["split_distance"],
         reference="fit",
+    )
+    a, b, group = drop_small(
+        seq, a, b, group, min_points=params["min_points"], min_length=params["min_length"]
     )
     a, b, group = merge_chi_square(
         seq,

@@ -40,13 +40,15 @@ References
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from scanlines.params import Param, choice, number
-from scanlines.steps.points import Sequence
+from scanlines.scan import is_full_circle
+from scanlines.steps.points import Sequence, rotate
 
 __all__ = [
     "BREAKPOINT_PARAMS",
@@ -54,6 +56,7 @@ __all__ = [
     "BreakpointRule",
     "Clusters",
     "cluster",
+    "cluster_scan",
     "neighbour_distances",
     "thresholds",
 ]
@@ -225,3 +228,29 @@ def cluster(seq: Sequence, breaks: np.ndarray, *, seam_break: bool = False) -> C
     end = np.r_[cut, n - 1].astype(np.intp)
     bp_positions = np.r_[cut, n - 1] if seam_break else cut
     return Clusters(start, end, np.sort(seq.index[bp_positions]).astype(np.intp))
+
+
+def cluster_scan(
+    seq: Sequence, rule: BreakpointRule, ring_anchor: Callable[[Sequence], int]
+) -> tuple[Sequence, Clusters, bool]:
+    """Clusters of a whole scan, with the seam of a full circle joined when continuous.
+
+    A full circle whose seam passes the test is rotated to start right after its
+    first gap, so that the cluster across the seam is one run of positions. A
+    full circle without any gap (a room seen all round) is one closed ring: it is
+    rotated to start at ``ring_anchor(seq)`` (a strong corner, so that the cut the
+    ring needs falls where the scan turns anyway).
+
+    Returns the (possibly rotated) sequence, its clusters and whether it is a ring.
+    """
+    breaks = is_break(seq, rule)
+    if not is_full_circle(seq.n_beams, seq.step) or len(seq) < 3:
+        return seq, cluster(seq, breaks), False
+    if seam_is_break(seq, rule):
+        return seq, cluster(seq, breaks, seam_break=True), False
+    cut = np.flatnonzero(breaks)
+    if cut.size:
+        seq = rotate(seq, int(cut[0]) + 1)
+        return seq, cluster(seq, is_break(seq, rule), seam_break=True), False
+    seq = rotate(seq, ring_anchor(seq))
+    return seq, cluster(seq, np.zeros(len(seq) - 1, dtype=bool)), True

@@ -28,9 +28,16 @@ import numpy as np
 
 from scanlines.steps.breakpoints import Clusters
 from scanlines.steps.fit import Moments, tls_lines
-from scanlines.steps.points import Sequence
+from scanlines.steps.points import Sequence, rotate
 
-__all__ = ["SCORES", "corner_side", "peak_candidates", "slope_difference", "turn_angle"]
+__all__ = [
+    "SCORES",
+    "corner_side",
+    "peak_candidates",
+    "slope_difference",
+    "strongest_turn",
+    "turn_angle",
+]
 
 SCORES = ("turn", "dk", "dk_signed")
 
@@ -106,3 +113,21 @@ def corner_side(score: np.ndarray, candidates: np.ndarray) -> np.ndarray:
     i = candidates
     before = np.abs(s[i] - s[i - 1]) < np.abs(s[i] - s[i + 1])
     return np.where(before, -1, 1)
+
+
+def strongest_turn(seq: Sequence, window: int) -> int:
+    """Position of the largest turn angle of a closed ring, scored cyclically.
+
+    The ring is scored twice, as it is and rotated by half, and each position
+    takes the score from the copy in which it lies farther from the ends.
+    """
+    n = len(seq)
+    half = n // 2
+    whole = Clusters(np.array([0]), np.array([n - 1]), np.zeros(0, dtype=np.intp))
+    direct = turn_angle(seq, whole, window, Moments(seq.x, seq.y))
+    turned_seq = rotate(seq, half)
+    turned = turn_angle(turned_seq, whole, window, Moments(turned_seq.x, turned_seq.y))
+    p = np.arange(n)
+    shifted = (p - half) % n
+    nearer_end = np.minimum(p, n - 1 - p) >= np.minimum(shifted, n - 1 - shifted)
+    return int(np.argmax(np.where(nearer_end, direct, turned[shifted])))

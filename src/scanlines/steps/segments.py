@@ -4,6 +4,11 @@ A *run* is an inclusive interval ``[a, b]`` of sequence positions (see
 :mod:`scanlines.steps.points`); ``group`` numbers the cluster (or the line) each run
 came from. Everything here works on many runs at once.
 
+Clustering and assembly
+    :func:`cluster_sequence` clusters by the method's ``breakpoints`` rule (or
+    not at all, ``"none"``), with the seam of full circles handled as the adaptive
+    method does; :func:`finish` drops small runs, finds the events and assembles
+    the :class:`~scanlines.Extraction`.
 Splitting
     :func:`split_runs` is the recursive split of iterative end-point fit [1]_ [2]_
     (``reference="chord"``: a run is split while a point is farther than the
@@ -19,7 +24,9 @@ Runs from inlier masks
     when at most ``max_bridge`` returns lie between them (returns not yet taken by
     another segment; they become outliers), no two or more consecutive beams are
     missing between them (the project's gap convention) and they are at most
-    ``max_gap`` metres apart.
+    ``max_gap`` metres apart. :func:`consensus_segments` is the loop of the
+    consensus methods around it (propose a line, refit, cut into runs, remove),
+    :func:`consensus_extraction` the whole method given its line search.
 Merging
     :func:`merge_chi_square` joins neighbouring runs of one cluster whose lines
     agree within a chi-square bound on ``(rho, alpha)``, with the covariances of
@@ -89,7 +96,9 @@ from scanlines.steps.breakpoints import (
     MAX_BRIDGED_GAP,
     BreakpointRule,
     Clusters,
+    cluster_scan,
 )
+from scanlines.steps.corners import strongest_turn
 from scanlines.steps.denoise import estimate_noise
 from scanlines.steps.fit import (
     Lines,
@@ -151,10 +160,12 @@ NO_CLUSTERING = "none"
 
 _EMPTY = np.zeros(0, dtype=np.intp)
 
-# The ring anchor (a full circle without any gap) is the strongest turn-angle corner,
-# scored as the adaptive method scores corners.
+# The ring anchor (a full circle without any gap) is the strongest turn-angle corner.
 _RING_WINDOW = 5
-_RING_ANCHOR: Mapping[str, Any] = {"corner_score": "turn", "slope_window": _RING_WINDOW}
+
+
+def _ring_anchor(seq: Sequence) -> int:
+    return strongest_turn(seq, _RING_WINDOW)
 
 
 # --------------------------------------------------------------------------- clustering
@@ -171,13 +182,10 @@ def cluster_sequence(seq: Sequence, params: Mapping[str, Any]) -> tuple[Sequence
     Returns the (possibly rotated) sequence, its clusters and whether the scan is
     one closed ring (a full circle without any break).
     """
-    # The seam logic is the adaptive method's; imported here until it moves to steps/.
-    from scanlines.methods.adaptive import _clusters
-
     name = params["breakpoints"]
     if name == NO_CLUSTERING:
         rule = BreakpointRule(name="fixed", jump_distance=math.inf)
-        seq, _, ring = _clusters(seq, rule, _RING_ANCHOR, _RING_WINDOW)
+        seq, _, ring = cluster_scan(seq, rule, _ring_anchor)
         whole = Clusters(np.array([0], dtype=np.intp), np.array([len(seq) - 1]), _EMPTY)
         return seq, whole, ring
     sigma = 0.0
@@ -185,12 +193,7 @@ def cluster_sequence(seq: Sequence, params: Mapping[str, Any]) -> tuple[Sequence
     if noisy_rule or params.get("line_k", 0.0) > 0.0:
         sigma = estimate_noise(seq, np.array([0]), np.array([len(seq) - 1]))
     rule = BreakpointRule.from_params(dict(params), sigma)
-    return _clusters(seq, rule, _RING_ANCHOR, _RING_WINDOW)
-
-
-def run_owner(clusters: Clusters, a: np.ndarray) -> np.ndarray:
-    """Cluster number of runs starting at positions ``a``."""
-    return (np.searchsorted(clusters.start, a, side="right") - 1).astype(np.intp)
+    return cluster_scan(seq, rule, _ring_anchor)
 
 
 # --------------------------------------------------------------------------- distances

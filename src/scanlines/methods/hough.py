@@ -1,0 +1,167 @@
+"""Hough transform: the most-voted line, its inliers removed, until the peak is too low.
+
+Algorithm (Hough [1]_ in the normal parametrisation of Duda and Hart [2]_; the
+"Hough Transform" algorithm as described by Nguyen et al. [3]_):
+
+1. by default on the whole scan (``breakpoints="none"``: the algorithm starts
+   from the set of all points); with a clustering rule, on each cluster
+   separately;
+2. every point votes, for every angle ``alpha_j = j * angle_resolution`` in
+   ``[0, pi)``, for the cell of ``rho = u cos alpha_j + v sin alpha_j`` rounded to
+   ``rho_resolution`` (``u, v`` relative to the points' centroid, so the
+   accumulator spans only the cluster); the accumulator is built once and votes
+   are subtracted as points leave;
+3. the cell with the most votes is the next line; below ``min_votes`` the search
+   ends;
+4. its inliers (free points within ``inlier_distance``) are refitted by total
+   least squares and collected again, cut into runs contiguous in beam order
+   (one return off the line bridged and dropped as an outlier; two or more
+   missing beams, or inliers more than ``max_gap`` apart, end a run); runs with at
+   least ``min_points`` inliers become segments and their points' votes are
+   removed (a set without such a run is removed as a whole) --
+   :func:`scanlines.steps.segments.consensus_segments`;
+5. segments shorter than ``min_length`` are dropped; corners and (on the whole
+   scan) breakpoints between consecutive segments by the shared rule of
+   :func:`scanlines.steps.segments.segment_events`.
+
+Defaults: ``angle_resolution = 1`` deg and ``rho_resolution = 0.02`` m (the cell
+is about the width of the 1-2 cm range noise; a 1 deg error tilts a 2 m wall by
+3.5 cm at its ends, within ``inlier_distance = 0.05`` m of the refitted line);
+``min_votes = 5``, ``max_gap = 0.4`` m, ``min_points = 5``, ``min_length = 0``.
+When the points span more than ``MAX_RHO_BINS`` cells (returns beyond about
+40 m at 2 cm) the rho cells are widened to fit.
+
+References
+----------
+.. [1] P. V. C. Hough, "Method and means for recognizing complex patterns",
+   U.S. Patent 3,069,654, 1962.
+.. [2] R. O. Duda and P. E. Hart, "Use of the Hough transformation to detect
+   lines and curves in pictures", Communications of the ACM 15(1), 11-15, 1972.
+.. [3] V. Nguyen, A. Martinelli, N. Tomatis and R. Siegwart, "A comparison of
+   line extraction algorithms using 2D laser rangefinder for indoor mobile
+   robotics", IEEE/RSJ IROS 2005.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from scanlines.extraction import Extraction
+from scanlines.params import Param, choice, int_at_least, number
+from scanlines.steps.assemble import empty_extraction
+from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, RULES
+from scanlines.steps.points import Sequence
+from scanlines.steps.segments import (
+    EVENT_PARAMS,
+    LITERAL_LINE_K,
+    NO_CLUSTERING,
+    consensus_extraction,
+)
+
+NAME = "hough"
+
+MAX_RHO_BINS = 4096
+"""Most rho cells of an accumulator (the cells widen beyond)."""
+
+PARAMS: dict[str, Param] = {
+    **BREAKPOINT_PARAMS,
+    **LITERAL_LINE_K,
+    "breakpoints": Param(
+        NO_CLUSTERING,
+        choice(NO_CLUSTERING, *RULES),
+        "clustering rule: none (whole scan) | " + " | ".join(RULES),
+    ),
+    "rho_resolution": Param(
+        0.02, number(low=0.0, low_open=True), "accumulator cell size in rho (m)"
+    ),
+    "angle_resolution": Param(
+        1.0, number(low=0.0, high=90.0, low_open=True), "accumulator cell size in alpha (deg)"
+    ),
+    "min_votes": Param(5, int_at_least(1), "fewest votes of an accumulator peak"),
+    "inlier_distance": Param(
+        0.05, number(low=0.0, low_open=True), "largest distance of an inlier from its line (m)"
+    ),
+    "max_gap": Param(
+        0.4, number(low=0.0, low_open=True), "largest distance between consecutive inliers (m)"
+    ),
+    **EVENT_PARAMS,
+    "min_points": Param(5, int_at_least(2), "fewest inliers of a segment"),
+    "min_length": Param(0.0, number(low=0.0), "shortest segment (m)"),
+    "range_sigma": Param(0.01, number(low=0.0), "range noise for the covariance (m)"),
+}
+
+PRESETS: dict[str, dict[str, Any]] = {}
+
+
+def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extraction:
+    """Extract features from the valid returns ``seq`` of one scan."""
+    if len(seq) == 0:
+        return empty_extraction(NAME, params)
+    return consensus_extraction(
+        seq,
+        angle_min,
+        params,
+        method=NAME,
+        finder=lambda s, member: Accumulator(
+            s,
+            member,
+            rho_resolution=params["rho_resolution"],
+            angle_resolution=math.radians(params["angle_resolution"]),
+            min_votes=params["min_votes"],
+        ),
+    )
+
+
+class Accumulator:
+    """The ``(alpha, rho)`` vote array of the points ``member`` (steps 2-3)."""
+
+    def __init__(
+        self,
+        seq: Sequence,
+        member: np.ndarray,
+        *,
+        rho_resolution: float,
+        angle_resolution: float,
+        min_votes: int,
+    ) -> None:
+        points = np.flatnonzero(member)
+        self.centre = (float(seq.x[points].mean()), float(seq.y[points].mean()))
+        u, v = seq.x[points] - self.centre[0], seq.y[points] - self.centre[1]
+        self.angles = np.arange(0.0, math.pi, angle_resolution)
+        reach = float(np.max(np.hypot(u, v)))
+        half = math.ceil(reach / rho_resolution)
+        if 2 * half + 1 > MAX_RHO_BINS:
+            half = (MAX_RHO_BINS - 1) // 2
+            rho_resolution = max(reach / half, rho_resolution)
+        self.resolution = rho_resolution
+        self.half = half
+        self.n_rho = 2 * half + 1
+        rho = np.outer(u, np.cos(self.angles)) + np.outer(v, np.sin(self.angles))
+        cell = np.clip(np.rint(rho / rho_resolution).astype(np.intp) + half, 0, self.n_rho - 1)
+        self.cells = cell + np.arange(self.angles.size) * self.n_rho
+        self.votes = np.bincount(self.cells.ravel(), minlength=self.angles.size * self.n_rho)
+        self.row = np.full(len(seq), -1, dtype=np.intp)
+        self.row[points] = np.arange(points.size)
+        self.min_votes = min_votes
+
+    def best_line(self, free: np.ndarray) -> tuple[float, float] | None:
+        """``(rho, alpha)`` of the most-voted cell in the sequence's frame, or ``None``."""
+        peak = int(np.argmax(self.votes))
+        if self.votes[peak] < self.min_votes:
+            return None
+        alpha = float(self.angles[peak // self.n_rho])
+        rho = (peak % self.n_rho - self.half) * self.resolution
+        rho += self.centre[0] * math.cos(alpha) + self.centre[1] * math.sin(alpha)
+        return rho, alpha
+
+    def remove(self, positions: np.ndarray) -> None:
+        """Subtract the votes of the points at ``positions`` (each point once)."""
+        rows = self.row[positions]
+        rows = rows[rows >= 0]
+        self.row[positions] = -1
+        if rows.size:
+            self.votes -= np.bincount(self.cells[rows].ravel(), minlength=self.votes.size)

@@ -1,0 +1,144 @@
+"""Sequential RANSAC: the line with the most inliers, removed, until too few points remain.
+
+Algorithm (Fischler and Bolles [1]_; the "RANSAC" algorithm as
+described by Nguyen et al. [2]_):
+
+1. by default on the whole scan (``breakpoints="none"``: the algorithm starts
+   from the set of all points); with a clustering rule, on each cluster
+   separately;
+2. draw ``trials`` pairs of free points uniformly at random; each pair defines a
+   line; the line with the most free points within ``inlier_distance`` wins;
+3. refit the winner's inliers by total least squares and collect the inliers of
+   the refitted line;
+4. cut the consensus set into runs contiguous in beam order
+   (:func:`scanlines.steps.segments.inlier_runs`: one return off the line is
+   bridged and dropped as an outlier; a gap of two or more missing beams, or
+   consecutive inliers more than ``max_gap`` apart, end a run); runs with at
+   least ``min_points`` inliers become segments and leave the set (a set without
+   such a run leaves as a whole) -- :func:`scanlines.steps.segments.consensus_segments`;
+5. repeat from 2 until fewer than ``min_points`` points remain or the best line
+   has fewer inliers;
+6. segments shorter than ``min_length`` are dropped; corners and (on the whole
+   scan) breakpoints between consecutive segments by the shared rule of
+   :func:`scanlines.steps.segments.segment_events`.
+
+The draws come from ``numpy.random.default_rng(seed)``, created anew for every
+scan: one seed gives the same result for the same scan.
+
+Defaults: ``inlier_distance = 0.05`` m (about 3 standard deviations of the 1-2 cm
+range noise of the simulated sensors, quantisation included); ``trials = 200``:
+with uniform pairs a wall holding a fraction ``w`` of the points is drawn with
+probability ``1 - (1 - w^2)^trials``, 99.97 % for ``w = 0.2`` (the wall found
+first is the largest; smaller ones are searched among the remaining points);
+``max_gap = 0.4`` m (as laser_line_extraction's ``max_line_gap``);
+``min_points = 5``, ``min_length = 0``, ``seed = 0``.
+
+The pairs are drawn from the whole scan, as in the literature: a line through
+two far-apart points of different walls can collect more inliers than a short
+wall; such a consensus set is broken into short runs and discarded.
+
+References
+----------
+.. [1] M. A. Fischler and R. C. Bolles, "Random sample consensus: a paradigm for
+   model fitting with applications to image analysis and automated
+   cartography", Communications of the ACM 24(6), 381-395, 1981.
+.. [2] V. Nguyen, A. Martinelli, N. Tomatis and R. Siegwart, "A comparison of
+   line extraction algorithms using 2D laser rangefinder for indoor mobile
+   robotics", IEEE/RSJ IROS 2005.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from scanlines.extraction import Extraction
+from scanlines.params import Param, choice, int_at_least, number
+from scanlines.steps.assemble import empty_extraction
+from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, RULES
+from scanlines.steps.points import Sequence
+from scanlines.steps.segments import (
+    EVENT_PARAMS,
+    LITERAL_LINE_K,
+    NO_CLUSTERING,
+    consensus_extraction,
+)
+
+NAME = "ransac"
+
+PARAMS: dict[str, Param] = {
+    **BREAKPOINT_PARAMS,
+    **LITERAL_LINE_K,
+    "breakpoints": Param(
+        NO_CLUSTERING,
+        choice(NO_CLUSTERING, *RULES),
+        "clustering rule: none (whole scan) | " + " | ".join(RULES),
+    ),
+    "inlier_distance": Param(
+        0.05, number(low=0.0, low_open=True), "largest distance of an inlier from its line (m)"
+    ),
+    "trials": Param(200, int_at_least(1), "random point pairs drawn per line"),
+    "max_gap": Param(
+        0.4, number(low=0.0, low_open=True), "largest distance between consecutive inliers (m)"
+    ),
+    "seed": Param(0, int_at_least(0), "seed of the random draws (per scan)"),
+    **EVENT_PARAMS,
+    "min_points": Param(5, int_at_least(2), "fewest inliers of a segment"),
+    "min_length": Param(0.0, number(low=0.0), "shortest segment (m)"),
+    "range_sigma": Param(0.01, number(low=0.0), "range noise for the covariance (m)"),
+}
+
+PRESETS: dict[str, dict[str, Any]] = {}
+
+
+def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extraction:
+    """Extract features from the valid returns ``seq`` of one scan."""
+    if len(seq) == 0:
+        return empty_extraction(NAME, params)
+    rng = np.random.default_rng(params["seed"])
+    return consensus_extraction(
+        seq,
+        angle_min,
+        params,
+        method=NAME,
+        finder=lambda s, _: RandomSampler(s, rng, params["trials"], params["inlier_distance"]),
+    )
+
+
+class RandomSampler:
+    """Line proposals from random pairs of free points (step 2)."""
+
+    def __init__(
+        self, seq: Sequence, rng: np.random.Generator, trials: int, inlier_distance: float
+    ) -> None:
+        self.seq = seq
+        self.rng = rng
+        self.trials = trials
+        self.inlier_distance = inlier_distance
+
+    def best_line(self, free: np.ndarray) -> tuple[float, float] | None:
+        """The line through the drawn pair with the most free points near it."""
+        points = np.flatnonzero(free)
+        m = points.size
+        if m < 2:
+            return None
+        first = self.rng.integers(0, m, self.trials)
+        second = self.rng.integers(0, m - 1, self.trials)
+        second = second + (second >= first)
+        x, y = self.seq.x[points], self.seq.y[points]
+        dx, dy = x[second] - x[first], y[second] - y[first]
+        length = np.hypot(dx, dy)
+        usable = length > 0.0
+        if not usable.any():
+            return None
+        nx, ny = -dy[usable] / length[usable], dx[usable] / length[usable]
+        rho = nx * x[first[usable]] + ny * y[first[usable]]
+        near = np.abs(np.outer(nx, x) + np.outer(ny, y) - rho[:, None]) <= self.inlier_distance
+        best = int(np.argmax(near.sum(axis=1)))
+        return float(rho[best]), math.atan2(float(ny[best]), float(nx[best]))
+
+    def remove(self, positions: np.ndarray) -> None:
+        """Nothing to forget: every draw looks at the free points only."""
