@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import typer
 
-from scanlines.cli import evaluate, extract, logs
+from scanlines.cli import bench, evaluate, extract, logs
 
 app = typer.Typer(
     name="scanlines",
@@ -28,6 +28,7 @@ def root() -> None:
 extract.register(app)
 logs.register(app)
 evaluate.register(app)
+bench.register(app)
 
 
 def main() -> None:

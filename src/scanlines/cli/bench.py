@@ -1,0 +1,194 @@
+"""``scanlines bench``: time every method on real and simulated scans, in one process."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated
+
+import typer
+
+from scanlines.cli.common import guarded
+
+if TYPE_CHECKING:
+    from scanlines.bench import BenchResult, TableData
+
+DEFAULT_DOCS = Path("docs/PERFORMANCE.md")
+
+TABLE_WIDTH = 160
+"""Console width when the output is not a terminal."""
+
+
+def register(app: typer.Typer) -> None:
+    app.command(
+        "bench",
+        help=(
+            "Time every method (median/p90 us per scan, scans/s, ratio to iepf) on the shipped "
+            "real excerpts and simulated scans of each sensor preset; scaling over beam counts; "
+            "Extractor.batch vs the loop. Speed figures for docs/PERFORMANCE.md."
+        ),
+    )(guarded(bench_command))
+
+
+def bench_command(
+    method: Annotated[
+        list[str] | None,
+        typer.Option("--method", "-m", help="Method to time, repeatable; default all."),
+    ] = None,
+    sensor: Annotated[
+        list[str] | None,
+        typer.Option("--sensor", "-s", help="Sensor preset to simulate, repeatable; default all."),
+    ] = None,
+    quick: Annotated[
+        bool,
+        typer.Option(
+            "--quick", help="Tiny run for CI: few scans, 1 repeat, beam counts 100 and 1000."
+        ),
+    ] = False,
+    real_scans: Annotated[
+        int | None, typer.Option("--real-scans", help="Scans per real excerpt (default 100).")
+    ] = None,
+    sim_scans: Annotated[
+        int | None, typer.Option("--sim-scans", help="Simulated scans per preset (default 50).")
+    ] = None,
+    repeats: Annotated[
+        int | None, typer.Option("--repeats", "-r", help="Timed passes (default 3).")
+    ] = None,
+    warmup: Annotated[
+        int | None,
+        typer.Option("--warmup", help="Warm-up calls per method and dataset (default 3)."),
+    ] = None,
+    beams: Annotated[
+        list[int] | None,
+        typer.Option(
+            "--beams",
+            help="Beam count of the scaling run, repeatable (default 100 300 1000 3000 10000).",
+        ),
+    ] = None,
+    scaling_scans: Annotated[
+        int | None,
+        typer.Option(
+            "--scaling-scans", help="Scans per beam count in the scaling run (default 10)."
+        ),
+    ] = None,
+    no_scaling: Annotated[bool, typer.Option("--no-scaling", help="Skip the scaling run.")] = False,
+    no_batch: Annotated[
+        bool, typer.Option("--no-batch", help="Skip Extractor.batch vs the loop.")
+    ] = False,
+    seed: Annotated[int, typer.Option(help="Base seed of the simulated scenes.")] = 0,
+    profile: Annotated[
+        bool,
+        typer.Option(
+            "--profile", help="Profile adaptive over the intel excerpt (on with --write-docs)."
+        ),
+    ] = False,
+    json_path: Annotated[
+        Path | None, typer.Option("--json", help="Also write the measurements as JSON.")
+    ] = None,
+    write_docs: Annotated[
+        bool,
+        typer.Option("--write-docs", help="Regenerate the performance page (see --docs-path)."),
+    ] = False,
+    docs_path: Annotated[
+        Path,
+        typer.Option("--docs-path", help="Page written by --write-docs."),
+    ] = DEFAULT_DOCS,
+) -> None:
+    from scanlines import bench
+
+    changes = {
+        key: value
+        for key, value in {
+            "real_scans": real_scans,
+            "sim_scans": sim_scans,
+            "repeats": repeats,
+            "warmup": warmup,
+            "scaling_scans": scaling_scans,
+        }.items()
+        if value is not None
+    }
+    changes.update(
+        methods=tuple(method or ()),
+        sensors=tuple(sensor or ()),
+        seed=seed,
+        batch=not no_batch,
+        profile=profile or write_docs,
+    )
+    if beams:
+        changes["beam_counts"] = tuple(beams)
+    if no_scaling:
+        changes["beam_counts"] = ()
+    make = bench.BenchConfig.quick_config if quick else bench.BenchConfig
+    config = make(**changes)
+    config = config.validated()  # bad input ends here, before anything is timed
+
+    with _Progress() as progress:
+        result = bench.run(config, command=bench.command_line(), progress=progress)
+    _print(result)
+    if json_path is not None:
+        typer.echo(f"wrote {result.to_json(json_path)}")
+    if write_docs:
+        typer.echo(f"wrote {bench.write_docs(result, docs_path)}")
+
+
+class _Progress:
+    """A transient rich progress bar on stderr; the instance is the ``progress`` callback."""
+
+    def __enter__(self) -> _Progress:
+        from rich.console import Console
+        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
+
+        self.bar = Progress(
+            "{task.description}",
+            BarColumn(),
+            MofNCompleteColumn(),
+            TimeElapsedColumn(),
+            transient=True,
+            console=Console(stderr=True),
+        )
+        self.bar.__enter__()
+        self.task = self.bar.add_task("bench", total=None)
+        return self
+
+    def __call__(self, stage: str, done: int, total: int) -> None:
+        self.bar.update(self.task, description=stage, completed=done, total=total)
+
+    def __exit__(self, *exc: object) -> None:
+        self.bar.__exit__(*exc)
+
+
+def _print(result: BenchResult) -> None:
+    from rich.console import Console
+
+    console = Console()
+    if not console.is_terminal:
+        console = Console(width=TABLE_WIDTH)
+    m = result.machine
+    console.print(
+        f"{m['cpu']}, {m['cores_logical']} cores, {m['python']}, numpy {m['numpy']}; "
+        f"{len(result.methods)} methods, {result.elapsed_s:.0f} s. {result.reference_note}"
+    )
+    for table in result.tables():
+        console.print(_rich(table))
+    for table in result.profile_tables():
+        console.print(_rich(table))
+
+
+def _rich(data: TableData):
+    from rich.box import SIMPLE_HEAD
+    from rich.table import Table
+
+    table = Table(
+        title=data.title,
+        caption=data.caption or None,
+        caption_justify="left",
+        box=SIMPLE_HEAD,
+        title_justify="left",
+    )
+    for i, column in enumerate(data.columns):
+        if i < data.left:
+            table.add_column(column, style="bold" if i == 0 else None, no_wrap=True)
+        else:
+            table.add_column(column, justify="right", no_wrap=True)
+    for row in data.rows:
+        table.add_row(*row)
+    return table

@@ -1,0 +1,199 @@
+"""``scanlines bench``: JSON layout, generated docs, errors. Speed itself is never asserted."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import types
+
+import pytest
+
+import scanlines
+from scanlines import bench
+from scanlines.methods import REGISTRY
+
+
+def run(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-m", "scanlines", "bench", *args],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+
+
+@pytest.fixture(scope="module")
+def quick_run(tmp_path_factory):
+    """One quick run of every method, writing both the JSON and the docs page."""
+    folder = tmp_path_factory.mktemp("bench")
+    out = run(
+        "--quick",
+        "--json",
+        str(folder / "out.json"),
+        "--write-docs",
+        "--docs-path",
+        str(folder / "docs" / "PERFORMANCE.md"),
+    )
+    return out, folder
+
+
+def test_quick_json_has_every_method_and_positive_timings(quick_run):
+    out, folder = quick_run
+    assert out.returncode == 0, out.stderr
+    data = json.loads((folder / "out.json").read_text())
+    assert data["schema"] == bench.SCHEMA
+    selected = list(scanlines.methods())
+    assert data["methods"] == selected
+    assert data["settings"]["quick"] is True
+    assert data["reference"]["method"] == "iepf"
+    names = [d["name"] for d in data["datasets"]]
+    assert names[:2] == ["intel", "freiburg"]
+    assert len(names) == 2 + 4  # the real excerpts and the four sensor presets
+    for dataset in data["datasets"]:
+        results = dataset["results"]
+        assert list(results) == selected
+        for timing in results.values():
+            assert timing["status"] == "ok", timing["error"]
+            assert timing["median_us"] > 0
+            assert timing["p90_us"] >= timing["median_us"] - 1e-9
+            assert timing["scans_per_s"] > 0
+            assert timing["samples"] == dataset["n_scans"]  # quick: one repeat
+        assert results["iepf"]["ratio"] == 1.0
+    assert data["machine"]["cpu"]
+    assert data["machine"]["numpy"]
+
+
+def test_quick_scaling_entries(quick_run):
+    out, folder = quick_run
+    assert out.returncode == 0, out.stderr
+    scaling = json.loads((folder / "out.json").read_text())["scaling"]
+    assert [e["n_beams"] for e in scaling["entries"]] == [100, 1000]
+    for entry in scaling["entries"]:
+        assert set(entry["results"]) == set(scanlines.methods())
+        for timing in entry["results"].values():
+            assert timing["median_us"] > 0
+            assert timing["us_per_beam"] == pytest.approx(timing["median_us"] / entry["n_beams"])
+    assert set(scaling["exponent"]) == set(scanlines.methods())
+
+
+def test_quick_batch_and_profile(quick_run):
+    _, folder = quick_run
+    data = json.loads((folder / "out.json").read_text())
+    assert [b["dataset"] for b in data["batch"]] == ["intel", "freiburg"]
+    for entry in data["batch"]:
+        for row in entry["results"].values():
+            assert row["error"] is None
+            assert row["loop_us"] > 0
+            assert row["batch_us"] > 0
+            assert row["ratio"] == pytest.approx(row["batch_us"] / row["loop_us"])
+    profile = data["profile"]  # --write-docs profiles adaptive
+    assert profile["method"] == "adaptive"
+    assert profile["cumulative"]
+    assert all(f["where"].startswith("scanlines/") for f in profile["cumulative"])
+
+
+def test_write_docs_to_docs_path(quick_run):
+    out, folder = quick_run
+    assert out.returncode == 0, out.stderr
+    page = folder / "docs" / "PERFORMANCE.md"
+    text = page.read_text()
+    assert "Generated" in text.split("## Machine")[0]
+    assert "scanlines bench" in text.split("## Machine")[0]
+    for heading in (
+        "## Machine",
+        "## Summary",
+        "## Per dataset",
+        "## Scaling with the number of beams",
+        "## Extractor.batch vs the loop",
+        "## Where the time goes",
+    ):
+        assert heading in text
+    assert "CPU:" in text
+    assert "OPENBLAS environment variables:" in text
+    assert "--docs-path" in text  # the command line used is recorded
+    assert "| method | median us/scan | p90 us/scan | scans/s | x iepf |" in text
+    # the numbers of the page are the numbers of the run
+    data = json.loads((folder / "out.json").read_text())
+    intel = data["datasets"][0]["results"]["iepf"]
+    assert bench._fmt_us(intel["median_us"]) in text
+    assert f"wrote {page}" in out.stdout
+
+
+def test_reference_falls_back_to_first_method(tmp_path):
+    path = tmp_path / "out.json"
+    out = run(
+        "--quick", "-m", "pdbs", "-m", "adaptive", "-s", "lms_1deg", "--beams", "100",
+        "--beams", "300", "--no-batch", "--json", str(path),
+    )  # fmt: skip
+    assert out.returncode == 0, out.stderr
+    data = json.loads(path.read_text())
+    assert data["methods"] == ["pdbs", "adaptive"]
+    assert data["reference"]["method"] == "pdbs"
+    assert "iepf is not selected" in data["reference"]["note"]
+    assert "iepf is not selected" in out.stdout
+    for dataset in data["datasets"]:
+        assert set(dataset["results"]) == {"pdbs", "adaptive"}
+        assert dataset["results"]["pdbs"]["ratio"] == 1.0
+    assert [e["n_beams"] for e in data["scaling"]["entries"]] == [100, 300]
+    assert data["batch"] == []
+    assert data["profile"] is None
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--method", "no_such_method"], "unknown method 'no_such_method'"),
+        (["--sensor", "no_such_sensor"], "unknown sensor preset"),
+        (["--beams", "1"], "beam counts"),
+        (["--repeats", "0"], "repeats"),
+    ],
+)
+def test_bad_input_exits_2_with_one_line(args, message):
+    out = run("--quick", *args)
+    assert out.returncode == 2
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1
+    assert lines[0].startswith("scanlines: error:")
+    assert message in lines[0]
+    assert out.stdout == ""
+
+
+def test_failing_method_is_reported_not_fatal(monkeypatch):
+    calls = {"n": 0}
+
+    def run_method(seq, angle_min, params):
+        calls["n"] += 1
+        if calls["n"] >= 2:
+            raise RuntimeError("boom on purpose")
+        return REGISTRY["iepf"].run(seq, angle_min, params)
+
+    fake = types.SimpleNamespace(
+        NAME="boom", __doc__="Fails.", PARAMS=REGISTRY["iepf"].PARAMS, PRESETS={}, run=run_method
+    )
+    monkeypatch.setitem(REGISTRY, "boom", fake)
+    config = bench.BenchConfig.quick_config(
+        methods=("iepf", "boom"), sensors=("lms_1deg",), beam_counts=(100,)
+    )
+    result = bench.run(config)
+    for dataset in result.datasets:
+        assert dataset.timings["iepf"].ok
+        assert dataset.timings["boom"].status == "error"
+        assert "RuntimeError: boom on purpose" in dataset.timings["boom"].error
+        assert dataset.timings["boom"].ratio is None
+    assert result.batch[0].rows["boom"].error is not None
+    data = result.to_dict()
+    json.dumps(data, allow_nan=False)
+    assert data["datasets"][0]["results"]["boom"]["median_us"] is None
+    page = bench.render_markdown(result)
+    assert "boom on purpose" in page
+    assert "| boom | error |" in page
+
+
+def test_import_needs_no_rich():
+    code = (
+        "import sys, scanlines.bench; "
+        "print(sorted(m for m in sys.modules if m.startswith(('rich', 'matplotlib', 'typer'))))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
