@@ -57,7 +57,7 @@ from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, RULES
 from scanlines.steps.points import Sequence
 from scanlines.steps.segments import (
     EVENT_PARAMS,
-    LITERAL_LINE_K,
+    LITERAL_CLUSTERING,
     NO_CLUSTERING,
     consensus_extraction,
 )
@@ -69,7 +69,7 @@ MAX_RHO_BINS = 4096
 
 PARAMS: dict[str, Param] = {
     **BREAKPOINT_PARAMS,
-    **LITERAL_LINE_K,
+    **LITERAL_CLUSTERING,
     "breakpoints": Param(
         NO_CLUSTERING,
         choice(NO_CLUSTERING, *RULES),

@@ -54,7 +54,7 @@ from scanlines.steps.fit import Moments
 from scanlines.steps.points import Sequence
 from scanlines.steps.segments import (
     EVENT_PARAMS,
-    LITERAL_LINE_K,
+    LITERAL_CLUSTERING,
     cluster_sequence,
     finish,
     split_runs,
@@ -64,7 +64,7 @@ NAME = "iepf"
 
 PARAMS: dict[str, Param] = {
     **BREAKPOINT_PARAMS,
-    **LITERAL_LINE_K,
+    **LITERAL_CLUSTERING,
     "breakpoints": Param(
         "fixed",
         BREAKPOINT_PARAMS["breakpoints"].check,

@@ -65,7 +65,7 @@ from scanlines.steps.fit import Lines, Moments, line_covariances, run_labels, tl
 from scanlines.steps.points import Sequence
 from scanlines.steps.segments import (
     EVENT_PARAMS,
-    LITERAL_LINE_K,
+    LITERAL_CLUSTERING,
     cluster_sequence,
     finish,
     pair_chi_square,
@@ -75,7 +75,7 @@ NAME = "line_regression"
 
 PARAMS: dict[str, Param] = {
     **BREAKPOINT_PARAMS,
-    **LITERAL_LINE_K,
+    **LITERAL_CLUSTERING,
     "breakpoints": Param(
         "fixed",
         BREAKPOINT_PARAMS["breakpoints"].check,

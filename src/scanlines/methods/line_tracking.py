@@ -58,13 +58,13 @@ from scanlines.steps.assemble import empty_extraction
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS
 from scanlines.steps.fit import Moments, tls_lines
 from scanlines.steps.points import Sequence
-from scanlines.steps.segments import EVENT_PARAMS, LITERAL_LINE_K, cluster_sequence, finish
+from scanlines.steps.segments import EVENT_PARAMS, LITERAL_CLUSTERING, cluster_sequence, finish
 
 NAME = "line_tracking"
 
 PARAMS: dict[str, Param] = {
     **BREAKPOINT_PARAMS,
-    **LITERAL_LINE_K,
+    **LITERAL_CLUSTERING,
     "breakpoints": Param(
         "fixed",
         BREAKPOINT_PARAMS["breakpoints"].check,

@@ -62,7 +62,7 @@ from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, RULES
 from scanlines.steps.points import Sequence
 from scanlines.steps.segments import (
     EVENT_PARAMS,
-    LITERAL_LINE_K,
+    LITERAL_CLUSTERING,
     NO_CLUSTERING,
     consensus_extraction,
 )
@@ -71,7 +71,7 @@ NAME = "ransac"
 
 PARAMS: dict[str, Param] = {
     **BREAKPOINT_PARAMS,
-    **LITERAL_LINE_K,
+    **LITERAL_CLUSTERING,
     "breakpoints": Param(
         NO_CLUSTERING,
         choice(NO_CLUSTERING, *RULES),

@@ -67,7 +67,7 @@ from scanlines.steps.fit import Moments
 from scanlines.steps.points import Sequence
 from scanlines.steps.segments import (
     EVENT_PARAMS,
-    LITERAL_LINE_K,
+    LITERAL_CLUSTERING,
     cluster_sequence,
     drop_small,
     finish,
@@ -79,7 +79,7 @@ NAME = "split_merge"
 
 PARAMS: dict[str, Param] = {
     **BREAKPOINT_PARAMS,
-    **LITERAL_LINE_K,
+    **LITERAL_CLUSTERING,
     "breakpoints": Param(
         "fixed",
         BREAKPOINT_PARAMS["breakpoints"].check,

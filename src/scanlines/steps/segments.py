@@ -113,7 +113,7 @@ from scanlines.steps.points import Sequence
 __all__ = [
     "BRIDGE_RETURNS",
     "EVENT_PARAMS",
-    "LITERAL_LINE_K",
+    "LITERAL_CLUSTERING",
     "LineFinder",
     "cluster_sequence",
     "consensus_extraction",
@@ -145,14 +145,11 @@ EVENT_PARAMS: dict[str, Param] = {
 }
 """Parameters of the shared corner/breakpoint rule (:func:`segment_events`)."""
 
-LITERAL_LINE_K: dict[str, Param] = {
-    "line_k": Param(
-        0.0,
-        BREAKPOINT_PARAMS["line_k"].check,
-        BREAKPOINT_PARAMS["line_k"].doc + "; off for the published rules",
-    ),
+LITERAL_CLUSTERING: dict[str, Param] = {
+    name: Param(0.0, BREAKPOINT_PARAMS[name].check, BREAKPOINT_PARAMS[name].doc + "; off here")
+    for name in ("line_k",)
 }
-"""Override of :data:`~scanlines.steps.breakpoints.BREAKPOINT_PARAMS`: the published
+"""Overrides of :data:`~scanlines.steps.breakpoints.BREAKPOINT_PARAMS`: the published
 clustering rules have no line-continuation bridge."""
 
 NO_CLUSTERING = "none"
