@@ -206,3 +206,22 @@ def test_grazing_wall_stays_one_cluster():
     assert len(default.segments) == 1
     literal = extract(scan, breakpoints="adaptive")  # k = 3: cut beyond 70.5 deg incidence
     assert len(literal.breakpoints) > 0
+
+
+def test_corner_check_turns_a_bridged_depth_step_into_a_breakpoint():
+    """Two parallel walls 12 cm apart in depth at 1 deg: the incidence-bounded clustering
+    bridges the step. Without the check the junction is a corner; with it, the lines do not
+    meet near their ends and it is a breakpoint. (When noise makes a 3-point segment across
+    the step, seeds 1, 2 and 4 here, the check sees two corners that do meet: a known limit.)"""
+    walls = [((2.0, -3.0), (2.0, 0.0)), ((2.12, 0.0), (2.12, 3.0))]
+    for seed in (0, 3):
+        scan = scan_of(walls, fov_deg=100, step_deg=1.0, sigma=SIGMA, seed=seed)
+        step = int(np.flatnonzero(scan.angles < 0.01)[-1])  # last beam on the near wall
+        unchecked = extract(scan, corner_check=False)
+        assert len(unchecked.corners) == 1
+        assert unchecked.corners[0] in (step, step + 1)
+        assert unchecked.breakpoints.size == 0
+        checked = extract(scan)
+        assert checked.corners.size == 0
+        assert checked.breakpoints.tolist() == [step]
+        assert len(checked.segments) == 2

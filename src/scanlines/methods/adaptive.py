@@ -62,11 +62,13 @@ brackets, and ``docs/decisions/`` (300 simulated scenes per sensor preset).
     ``y = kx + b`` cannot describe a wall parallel to the y axis (the paper fit
     returns NaN there) and its error is measured vertically; total least squares
     in Hesse form has neither fault. [test_adaptive.py::test_vertical_wall_paper_fit_has_no_slope]
-``corner_split="refine"``, ``merge=True``, ``max_residual=0.1``, ``min_points=3``
+``corner_split="refine"``, ``merge=True``, ``corner_check=True``, ``max_residual=0.1``
     The corner point goes to the side whose fit it suits (among the three beams
     around the peak), collinear neighbours that a global threshold cut apart are
-    merged by the same criterion, and no point of a segment is farther than
-    ``max_residual`` from its line.
+    merged by the same criterion, two segments whose lines do not meet near
+    their facing ends are a depth step (a breakpoint), not a corner, and no point
+    of a segment is farther than ``max_residual`` from its line.
+    [test_adaptive.py::test_corner_check_turns_a_bridged_depth_step_into_a_breakpoint]
 
 Missing beams: one missing beam is bridged, two or more end a cluster; full-circle
 scans join across the seam. The paper preset's window mean can replace three
@@ -152,6 +154,9 @@ PARAMS: dict[str, Param] = {
     "max_residual": Param(
         0.1, optional(number(low=0.0, low_open=True)), "largest point-to-line distance (m)"
     ),
+    "corner_check": Param(
+        True, choice(True, False), "lines that do not meet near their ends are a jump, not a corner"
+    ),
     "min_points": Param(3, int_at_least(2), "fewest points of a segment"),
     "min_cluster_points": Param(
         3, int_at_least(1), "isolated denoising: smaller clusters are dropped as noise"
@@ -176,6 +181,7 @@ PRESETS: dict[str, dict[str, Any]] = {
         "fit": "paper",
         "corner_split": "shared",
         "merge": False,
+        "corner_check": False,
         "max_residual": None,
         "min_points": 2,
         "min_cluster_points": 1,
@@ -249,7 +255,18 @@ def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extractio
             min_points=params["min_points"],
         )
     a, b, owner = _drop_small(seq, a, b, owner, params)
-    corners = _corner_beams(seq, moments, params["fit"], a, b, owner, shared, ring)
+    corners, jumps = _corner_beams(
+        seq,
+        moments,
+        params["fit"],
+        a,
+        b,
+        owner,
+        shared,
+        ring,
+        sigma if params["corner_check"] else None,
+    )
+    breakpoints = np.union1d(clusters.breakpoints, jumps).astype(np.intp)
     return assemble(
         seq,
         a,
@@ -257,7 +274,7 @@ def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extractio
         fit=params["fit"],
         moments=moments,
         corners=corners,
-        breakpoints=clusters.breakpoints,
+        breakpoints=breakpoints,
         outliers=outliers,
         angle_min=angle_min,
         range_sigma=params["range_sigma"],
@@ -412,25 +429,40 @@ def _corner_beams(
     owner: np.ndarray,
     shared: bool,
     ring: bool,
-) -> np.ndarray:
-    """Beam of each corner: where two kept segments of one cluster meet.
+    sigma: float | None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Beams of the corners where two kept segments of one cluster meet, and of jumps.
 
     A shared corner is its shared point; otherwise the point nearer the two
-    lines' intersection among those between the segments.
+    lines' intersection among those between the segments. With ``sigma`` given,
+    two segments whose lines do not meet near their facing ends (farther than
+    :data:`CORNER_REACH` times the local spacing plus three ``sigma``) are two
+    surfaces at different depths joined by a mixed pixel or a small step: the
+    junction is reported as a breakpoint (the last beam of the first segment).
     """
+    none = np.zeros(0, dtype=np.intp)
     if a.size == 0:
-        return np.zeros(0, dtype=np.intp)
+        return none, none
     left = np.flatnonzero((owner[:-1] == owner[1:]) & (a[1:] - b[:-1] <= 2))
     ends, starts = b[left], a[left + 1]
     if ring and a.size >= 2 and a[0] == 0 and b[-1] == len(seq) - 1:
         left = np.r_[left, a.size - 1]
         ends, starts = np.r_[ends, b[-1]], np.r_[starts, a[0]]
     if shared:
-        return seq.index[starts]
+        return seq.index[starts], none
     lines = fit_runs(fit, moments, a, b)
     right = (left + 1) % a.size
     corner_x, corner_y = line_intersections(lines, left, right)
     before_dist = np.hypot(seq.x[ends] - corner_x, seq.y[ends] - corner_y)
     after_dist = np.hypot(seq.x[starts] - corner_x, seq.y[starts] - corner_y)
     pick = np.where(after_dist < before_dist, starts, ends)
-    return seq.index[pick]
+    if sigma is None:
+        return seq.index[pick], none
+    spacing = np.hypot(seq.x[starts] - seq.x[ends], seq.y[starts] - seq.y[ends])
+    reach = CORNER_REACH * spacing + 3.0 * sigma
+    meets = np.maximum(before_dist, after_dist) <= reach  # NaN (parallel) is not a corner
+    return seq.index[pick[meets]], seq.index[ends[~meets]]
+
+
+CORNER_REACH = 2.0
+"""A corner's lines meet within this many spacings (plus noise) of the facing ends."""
