@@ -33,12 +33,12 @@ brackets, and ``docs/decisions/`` (300 simulated scenes per sensor preset).
     3.5 cm and noise alone cuts about one pair in fifty), and does not cut a step
     that continues the lines on both sides (walls at grazing incidence).
     [test_adaptive.py::test_grazing_wall_stays_one_cluster, docs/decisions/breakpoints.md]
-``denoise="isolated"``, ``min_cluster_points=3``
+``denoise="isolated"``, ``min_cluster_points=2``
     Step 2 as printed (``d_{i-1} > d_{i-2}`` and ``d_i > d_{i+1}``) flags any local
     bump of the neighbour distance: about a quarter of the points of a straight
     noisy wall. The default drops a point that the breakpoint test cuts from both
-    neighbours while the neighbours stay continuous (a spike), and clusters of
-    fewer than three returns (stray echoes, mixed pixels between two surfaces);
+    neighbours while the neighbours stay continuous (a spike), and single-return
+    clusters (stray echoes, mixed pixels between two surfaces);
     dropped points are reported in ``Extraction.outliers``. No point is moved.
     [test_adaptive.py::test_spike_outlier_in_wall_is_dropped,
     test_steps.py::test_literal_noise_rule_fires_on_ordinary_wall_points]
@@ -159,7 +159,7 @@ PARAMS: dict[str, Param] = {
     ),
     "min_points": Param(3, int_at_least(2), "fewest points of a segment"),
     "min_cluster_points": Param(
-        3, int_at_least(1), "isolated denoising: smaller clusters are dropped as noise"
+        2, int_at_least(1), "isolated denoising: smaller clusters are dropped as noise"
     ),
     "min_length": Param(0.0, number(low=0.0), "shortest segment (m)"),
     "range_sigma": Param(0.01, number(low=0.0), "range noise for the covariance (m)"),
