@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import typer
 
-from scanlines.cli import bench, evaluate, extract, logs
+from scanlines.cli import bench, evaluate, extract, logs, reproduce
 
 app = typer.Typer(
     name="scanlines",
@@ -29,6 +29,7 @@ extract.register(app)
 logs.register(app)
 evaluate.register(app)
 bench.register(app)
+reproduce.register(app)
 
 
 def main() -> None:
