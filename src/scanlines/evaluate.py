@@ -1160,9 +1160,10 @@ BAR_METRICS: tuple[tuple[str, Callable[[Summary], float]], ...] = (
 
 def plot_bars(result: EvalResult, *, size: float = 4.0) -> Figure:
     """Grouped bars per sensor: :data:`BAR_METRICS` (groups) by spec (bars)."""
-    from scanlines.plot import SEGMENT_COLOURS, _pyplot
+    from scanlines.plot import _pyplot
 
     plt = _pyplot()
+    palette = plt.get_cmap("tab20").colors  # one colour per spec, up to 20
     sensors = list(dict.fromkeys(r.sensor for r in result.summaries))
     specs = result.config.specs
     fig, axes = plt.subplots(
@@ -1179,7 +1180,7 @@ def plot_bars(result: EvalResult, *, size: float = 4.0) -> Figure:
                 values,
                 width,
                 label=spec.label,
-                color=SEGMENT_COLOURS[j % len(SEGMENT_COLOURS)],
+                color=palette[j % len(palette)],
             )
         n_scans = result.summary(sensor, specs[0].label).summary.n_scans
         ax.set_title(f"{sensor} ({n_scans} scans)", fontsize=10)

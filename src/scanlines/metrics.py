@@ -564,14 +564,17 @@ def environmental_similarity(extraction: Extraction, scan: Scan) -> SimilaritySc
     """Perpendicular distance of each point to its segment's line (the paper's Fig. 13).
 
     The points of a segment are the valid beams in ``first..last`` (across the seam
-    when ``first > last``) that are not in ``extraction.outliers``.
+    when ``first > last``) that are not in ``extraction.outliers``. Segments without
+    a finite line (the paper's fit on a run with no slope) are left out.
     """
     beams, seg = _segment_beams(extraction.first, extraction.last, len(scan))
     keep = scan.valid[beams] & ~np.isin(beams, extraction.outliers)
     beams, seg = beams[keep], seg[keep]
     pts = scan.points[beams]
     rho, alpha = extraction.lines[seg, RHO], extraction.lines[seg, ALPHA]
-    d = np.abs(pts[:, 0] * np.cos(alpha) + pts[:, 1] * np.sin(alpha) - rho)
+    with np.errstate(invalid="ignore"):
+        d = np.abs(pts[:, 0] * np.cos(alpha) + pts[:, 1] * np.sin(alpha) - rho)
+    d = d[np.isfinite(d)]
     return SimilarityScore(
         n_points=len(d),
         sum_distance=float(d.sum()),
