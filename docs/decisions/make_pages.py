@@ -47,17 +47,17 @@ neighbours stay continuous is dropped, and so are clusters of fewer than `min_cl
 returns: spikes, stray echoes, mixed pixels between two surfaces), `denoise="none"`.
 
 `min_cluster_points` was 3 at first. The simulator counts events next to runs of fewer than three
-returns as don't care, so it cannot tell 2 from 3; the 10 hand-labelled Intel frames can, since
-their labeller marked breakpoints around small objects: breakpoint recall 0.38 with 3, 0.52 with
-2 and 0.67 with 1 (precision 0.87, 0.90, 0.92; `python docs/decisions/labelled_frames.py`). With 1,
-the simulated breakpoint F1 falls (every mixed pixel becomes two breakpoints; rows `mcp=1`,
-`mcp=3` below). 2 is the default.
+returns as don't care and slightly prefers 3 (breakpoint F1 over all sensors 0.939 against 0.930
+with 2); the 10 hand-labelled Intel frames, whose labeller marked breakpoints around small
+objects, do not: breakpoint recall 0.38 with 3, 0.52 with 2 and 0.67 with 1 (precision 0.87, 0.90,
+0.92; `python docs/decisions/labelled_frames.py`). With 1 the simulated breakpoint F1 falls to
+0.786 (every mixed pixel becomes two breakpoints). 2 is the compromise.
 
 The printed rule fires on any local bump of the neighbour distance: on a plain noisy wall about a
 quarter of the points (`tests/test_steps.py::test_literal_noise_rule_fires_on_ordinary_wall_points`),
 and averaging three points into one mean makes degenerate runs. Without denoising, every spike and
 stray echo becomes two breakpoints.""",
-        "`isolated` (the default): breakpoint F1 0.95 against 0.48 (paper rule) and 0.56 (none) over all sensors.",
+        "`isolated` with `min_cluster_points=2` (the default): breakpoint F1 0.93 over all sensors against 0.48 (paper rule) and 0.56 (none).",
     ),
     "criterion": (
         "Threshold criterion: smallest SSE or a criterion over-segmenting cannot win",
@@ -146,8 +146,8 @@ continuation).
 k = 3 without a margin cuts plain walls at fine resolution (noise alone crosses 3 rho dtheta) and
 every wall beyond 70.5 deg incidence. The margin and the continuation fix most of that; among the
 rules, ABD with lambda = 10 finds breakpoints best on every sensor. Its larger threshold at 1 deg
-lets some mixed pixels bridge a depth jump, which then looks like a corner (corner F1 at 1 deg:
-0.76 against 0.88 with k = 3).""",
+lets some mixed pixels and small depth steps pass as continuous, which then look like corners
+(corner F1 at 1 deg: 0.78 against 0.89 with k = 3; `corner_check` recovers part of it).""",
         "`abd`, lambda = 10, `noise_k` = 3, `line_k` = 3 (the default).",
     ),
 }
