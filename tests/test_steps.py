@@ -270,31 +270,25 @@ def test_cast_helper_hits_a_wall():
     ).tolist() == pytest.approx([2.0, math.hypot(2.0, 1.0)])
 
 
-def test_corner_removal_rule_needs_two_points_on_each_side():
+@pytest.mark.parametrize(
+    ("shared", "expected"),
+    [
+        (False, [True, True, False]),  # split after 10 leaves one point after it
+        (True, [False, True, False]),  # [0, 1] and [10, 11] hold one point besides the corner
+    ],
+)
+def test_corner_removal_rule_needs_two_points_on_each_side(shared, expected):
     """Step 5: a corner whose part before or after would have fewer than 2 points is dropped."""
     x = np.arange(12, dtype=float)
-    y = np.zeros(12)
-    moments = Moments(x, y)
+    moments = Moments(x, np.zeros(12))
     clusters = Clusters(np.array([0]), np.array([11]), np.zeros(0, dtype=np.intp))
-    candidates = np.array([1, 5, 10])  # 10 leaves one point after it when split after 10
     cuts = sweep(
         RunCost(moments, "tls"),
         clusters,
-        candidates,
+        np.array([1, 5, 10]),
         np.array([3.0, 2.0, 1.0]),
         grid=None,
         max_evaluations=10,
-        shared=False,
+        shared=shared,
     )
-    assert cuts.accepted.tolist() == [True, True, False]
-    shared = sweep(
-        RunCost(moments, "tls"),
-        clusters,
-        candidates,
-        np.array([3.0, 2.0, 1.0]),
-        grid=None,
-        max_evaluations=10,
-        shared=True,
-    )
-    # shared corner point: [0, 1] and [10, 11] would hold one point besides the corner
-    assert shared.accepted.tolist() == [False, True, False]
+    assert cuts.accepted.tolist() == expected

@@ -57,6 +57,7 @@ import numpy as np
 from scanlines.errors import ParameterError
 from scanlines.extractor import Extractor
 from scanlines.extractor import methods as registered_methods
+from scanlines.io.writers import write_text_atomically
 from scanlines.scan import Scan
 
 __all__ = [
@@ -399,7 +400,7 @@ class BenchResult:
     def to_json(self, path: str | Path) -> Path:
         """Write :meth:`to_dict` as JSON (atomically); returns the path."""
         text = json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
-        return _write_text(Path(path), text)
+        return write_text_atomically(Path(path), text)
 
     # ----------------------------------------------------------------- tables
 
@@ -1200,19 +1201,7 @@ def render_markdown(result: BenchResult) -> str:
 
 def write_docs(result: BenchResult, path: str | Path) -> Path:
     """Write :func:`render_markdown` to ``path`` (atomically); returns the path."""
-    return _write_text(Path(path), render_markdown(result))
-
-
-def _write_text(path: Path, text: str) -> Path:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-    return path
+    return write_text_atomically(Path(path), render_markdown(result))
 
 
 def command_line(argv: Sequence[str] | None = None) -> str:

@@ -17,6 +17,7 @@ __all__ = [
     "number",
     "optional",
     "resolve",
+    "with_default",
 ]
 
 Check = Callable[[str, Any], Any]
@@ -29,6 +30,11 @@ class Param:
     default: Any
     check: Check
     doc: str
+
+
+def with_default(param: Param, default: Any, note: str = "") -> Param:
+    """``param`` with another default (and a note appended to its doc), same validation."""
+    return Param(default, param.check, param.doc + (f" ({note})" if note else ""))
 
 
 def number(*, low: float = -math.inf, high: float = math.inf, low_open: bool = False) -> Check:

@@ -64,6 +64,7 @@ from scanlines.evaluate import EvalResult, MethodSpec, evaluate, make_scene, par
 from scanlines.evaluate import tolerance_caption as sim_tolerance_caption
 from scanlines.extraction import ALPHA, RHO, Extraction
 from scanlines.extractor import methods as registered_methods
+from scanlines.io.writers import write_text_atomically
 from scanlines.metrics import (
     EventScore,
     SimilarityScore,
@@ -1627,18 +1628,6 @@ def _label_details(result: ReproduceResult) -> list[str]:
     return out
 
 
-def _write_text(path: Path, text: str) -> Path:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-    return path
-
-
 def reproduce(
     out: str | Path = "docs",
     config: ReproduceConfig | None = None,
@@ -1657,5 +1646,5 @@ def reproduce(
     out = Path(out)
     figures = write_figures(result, out / "figures")
     names = {key: path.name for key, path in figures.items()}
-    md = _write_text(out / "RESULTS.md", render_markdown(result, names))
+    md = write_text_atomically(out / "RESULTS.md", render_markdown(result, names))
     return result, [md, *figures.values()]

@@ -222,14 +222,20 @@ def _discard_file(handle: IO[Any]) -> None:
 
 
 def _write_json_atomically(target: Path, content: Mapping[str, Any]) -> None:
+    write_text_atomically(target, json.dumps(content, indent=2, allow_nan=False) + "\n")
+
+
+def write_text_atomically(target: str | Path, text: str) -> Path:
+    """Write ``text`` to ``target`` so that it appears complete or not at all."""
+    target = Path(target)
     handle = _atomic_temp_file(target, "w")
     try:
-        json.dump(content, handle, indent=2, allow_nan=False)
-        handle.write("\n")
+        handle.write(text)
         _commit_file(handle, target)
     except BaseException:
         _discard_file(handle)
         raise
+    return target
 
 
 class ResultWriter(ABC):

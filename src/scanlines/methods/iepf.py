@@ -47,7 +47,7 @@ from typing import Any
 import numpy as np
 
 from scanlines.extraction import Extraction
-from scanlines.params import Param, int_at_least, number
+from scanlines.params import Param, int_at_least, number, with_default
 from scanlines.steps.assemble import empty_extraction
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS
 from scanlines.steps.fit import Moments
@@ -65,10 +65,8 @@ NAME = "iepf"
 PARAMS: dict[str, Param] = {
     **BREAKPOINT_PARAMS,
     **LITERAL_CLUSTERING,
-    "breakpoints": Param(
-        "fixed",
-        BREAKPOINT_PARAMS["breakpoints"].check,
-        BREAKPOINT_PARAMS["breakpoints"].doc + " (IEPF: fixed jump distance)",
+    "breakpoints": with_default(
+        BREAKPOINT_PARAMS["breakpoints"], "fixed", "IEPF: fixed jump distance"
     ),
     "split_distance": Param(
         0.1, number(low=0.0, low_open=True), "split where a point is this far from the chord (m)"

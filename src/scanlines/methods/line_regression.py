@@ -58,7 +58,7 @@ from typing import Any
 import numpy as np
 
 from scanlines.extraction import Extraction
-from scanlines.params import Param, int_at_least, number
+from scanlines.params import Param, int_at_least, number, with_default
 from scanlines.steps.assemble import empty_extraction
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, Clusters
 from scanlines.steps.fit import Lines, Moments, line_covariances, run_labels, tls_lines
@@ -76,10 +76,8 @@ NAME = "line_regression"
 PARAMS: dict[str, Param] = {
     **BREAKPOINT_PARAMS,
     **LITERAL_CLUSTERING,
-    "breakpoints": Param(
-        "fixed",
-        BREAKPOINT_PARAMS["breakpoints"].check,
-        BREAKPOINT_PARAMS["breakpoints"].doc + " (line regression: fixed jump distance)",
+    "breakpoints": with_default(
+        BREAKPOINT_PARAMS["breakpoints"], "fixed", "line regression: fixed jump distance"
     ),
     "window": Param(9, int_at_least(2), "sliding window N_f: points per window fit"),
     "fidelity": Param(

@@ -43,7 +43,7 @@ from typing import Any
 from scanlines.extraction import Extraction
 from scanlines.methods.iepf import PARAMS as IEPF_PARAMS
 from scanlines.methods.iepf import split_extraction
-from scanlines.params import Param
+from scanlines.params import Param, with_default
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS
 from scanlines.steps.points import Sequence
 
@@ -51,10 +51,8 @@ NAME = "pdbs"
 
 PARAMS: dict[str, Param] = {
     **IEPF_PARAMS,
-    "breakpoints": Param(
-        "pdbs",
-        BREAKPOINT_PARAMS["breakpoints"].check,
-        BREAKPOINT_PARAMS["breakpoints"].doc + " (PDBS: Premebida and Nunes)",
+    "breakpoints": with_default(
+        BREAKPOINT_PARAMS["breakpoints"], "pdbs", "PDBS: Premebida and Nunes"
     ),
 }
 

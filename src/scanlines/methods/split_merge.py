@@ -60,7 +60,7 @@ from typing import Any
 import numpy as np
 
 from scanlines.extraction import Extraction
-from scanlines.params import Param, int_at_least, number
+from scanlines.params import Param, int_at_least, number, with_default
 from scanlines.steps.assemble import empty_extraction
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS
 from scanlines.steps.fit import Moments
@@ -80,10 +80,8 @@ NAME = "split_merge"
 PARAMS: dict[str, Param] = {
     **BREAKPOINT_PARAMS,
     **LITERAL_CLUSTERING,
-    "breakpoints": Param(
-        "fixed",
-        BREAKPOINT_PARAMS["breakpoints"].check,
-        BREAKPOINT_PARAMS["breakpoints"].doc + " (split-and-merge: fixed, max_line_gap)",
+    "breakpoints": with_default(
+        BREAKPOINT_PARAMS["breakpoints"], "fixed", "split-and-merge: fixed, max_line_gap"
     ),
     "jump_distance": Param(
         0.4,
