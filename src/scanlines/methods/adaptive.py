@@ -199,21 +199,53 @@ def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extractio
         seq, angle_min = seq.turned(angle_min), 0.0
     sigma = _noise_sigma(seq, params)
     rule = BreakpointRule.from_params(dict(params), sigma)
-    seq, outliers = _denoise(seq, rule, params)
-    window = _slope_window(seq, sigma, params["slope_window"])
+    seq, outliers = _denoise(seq, rule, params)  # Steps 1-3
     if len(seq) == 0:
         return empty_extraction(NAME, params, outliers=outliers)
+    window = _slope_window(seq, sigma, params["slope_window"])
     seq, clusters, ring = cluster_scan(seq, rule, lambda ring: strongest_turn(ring, window))
-    shared = params["corner_split"] == "shared"
     moments = Moments(seq.x, seq.y)
+    cost = RunCost(moments, params["fit"], seq.r if params["criterion"] == "bic" else None)
+    corners, sigma = _choose_corners(seq, clusters, moments, cost, window, sigma, params)
+    a, b, owner = _segments(seq, clusters, corners, moments, cost, sigma, params)
+    shared = params["corner_split"] == "shared"
+    check_sigma = sigma if params["corner_check"] else None
+    corners, jumps = _corner_beams(
+        seq, moments, params["fit"], a, b, owner, shared, ring, check_sigma
+    )
+    return assemble(
+        seq,
+        a,
+        b,
+        fit=params["fit"],
+        moments=moments,
+        corners=corners,
+        breakpoints=np.union1d(clusters.breakpoints, jumps).astype(np.intp),
+        outliers=outliers,
+        angle_min=angle_min,
+        range_sigma=params["range_sigma"],
+        method=NAME,
+        params=params,
+    )
+
+
+def _choose_corners(
+    seq: Sequence,
+    clusters: Clusters,
+    moments: Moments,
+    cost: RunCost,
+    window: int,
+    sigma: float,
+    params: Mapping[str, Any],
+) -> tuple[np.ndarray, float]:
+    """Steps 5-7: corner candidates and the threshold sweep; returns corners and the noise."""
+    shared = params["corner_split"] == "shared"
     scores = _scores(seq, clusters, moments, params, window)
     candidates = peak_candidates(scores, clusters)
     grid = None
     if params["dkth_range"] != "auto":
         low, high = params["dkth_range"]
         grid = threshold_grid(low, high, params["dkth_step"], params["max_evaluations"])
-    n_points = len(seq)
-    cost = RunCost(moments, params["fit"], seq.r if params["criterion"] == "bic" else None)
     cuts = sweep(
         cost,
         clusters,
@@ -229,18 +261,26 @@ def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extractio
         a, b, _ = _cut(clusters, selection.corners, shared)
         sigma = _residual_sigma(cost, a, b, sigma)
         selection = cuts.choose(params["criterion"], sigma, params["penalty"])
-    a, b, owner = _cut(clusters, selection.corners, shared)
+    return selection.corners, sigma
+
+
+def _segments(
+    seq: Sequence,
+    clusters: Clusters,
+    corners: np.ndarray,
+    moments: Moments,
+    cost: RunCost,
+    sigma: float,
+    params: Mapping[str, Any],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Runs ``[a, b]`` (and cluster of each) after cutting, refining, merging and bounding."""
+    shared = params["corner_split"] == "shared"
+    a, b, owner = _cut(clusters, corners, shared)
     if not shared:
         b, a = _refine_splits(cost, a, b, owner)
     if params["merge"]:
         a, b, owner = merge_collinear(
-            cost,
-            a,
-            b,
-            owner,
-            sigma=sigma,
-            penalty=params["penalty"],
-            n_points=n_points,
+            cost, a, b, owner, sigma=sigma, penalty=params["penalty"], n_points=len(seq)
         )
     if params["max_residual"] is not None:
         a, b, owner = split_by_residual(
@@ -254,33 +294,7 @@ def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extractio
             max_residual=params["max_residual"],
             min_points=params["min_points"],
         )
-    a, b, owner = _drop_small(seq, a, b, owner, params)
-    corners, jumps = _corner_beams(
-        seq,
-        moments,
-        params["fit"],
-        a,
-        b,
-        owner,
-        shared,
-        ring,
-        sigma if params["corner_check"] else None,
-    )
-    breakpoints = np.union1d(clusters.breakpoints, jumps).astype(np.intp)
-    return assemble(
-        seq,
-        a,
-        b,
-        fit=params["fit"],
-        moments=moments,
-        corners=corners,
-        breakpoints=breakpoints,
-        outliers=outliers,
-        angle_min=angle_min,
-        range_sigma=params["range_sigma"],
-        method=NAME,
-        params=params,
-    )
+    return _drop_small(seq, a, b, owner, params)
 
 
 def _noise_sigma(seq: Sequence, params: Mapping[str, Any]) -> float:
