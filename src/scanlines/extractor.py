@@ -13,7 +13,7 @@ from scanlines.errors import ParameterError, ScanError
 from scanlines.extraction import Extraction
 from scanlines.methods import REGISTRY
 from scanlines.params import resolve
-from scanlines.scan import Scan
+from scanlines.scan import Scan, valid_returns
 from scanlines.steps.points import make_sequence
 
 __all__ = ["Extractor", "extract", "method_info", "methods"]
@@ -95,11 +95,29 @@ class Extractor:
         range_min: float = 0.0,
         range_max: float = math.inf,
     ) -> list[Extraction]:
-        """Extract from a stack of scans of one sensor, ``ranges`` of shape (scans, beams)."""
+        """Extract from a stack of scans of one sensor, ``ranges`` of shape (scans, beams).
+
+        Gives exactly what calling the extractor on each row as a :class:`Scan` gives,
+        without building the scans: the stack is validated once, the validity
+        mask computed for all rows at once and the bearing tables shared.
+        """
+        # Validate the sensor fields once, as Scan does (same errors).
+        sensor = Scan(np.zeros(0), angle_min, angle_increment, range_min, range_max)
         stack = np.asarray(ranges)
         if stack.ndim != 2:
             raise ScanError(f"ranges must be 2-D (scans, beams), got shape {stack.shape}")
-        return [self(Scan(row, angle_min, angle_increment, range_min, range_max)) for row in stack]
+        if stack.dtype.kind not in "fiu" or stack.dtype == np.bool_:
+            raise ScanError(f"ranges must hold real numbers, got dtype {stack.dtype}")
+        stack = stack.astype(np.float64, copy=False)
+        valid = valid_returns(stack, sensor.range_min, sensor.range_max)
+        step = sensor.angle_increment
+        cos, sin = self._bearings(stack.shape[1], step)
+        return [
+            self._module.run(
+                make_sequence(row, mask, cos, sin, step), sensor.angle_min, self.params
+            )
+            for row, mask in zip(stack, valid, strict=True)
+        ]
 
     def _bearings(self, n_beams: int, increment: float) -> tuple[np.ndarray, np.ndarray]:
         key = (n_beams, increment)

@@ -10,7 +10,7 @@ import numpy as np
 
 from scanlines.errors import ScanError
 
-__all__ = ["Scan", "is_full_circle"]
+__all__ = ["Scan", "is_full_circle", "valid_returns"]
 
 FloatArray = np.ndarray
 
@@ -46,6 +46,15 @@ def _as_vector(name: str, values: Any, *, length: int | None = None) -> FloatArr
 def _preview(values: Any) -> str:
     text = repr(values)
     return text if len(text) <= 60 else text[:57] + "..."
+
+
+def valid_returns(ranges: np.ndarray, range_min: float, range_max: float) -> np.ndarray:
+    """Mask of beams with a return: finite, > 0 and within ``[range_min, range_max]``.
+
+    Works on one scan or a stack of scans (any shape).
+    """
+    with np.errstate(invalid="ignore"):
+        return np.isfinite(ranges) & (ranges > 0.0) & (ranges >= range_min) & (ranges <= range_max)
 
 
 def is_full_circle(n_beams: int, angle_increment: float) -> bool:
@@ -197,9 +206,7 @@ class Scan:
     def valid(self) -> np.ndarray:
         """Boolean mask of beams with a return: finite, > 0 and within the range limits."""
         if self._valid is None:
-            r = self.ranges
-            with np.errstate(invalid="ignore"):
-                mask = np.isfinite(r) & (r > 0.0) & (r >= self.range_min) & (r <= self.range_max)
+            mask = valid_returns(self.ranges, self.range_min, self.range_max)
             mask.setflags(write=False)
             object.__setattr__(self, "_valid", mask)
         return self._valid  # type: ignore[return-value]
