@@ -404,10 +404,14 @@ def _refine_splits(
         return b, a
     best_cost = np.full(k.size, np.inf)
     best_shift = np.zeros(k.size, dtype=np.intp)
-    for shift in (0, -1, 1):
-        end = b[k] + shift
+    shifts = (0, -1, 1)
+    ends = [b[k] + shift for shift in shifts]
+    # The three shifts' parts, fitted in one call; a shift that empties a part costs inf.
+    safe = [np.clip(end, a[k], b[k + 1] - 1) for end in ends]
+    parts = cost.many(*[(a[k], e) for e in safe], *[(e + 1, b[k + 1]) for e in safe])
+    for j, (shift, end) in enumerate(zip(shifts, ends, strict=True)):
         ok = (end - a[k] >= 1) & (b[k + 1] - end - 1 >= 1)
-        total = cost(a[k], end) + cost(end + 1, b[k + 1])
+        total = parts[j] + parts[j + len(shifts)]
         total = np.where(ok & ~np.isnan(total), total, np.inf)
         better = total < best_cost - 1e-15
         best_cost = np.where(better, total, best_cost)

@@ -183,6 +183,12 @@ class RunCost:
             inverse = 1.0 / np.maximum(r, 1e-6) ** 2
             self.sum_inv_r2 = np.concatenate(([0.0], np.cumsum(inverse)))
 
+    def many(self, *runs: tuple[np.ndarray, np.ndarray]) -> list[np.ndarray]:
+        """The cost of several sets of runs in one call (one fit over all of them)."""
+        sizes = [len(a) for a, _ in runs]
+        joined = self(np.concatenate([a for a, _ in runs]), np.concatenate([b for _, b in runs]))
+        return np.split(joined, np.cumsum(sizes)[:-1])
+
     def __call__(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         lines = fit_runs(self.fit, self.moments, a, b)
         if self.sum_inv_r2 is None:

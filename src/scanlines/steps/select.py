@@ -174,7 +174,8 @@ def sweep(
     gain = np.zeros(len(ranked))
     if accepted.any():
         a, b, c, c2 = parent_a[accepted], parent_b[accepted], ranked[accepted], second[accepted]
-        gain[accepted] = cost(a, c) + cost(c2, b) - cost(a, b)
+        before, after, whole = cost.many((a, c), (c2, b), (a, b))
+        gain[accepted] = before + after - whole
     if grid is None:
         levels = np.arange(min(len(ranked), max_evaluations) + 1)
         thresholds = np.r_[ranked_score, 0.0][levels]
