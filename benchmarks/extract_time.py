@@ -1,4 +1,5 @@
-"""Median time of one ``Extractor`` call on simulated 481-beam and 181-beam scans.
+"""Median time of one ``Extractor`` call, and of ``Extractor.batch`` per scan, on simulated
+481-beam and 181-beam scans.
 
     python benchmarks/extract_time.py [--scenes 50] [--repeats 20]
 
@@ -37,6 +38,20 @@ def median_us(extractor: Extractor, scans, repeats: int) -> float:
     return 1e6 * statistics.median(samples)
 
 
+def batch_us(extractor: Extractor, scans, repeats: int) -> float:
+    """Median over repeats of one ``batch`` call over all scans, per scan."""
+    first = scans[0]
+    stack = [s.ranges for s in scans]
+    args = (first.angle_min, first.angle_increment, first.range_min, first.range_max)
+    extractor.batch(stack[:5], *args)
+    samples = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        extractor.batch(stack, *args)
+        samples.append((time.perf_counter() - start) / len(scans))
+    return 1e6 * statistics.median(samples)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scenes", type=int, default=50)
@@ -45,8 +60,13 @@ def main() -> None:
     for label, sensor in sensors().items():
         scans = [random_scene(s, sensor).scan(s).scan for s in range(args.scenes)]
         for preset in (None, "paper"):
-            us = median_us(Extractor(preset=preset), scans, args.repeats)
-            print(f"{label:28s} {preset or 'default':8s} median {us:8.0f} us")
+            extractor = Extractor(preset=preset)
+            us = median_us(extractor, scans, args.repeats)
+            batch = batch_us(extractor, scans, args.repeats)
+            print(
+                f"{label:28s} {preset or 'default':8s} median {us:8.0f} us/call, "
+                f"batch {batch:8.0f} us/scan ({1e6 / batch:,.0f} scans/s)"
+            )
 
 
 if __name__ == "__main__":
