@@ -37,6 +37,17 @@ def with_default(param: Param, default: Any, note: str = "") -> Param:
     return Param(default, param.check, param.doc + (f" ({note})" if note else ""))
 
 
+def segment_params(
+    min_points: int, min_length: float = 0.0, range_sigma: float = 0.01
+) -> dict[str, Param]:
+    """The output parameters every method has, with that method's defaults."""
+    return {
+        "min_points": Param(min_points, int_at_least(2), "fewest points of a segment"),
+        "min_length": Param(min_length, number(low=0.0), "shortest segment (m)"),
+        "range_sigma": Param(range_sigma, number(low=0.0), "range noise for the covariance (m)"),
+    }
+
+
 def number(*, low: float = -math.inf, high: float = math.inf, low_open: bool = False) -> Check:
     """A real number in ``[low, high]`` (``(low, high]`` when ``low_open``)."""
 

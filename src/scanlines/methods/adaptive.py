@@ -92,7 +92,16 @@ from typing import Any
 import numpy as np
 
 from scanlines.extraction import Extraction
-from scanlines.params import Param, auto_or, choice, float_pair, int_at_least, number, optional
+from scanlines.params import (
+    Param,
+    auto_or,
+    choice,
+    float_pair,
+    int_at_least,
+    number,
+    optional,
+    segment_params,
+)
 from scanlines.scan import is_full_circle
 from scanlines.steps.assemble import assemble, empty_extraction
 from scanlines.steps.breakpoints import (
@@ -127,6 +136,7 @@ from scanlines.steps.select import CRITERIA, sweep, threshold_grid
 NAME = "adaptive"
 
 PARAMS: dict[str, Param] = {
+    **segment_params(3),
     **BREAKPOINT_PARAMS,
     "denoise": Param(
         "isolated", choice("isolated", "paper", "none"), "noise rule: isolated | paper | none"
@@ -157,12 +167,9 @@ PARAMS: dict[str, Param] = {
     "corner_check": Param(
         True, choice(True, False), "lines that do not meet near their ends are a jump, not a corner"
     ),
-    "min_points": Param(3, int_at_least(2), "fewest points of a segment"),
     "min_cluster_points": Param(
         2, int_at_least(1), "isolated denoising: smaller clusters are dropped as noise"
     ),
-    "min_length": Param(0.0, number(low=0.0), "shortest segment (m)"),
-    "range_sigma": Param(0.01, number(low=0.0), "range noise for the covariance (m)"),
 }
 
 PRESETS: dict[str, dict[str, Any]] = {

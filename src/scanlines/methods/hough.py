@@ -51,7 +51,7 @@ from typing import Any
 import numpy as np
 
 from scanlines.extraction import Extraction
-from scanlines.params import Param, choice, int_at_least, number
+from scanlines.params import Param, choice, int_at_least, number, segment_params
 from scanlines.steps.assemble import empty_extraction
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, RULES
 from scanlines.steps.points import Sequence
@@ -68,6 +68,7 @@ MAX_RHO_BINS = 4096
 """Most rho cells of an accumulator (the cells widen beyond)."""
 
 PARAMS: dict[str, Param] = {
+    **segment_params(5),
     **BREAKPOINT_PARAMS,
     **LITERAL_CLUSTERING,
     "breakpoints": Param(
@@ -89,9 +90,6 @@ PARAMS: dict[str, Param] = {
         0.4, number(low=0.0, low_open=True), "largest distance between consecutive inliers (m)"
     ),
     **EVENT_PARAMS,
-    "min_points": Param(5, int_at_least(2), "fewest inliers of a segment"),
-    "min_length": Param(0.0, number(low=0.0), "shortest segment (m)"),
-    "range_sigma": Param(0.01, number(low=0.0), "range noise for the covariance (m)"),
 }
 
 PRESETS: dict[str, dict[str, Any]] = {}

@@ -58,7 +58,7 @@ from typing import Any
 import numpy as np
 
 from scanlines.extraction import Extraction
-from scanlines.params import Param, int_at_least, number, with_default
+from scanlines.params import Param, int_at_least, number, segment_params, with_default
 from scanlines.steps.assemble import empty_extraction
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, Clusters
 from scanlines.steps.fit import Lines, Moments, line_covariances, run_labels, tls_lines
@@ -74,6 +74,7 @@ from scanlines.steps.segments import (
 NAME = "line_regression"
 
 PARAMS: dict[str, Param] = {
+    **segment_params(5, range_sigma=0.02),
     **BREAKPOINT_PARAMS,
     **LITERAL_CLUSTERING,
     "breakpoints": with_default(
@@ -87,11 +88,6 @@ PARAMS: dict[str, Param] = {
         6.0, number(low=0.0), "overlapping segments merge below this chi-square of (rho, alpha)"
     ),
     **EVENT_PARAMS,
-    "min_points": Param(5, int_at_least(2), "fewest points of a segment"),
-    "min_length": Param(0.0, number(low=0.0), "shortest segment (m)"),
-    "range_sigma": Param(
-        0.02, number(low=0.0), "range noise for the covariances and the tests (m)"
-    ),
 }
 
 PRESETS: dict[str, dict[str, Any]] = {}

@@ -53,7 +53,7 @@ from typing import Any
 import numpy as np
 
 from scanlines.extraction import Extraction
-from scanlines.params import Param, int_at_least, number, with_default
+from scanlines.params import Param, number, segment_params, with_default
 from scanlines.steps.assemble import empty_extraction
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS
 from scanlines.steps.fit import Moments, tls_lines
@@ -63,6 +63,7 @@ from scanlines.steps.segments import EVENT_PARAMS, LITERAL_CLUSTERING, cluster_s
 NAME = "line_tracking"
 
 PARAMS: dict[str, Param] = {
+    **segment_params(5),
     **BREAKPOINT_PARAMS,
     **LITERAL_CLUSTERING,
     "breakpoints": with_default(
@@ -74,9 +75,6 @@ PARAMS: dict[str, Param] = {
         "a point farther than this from the current line starts a new one (m)",
     ),
     **EVENT_PARAMS,
-    "min_points": Param(5, int_at_least(2), "fewest points of a segment"),
-    "min_length": Param(0.0, number(low=0.0), "shortest segment (m)"),
-    "range_sigma": Param(0.01, number(low=0.0), "range noise for the covariance (m)"),
 }
 
 PRESETS: dict[str, dict[str, Any]] = {}

@@ -56,7 +56,7 @@ from typing import Any
 import numpy as np
 
 from scanlines.extraction import Extraction
-from scanlines.params import Param, choice, int_at_least, number
+from scanlines.params import Param, choice, int_at_least, number, segment_params
 from scanlines.steps.assemble import empty_extraction
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, RULES
 from scanlines.steps.points import Sequence
@@ -70,6 +70,7 @@ from scanlines.steps.segments import (
 NAME = "ransac"
 
 PARAMS: dict[str, Param] = {
+    **segment_params(5),
     **BREAKPOINT_PARAMS,
     **LITERAL_CLUSTERING,
     "breakpoints": Param(
@@ -86,9 +87,6 @@ PARAMS: dict[str, Param] = {
     ),
     "seed": Param(0, int_at_least(0), "seed of the random draws (per scan)"),
     **EVENT_PARAMS,
-    "min_points": Param(5, int_at_least(2), "fewest inliers of a segment"),
-    "min_length": Param(0.0, number(low=0.0), "shortest segment (m)"),
-    "range_sigma": Param(0.01, number(low=0.0), "range noise for the covariance (m)"),
 }
 
 PRESETS: dict[str, dict[str, Any]] = {}

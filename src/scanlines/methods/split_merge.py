@@ -60,7 +60,7 @@ from typing import Any
 import numpy as np
 
 from scanlines.extraction import Extraction
-from scanlines.params import Param, int_at_least, number, with_default
+from scanlines.params import Param, number, segment_params, with_default
 from scanlines.steps.assemble import empty_extraction
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS
 from scanlines.steps.fit import Moments
@@ -78,6 +78,7 @@ from scanlines.steps.segments import (
 NAME = "split_merge"
 
 PARAMS: dict[str, Param] = {
+    **segment_params(9, min_length=0.5, range_sigma=0.02),
     **BREAKPOINT_PARAMS,
     **LITERAL_CLUSTERING,
     "breakpoints": with_default(
@@ -102,11 +103,6 @@ PARAMS: dict[str, Param] = {
         3.0, number(low=0.0), "merge neighbours while chi-square of (rho, alpha) is below this"
     ),
     **EVENT_PARAMS,
-    "min_points": Param(9, int_at_least(2), "fewest points of a segment (min_line_points)"),
-    "min_length": Param(0.5, number(low=0.0), "shortest segment (m; min_line_length)"),
-    "range_sigma": Param(
-        0.02, number(low=0.0), "range noise for the covariance and the merge (m; range_std_dev)"
-    ),
 }
 
 PRESETS: dict[str, dict[str, Any]] = {}
