@@ -74,6 +74,8 @@ class Extractor:
             resolve(method, self._module.PARAMS, self._module.PRESETS, preset, params)
         )
         self._tables: dict[tuple[int, float], tuple[np.ndarray, np.ndarray]] = {}
+        compiled = getattr(self._module, "Compiled", None)
+        self._compiled = None if compiled is None else compiled(self.params)
 
     def __repr__(self) -> str:
         preset = f", preset={self.preset!r}" if self.preset else ""
@@ -84,6 +86,10 @@ class Extractor:
         if not isinstance(scan, Scan):
             raise ScanError(f"expected a scanlines.Scan, got {type(scan).__name__}")
         cos, sin = self._bearings(len(scan), scan.angle_increment)
+        if self._compiled is not None:
+            return self._compiled.one(
+                scan.ranges, scan.valid, cos, sin, scan.angle_increment, scan.angle_min
+            )
         seq = make_sequence(scan.ranges, scan.valid, cos, sin, scan.angle_increment)
         return self._module.run(seq, scan.angle_min, self.params)
 
@@ -112,6 +118,9 @@ class Extractor:
         valid = valid_returns(stack, sensor.range_min, sensor.range_max)
         step = sensor.angle_increment
         cos, sin = self._bearings(stack.shape[1], step)
+        if self._compiled is not None and stack.shape[0]:
+            stack = np.ascontiguousarray(stack)
+            return self._compiled.many(stack, valid, cos, sin, step, sensor.angle_min)
         return [
             self._module.run(
                 make_sequence(row, mask, cos, sin, step), sensor.angle_min, self.params

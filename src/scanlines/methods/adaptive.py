@@ -91,6 +91,7 @@ from typing import Any
 
 import numpy as np
 
+from scanlines._jit import jit
 from scanlines.extraction import Extraction
 from scanlines.params import (
     Param,
@@ -103,35 +104,47 @@ from scanlines.params import (
     segment_params,
 )
 from scanlines.scan import is_full_circle
-from scanlines.steps.assemble import assemble, empty_extraction
+from scanlines.steps.assemble import assemble_runs, empty_result, from_arrays
 from scanlines.steps.breakpoints import (
     BREAKPOINT_PARAMS,
-    BreakpointRule,
-    Clusters,
-    cluster_scan,
-    is_break,
-    seam_is_break,
+    RULE_CODES,
+    break_beams,
+    break_flags,
+    cluster_bounds,
+    rule_array,
+    seam_break,
+    seam_rotation,
 )
-from scanlines.steps.corners import (
-    SCORES,
-    peak_candidates,
-    slope_difference,
-    strongest_turn,
-    turn_angle,
-)
+from scanlines.steps.corners import SCORES, peak_positions, ring_anchor, slope_scores, turn_scores
 from scanlines.steps.denoise import (
     MIN_NOISE_SIGMA,
-    estimate_noise,
-    isolated_noise,
+    isolated_noise_mask,
     literal_noise,
-    replace_by_window_mean,
+    noise_from_ranges,
     small_clusters,
+    window_means,
 )
-from scanlines.steps.fit import FITS, Moments, RunCost, fit_runs
-from scanlines.steps.merge import merge_collinear, split_by_residual
+from scanlines.steps.fit import (
+    FIT_CODES,
+    FITS,
+    PAPER,
+    fit_run,
+    inverse_square_sums,
+    line_intersection,
+    prefix_moments,
+    run_cost,
+)
+from scanlines.steps.merge import merge_runs, split_runs
 from scanlines.steps.points import Sequence
-from scanlines.steps.segments import line_intersections
-from scanlines.steps.select import CRITERIA, sweep, threshold_grid
+from scanlines.steps.select import (
+    BIC,
+    CRITERIA,
+    CRITERION_CODES,
+    best_level,
+    level_corners,
+    sweep_levels,
+    threshold_grid,
+)
 
 NAME = "adaptive"
 
@@ -196,180 +209,209 @@ PRESETS: dict[str, dict[str, Any]] = {
     },
 }
 
-
-def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extraction:
-    """Extract features from the valid returns ``seq`` of one scan."""
-    if len(seq) == 0:
-        return empty_extraction(NAME, params)
-    if params["fit"] == "paper":
-        # y = kx + b depends on the frame: fit in the sensor frame, as the paper does.
-        seq, angle_min = seq.turned(angle_min), 0.0
-    sigma = _noise_sigma(seq, params)
-    rule = BreakpointRule.from_params(dict(params), sigma)
-    seq, outliers = _denoise(seq, rule, params)  # Steps 1-3
-    if len(seq) == 0:
-        return empty_extraction(NAME, params, outliers=outliers)
-    window = _slope_window(seq, sigma, params["slope_window"])
-    seq, clusters, ring = cluster_scan(seq, rule, lambda ring: strongest_turn(ring, window))
-    moments = Moments(seq.x, seq.y)
-    cost = RunCost(moments, params["fit"], seq.r if params["criterion"] == "bic" else None)
-    corners, sigma = _choose_corners(seq, clusters, moments, cost, window, sigma, params)
-    a, b, owner = _segments(seq, clusters, corners, moments, cost, sigma, params)
-    shared = params["corner_split"] == "shared"
-    check_sigma = sigma if params["corner_check"] else None
-    corners, jumps = _corner_beams(
-        seq, moments, params["fit"], a, b, owner, shared, ring, check_sigma
-    )
-    return assemble(
-        seq,
-        a,
-        b,
-        fit=params["fit"],
-        moments=moments,
-        corners=corners,
-        breakpoints=np.union1d(clusters.breakpoints, jumps).astype(np.intp),
-        outliers=outliers,
-        angle_min=angle_min,
-        range_sigma=params["range_sigma"],
-        method=NAME,
-        params=params,
-    )
+# --------------------------------------------------------------------------- settings
+# The kernel takes the parameters as one float array; these name its slots.
+(
+    RULE_KIND, K, NOISE_K, LINE_K, ABD_LAMBDA, PDBS_C0, JUMP_DISTANCE,
+    DENOISE, WINDOW, MIN_CLUSTER_POINTS, CORNER_SCORE, SLOPE_WINDOW, USE_GRID,
+    MAX_EVALUATIONS, CRITERION, PENALTY, NOISE_SIGMA, FIT, SHARED, MERGE, MAX_RESIDUAL,
+    CORNER_CHECK, MIN_POINTS, MIN_LENGTH, RANGE_SIGMA, N_SETTINGS,
+) = range(26)  # fmt: skip
+DENOISE_CODES = {"isolated": 0, "paper": 1, "none": 2}
+ISOLATED, LITERAL, NO_DENOISE = 0, 1, 2
+SCORE_CODES = {name: code for code, name in enumerate(SCORES)}
+TURN, DK, DK_SIGNED = 0, 1, 2
+AUTO = -1.0
+"""``slope_window``, ``noise_sigma`` and ``max_residual`` slots: estimate / none."""
 
 
-def _choose_corners(
-    seq: Sequence,
-    clusters: Clusters,
-    moments: Moments,
-    cost: RunCost,
-    window: int,
-    sigma: float,
-    params: Mapping[str, Any],
-) -> tuple[np.ndarray, float]:
-    """Steps 5-7: corner candidates and the threshold sweep; returns corners and the noise."""
-    shared = params["corner_split"] == "shared"
-    scores = _scores(seq, clusters, moments, params, window)
-    candidates = peak_candidates(scores, clusters)
-    grid = None
+def settings(params: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+    """The kernel's form of resolved ``params``: the settings array and the threshold grid."""
+    s = np.zeros(N_SETTINGS)
+    s[RULE_KIND] = RULE_CODES[params["breakpoints"]]
+    s[K], s[NOISE_K], s[LINE_K] = params["k"], params["noise_k"], params["line_k"]
+    s[ABD_LAMBDA] = math.radians(params["abd_lambda"])
+    s[PDBS_C0], s[JUMP_DISTANCE] = params["pdbs_c0"], params["jump_distance"]
+    s[DENOISE] = DENOISE_CODES[params["denoise"]]
+    s[WINDOW], s[MIN_CLUSTER_POINTS] = params["window"], params["min_cluster_points"]
+    s[CORNER_SCORE] = SCORE_CODES[params["corner_score"]]
+    s[SLOPE_WINDOW] = AUTO if params["slope_window"] == "auto" else params["slope_window"]
+    s[MAX_EVALUATIONS] = params["max_evaluations"]
+    s[CRITERION], s[PENALTY] = CRITERION_CODES[params["criterion"]], params["penalty"]
+    s[NOISE_SIGMA] = AUTO if params["noise_sigma"] == "auto" else params["noise_sigma"]
+    s[FIT] = FIT_CODES[params["fit"]]
+    s[SHARED] = params["corner_split"] == "shared"
+    s[MERGE], s[CORNER_CHECK] = params["merge"], params["corner_check"]
+    s[MAX_RESIDUAL] = AUTO if params["max_residual"] is None else params["max_residual"]
+    s[MIN_POINTS], s[MIN_LENGTH] = params["min_points"], params["min_length"]
+    s[RANGE_SIGMA] = params["range_sigma"]
+    grid = np.zeros(0)
     if params["dkth_range"] != "auto":
         low, high = params["dkth_range"]
         grid = threshold_grid(low, high, params["dkth_step"], params["max_evaluations"])
-    cuts = sweep(
-        cost,
-        clusters,
-        candidates,
-        scores[candidates],
-        grid=grid,
-        max_evaluations=params["max_evaluations"],
-        shared=shared,
+        s[USE_GRID] = 1.0
+    return s, grid
+
+
+# --------------------------------------------------------------------------- entry points
+
+
+def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extraction:
+    """Extract features from the valid returns ``seq`` of one scan."""
+    s, grid = settings(params)
+    full_circle = is_full_circle(seq.n_beams, seq.step)
+    arrays = extract_sequence(
+        seq.index, seq.r, seq.x, seq.y, seq.n_beams, seq.step, full_circle, angle_min, s, grid
     )
-    selection = cuts.choose(params["criterion"], sigma, params["penalty"])
-    if params["noise_sigma"] == "auto" and params["criterion"] == "bic":
-        # Second pass with the noise measured on the lines of the first choice.
-        a, b, _ = _cut(clusters, selection.corners, shared)
-        sigma = _residual_sigma(cost, a, b, sigma)
-        selection = cuts.choose(params["criterion"], sigma, params["penalty"])
-    return selection.corners, sigma
+    return from_arrays(arrays, NAME, params)
 
 
-def _segments(
-    seq: Sequence,
-    clusters: Clusters,
-    corners: np.ndarray,
-    moments: Moments,
-    cost: RunCost,
-    sigma: float,
-    params: Mapping[str, Any],
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Runs ``[a, b]`` (and cluster of each) after cutting, refining, merging and bounding."""
-    shared = params["corner_split"] == "shared"
-    a, b, owner = _cut(clusters, corners, shared)
-    if not shared:
-        b, a = _refine_splits(cost, a, b, owner)
-    if params["merge"]:
-        a, b, owner = merge_collinear(
-            cost, a, b, owner, sigma=sigma, penalty=params["penalty"], n_points=len(seq)
-        )
-    if params["max_residual"] is not None:
-        a, b, owner = split_by_residual(
-            seq.x,
-            seq.y,
-            moments,
-            params["fit"],
-            a,
-            b,
-            owner,
-            max_residual=params["max_residual"],
-            min_points=params["min_points"],
-        )
-    return _drop_small(seq, a, b, owner, params)
+class Compiled:
+    """The method with its parameters in kernel form: what :class:`~scanlines.Extractor` calls.
 
-
-def _noise_sigma(seq: Sequence, params: Mapping[str, Any]) -> float:
-    """The range noise: given, or estimated from the raw returns."""
-    if params["noise_sigma"] != "auto":
-        return params["noise_sigma"]
-    return estimate_noise(seq, np.array([0]), np.array([len(seq) - 1]))
-
-
-def _residual_sigma(cost: RunCost, a: np.ndarray, b: np.ndarray, fallback: float) -> float:
-    """Range noise from the fits of the runs ``[a, b]``: the median of ``sqrt(cost / (n - 2))``.
-
-    Only runs of :data:`MIN_RUN_FOR_NOISE` points or more count (short runs fit
-    their own noise); the median ignores the few runs that still hide a corner.
+    ``cos`` and ``sin`` are the bearing tables of the scan's beams relative to
+    beam 0; ``valid`` the mask of beams with a return.
     """
-    long_enough = b - a + 1 >= MIN_RUN_FOR_NOISE
-    if not long_enough.any():
-        return fallback
-    a, b = a[long_enough], b[long_enough]
-    per_run = np.sqrt(cost(a, b) / (b - a - 1))
-    per_run = per_run[np.isfinite(per_run)]
-    if per_run.size == 0:
-        return fallback
-    return max(float(np.median(per_run)), MIN_NOISE_SIGMA)
+
+    __slots__ = ("grid", "params", "settings")
+
+    def __init__(self, params: Mapping[str, Any]) -> None:
+        self.params = params
+        self.settings, self.grid = settings(params)
+
+    def one(self, ranges, valid, cos, sin, step: float, angle_min: float) -> Extraction:
+        """The extraction of one scan."""
+        full_circle = is_full_circle(ranges.shape[0], step)
+        arrays = extract_ranges(
+            ranges, valid, cos, sin, abs(step), full_circle, angle_min, self.settings, self.grid
+        )
+        return from_arrays(arrays, NAME, self.params)
+
+    def many(self, stack, valid, cos, sin, step: float, angle_min: float) -> list[Extraction]:
+        """The extractions of a stack of scans of one sensor (C-contiguous float64 rows)."""
+        full_circle = is_full_circle(stack.shape[1], step)
+        s, grid, params, step = self.settings, self.grid, self.params, abs(step)
+        return [
+            from_arrays(
+                extract_ranges(row, mask, cos, sin, step, full_circle, angle_min, s, grid),
+                NAME,
+                params,
+            )
+            for row, mask in zip(stack, valid, strict=True)
+        ]
 
 
-MIN_RUN_FOR_NOISE = 8
+@jit
+def extract_ranges(ranges, valid, cos, sin, step, full_circle, angle_min, s, grid):
+    """:func:`extract_sequence` of one scan's ranges (``valid``: beams with a return)."""
+    index = np.flatnonzero(valid)
+    r = ranges[index]
+    x = r * cos[index]
+    y = r * sin[index]
+    return extract_sequence(index, r, x, y, ranges.shape[0], step, full_circle, angle_min, s, grid)
 
 
-def _denoise(
-    seq: Sequence, rule: BreakpointRule, params: Mapping[str, Any]
-) -> tuple[Sequence, np.ndarray]:
-    """Steps 2-3; returns the cleaned sequence and the beams dropped as noise."""
-    none = np.zeros(0, dtype=np.intp)
-    if params["denoise"] == "none" or len(seq) < 3:
-        return seq, none
-    raw_breaks = is_break(seq, rule)
-    if params["denoise"] == "paper":
-        d = np.hypot(np.diff(seq.x), np.diff(seq.y))
+# --------------------------------------------------------------------------- the kernel
+
+
+@jit
+def extract_sequence(index, r, x, y, n_beams, step, full_circle, angle_min, s, grid):
+    """The whole method on the valid returns of one scan; arrays of the result.
+
+    Returns ``first, last, n_points, lines, covariances, breakpoints, corners,
+    outliers`` as :func:`~scanlines.steps.assemble.from_arrays` takes them.
+    """
+    outliers = np.zeros(0, dtype=np.int64)
+    if index.shape[0] == 0:
+        return empty_result(outliers, outliers)
+    fit = int(s[FIT])
+    if fit == PAPER:
+        # y = kx + b depends on the frame: fit in the sensor frame, as the paper does.
+        c, si = math.cos(angle_min), math.sin(angle_min)
+        x, y = c * x - si * y, si * x + c * y
+        angle_min = 0.0
+    gap = np.diff(index)
+    sigma = s[NOISE_SIGMA]
+    if sigma == AUTO:
+        sigma = noise_from_ranges(r, gap, np.zeros(1, np.int64), np.full(1, r.shape[0] - 1))
+    rule = _rule(s, sigma)
+    index, r, x, y, outliers = _denoise(index, r, x, y, n_beams, step, full_circle, rule, s)
+    if index.shape[0] == 0:
+        return empty_result(outliers, outliers)
+    window = _slope_window(x, y, index, sigma, s[SLOPE_WINDOW])
+    index, r, x, y, start, end, breakpoints, ring = _cluster_scan(
+        index, r, x, y, n_beams, step, full_circle, rule, window
+    )
+    table, ox, oy = prefix_moments(x, y)
+    inv_r2 = inverse_square_sums(r) if s[CRITERION] == BIC else np.zeros(0)
+    scores = _scores(x, y, r, index, step, table, ox, oy, start, end, window, s)
+    corners, sigma = _choose_corners(table, ox, oy, inv_r2, start, end, scores, sigma, s, grid)
+    a, b, owner = _segments(x, y, table, ox, oy, inv_r2, start, end, corners, sigma, s)
+    check_sigma = sigma if s[CORNER_CHECK] else -1.0
+    corner_beams, jumps = _corner_beams(
+        x, y, index, table, ox, oy, fit, a, b, owner, s[SHARED] != 0.0, ring, check_sigma
+    )
+    return assemble_runs(
+        index, x, y, r, a, b, fit, table, ox, oy, angle_min, s[RANGE_SIGMA],
+        np.unique(np.concatenate((breakpoints, jumps))), corner_beams, outliers,
+    )  # fmt: skip
+
+
+@jit
+def _rule(s, sigma):
+    return rule_array(
+        int(s[RULE_KIND]),
+        s[K],
+        s[NOISE_K] * math.sqrt(2.0) * sigma,
+        s[LINE_K] * math.sqrt(5.0) * sigma,
+        s[ABD_LAMBDA],
+        s[PDBS_C0],
+        s[JUMP_DISTANCE],
+    )
+
+
+@jit
+def _denoise(index, r, x, y, n_beams, step, full_circle, rule, s):
+    """Steps 2-3; returns the cleaned returns and the beams dropped as noise."""
+    none = np.zeros(0, dtype=np.int64)
+    kind = s[DENOISE]
+    if kind == NO_DENOISE or index.shape[0] < 3:
+        return index, r, x, y, none
+    gap = np.diff(index)
+    raw_breaks = break_flags(x, y, r, gap, step, rule)
+    if kind == LITERAL:
+        d = np.hypot(np.diff(x), np.diff(y))
         noise = literal_noise(d)
-        return replace_by_window_mean(seq, noise, params["window"], raw_breaks), none
-    noise = isolated_noise(seq, rule, raw_breaks)
-    if params["min_cluster_points"] > 1:
-        kept = seq.subset(~noise)
+        if noise.any():
+            x, y = window_means(x, y, noise, int(s[WINDOW]), raw_breaks)
+            r = np.hypot(x, y)
+        return index, r, x, y, none
+    noise = isolated_noise_mask(x, y, r, gap, step, rule, raw_breaks)
+    if s[MIN_CLUSTER_POINTS] > 1:
+        kept = np.flatnonzero(~noise)
+        kx, ky, kr, ki = x[kept], y[kept], r[kept], index[kept]
         joined = (
-            is_full_circle(seq.n_beams, seq.step)
-            and len(kept) >= 3
-            and not seam_is_break(kept, rule)
+            full_circle
+            and kept.shape[0] >= 3
+            and not seam_break(kx, ky, kr, ki, n_beams, step, rule)
         )
-        small = small_clusters(
-            is_break(kept, rule), params["min_cluster_points"], seam_joined=joined
-        )
-        noise[np.flatnonzero(~noise)[small]] = True
+        kept_breaks = break_flags(kx, ky, kr, _gaps(ki, n_beams), step, rule)
+        small = small_clusters(kept_breaks, int(s[MIN_CLUSTER_POINTS]), joined)
+        noise[kept[small]] = True
     if not noise.any():
-        return seq, none
-    return seq.subset(~noise), seq.index[noise]
+        return index, r, x, y, none
+    keep = ~noise
+    return index[keep], r[keep], x[keep], y[keep], index[noise]
 
 
-def _scores(
-    seq: Sequence, clusters: Clusters, moments: Moments, params: Mapping[str, Any], window: int
-) -> np.ndarray:
-    kind = params["corner_score"]
-    if kind == "turn":
-        return turn_angle(seq, clusters, window, moments)
-    return slope_difference(seq, clusters, signed=kind == "dk_signed")
+@jit
+def _gaps(index, n_beams):
+    """Beams between consecutive positions (a rotated full circle wraps once)."""
+    return np.diff(index) % n_beams
 
 
-def _slope_window(seq: Sequence, sigma: float, setting: Any) -> int:
+@jit
+def _slope_window(x, y, index, sigma, setting):
     """Points fitted on each side for the turn score: given, or grown with the noise.
 
     A line through ``w`` points ``h`` apart with noise ``sigma`` has a direction
@@ -378,115 +420,200 @@ def _slope_window(seq: Sequence, sigma: float, setting: Any) -> int:
     1 deg and 1 cm noise a short wall still has a corner score, and at 0.33 deg
     and 2 cm the score is not noise.
     """
-    if setting != "auto":
+    if setting != AUTO:
         return int(setting)
-    steps = np.hypot(np.diff(seq.x), np.diff(seq.y))[seq.gap == 1]
-    if steps.size == 0:
+    adjacent = np.flatnonzero(np.diff(index) == 1)
+    if adjacent.shape[0] == 0:
         return 3
-    spacing = float(np.median(steps))
+    steps = np.hypot(x[adjacent + 1] - x[adjacent], y[adjacent + 1] - y[adjacent])
+    spacing = np.median(steps)
     wanted = 3 + 6 * sigma / spacing if spacing > 0.0 else math.inf
-    return round(min(max(wanted, 3), SLOPE_WINDOW_MAX))
+    return int(round(min(max(wanted, 3.0), SLOPE_WINDOW_MAX)))  # noqa: RUF046 (int for numba)
 
 
 SLOPE_WINDOW_MAX = 15
 
 
-def _cut(
-    clusters: Clusters, corners: np.ndarray, shared: bool
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Runs ``[a, b]`` and their cluster number after cutting the clusters at ``corners``."""
-    a = np.sort(np.r_[clusters.start, corners + (0 if shared else 1)]).astype(np.intp)
-    b = np.sort(np.r_[corners, clusters.end]).astype(np.intp)
-    owner = np.searchsorted(clusters.start, a, side="right") - 1
-    return a, b, owner
+@jit
+def _cluster_scan(index, r, x, y, n_beams, step, full_circle, rule, window):
+    """Clusters, with the seam of a full circle joined (see ``steps.breakpoints.cluster_scan``).
+
+    Returns the (possibly rotated) returns, cluster bounds, breakpoint beams and
+    whether the scan is one closed ring.
+    """
+    n = index.shape[0]
+    if not full_circle or n < 3:
+        start, end = cluster_bounds(break_flags(x, y, r, np.diff(index), step, rule))
+        return index, r, x, y, start, end, break_beams(index, end, False), False
+    rotate_to, seam, ring = seam_rotation(x, y, r, index, np.diff(index), n_beams, step, rule)
+    if ring:
+        rotate_to = ring_anchor(x, y, window)
+    if rotate_to:
+        order = np.concatenate((np.arange(rotate_to, n), np.arange(0, rotate_to)))
+        index, r, x, y = index[order], r[order], x[order], y[order]
+    if ring:
+        start, end = np.zeros(1, np.int64), np.full(1, n - 1, np.int64)
+        return index, r, x, y, start, end, np.zeros(0, np.int64), True
+    start, end = cluster_bounds(break_flags(x, y, r, _gaps(index, n_beams), step, rule))
+    return index, r, x, y, start, end, break_beams(index, end, seam), False
 
 
-def _refine_splits(
-    cost: RunCost, a: np.ndarray, b: np.ndarray, owner: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Move each cut (end ``b[k]`` / start ``a[k+1]``) by one position where that fits better."""
-    b, a = b.copy(), a.copy()
-    k = np.flatnonzero(owner[:-1] == owner[1:])
-    if k.size == 0:
-        return b, a
-    best_cost = np.full(k.size, np.inf)
-    best_shift = np.zeros(k.size, dtype=np.intp)
-    shifts = (0, -1, 1)
-    ends = [b[k] + shift for shift in shifts]
-    # The three shifts' parts, fitted in one call; a shift that empties a part costs inf.
-    safe = [np.clip(end, a[k], b[k + 1] - 1) for end in ends]
-    parts = cost.many(*[(a[k], e) for e in safe], *[(e + 1, b[k + 1]) for e in safe])
-    for j, (shift, end) in enumerate(zip(shifts, ends, strict=True)):
-        ok = (end - a[k] >= 1) & (b[k + 1] - end - 1 >= 1)
-        total = parts[j] + parts[j + len(shifts)]
-        total = np.where(ok & ~np.isnan(total), total, np.inf)
-        better = total < best_cost - 1e-15
-        best_cost = np.where(better, total, best_cost)
-        best_shift = np.where(better, shift, best_shift)
-    # Two cuts moving towards each other could leave a run of one point: keep those still.
-    new_b = b.copy()
-    new_b[k] += best_shift
-    new_a = a.copy()
-    new_a[k + 1] = new_b[k] + 1
-    too_short = new_b - new_a < 1
-    if too_short.any():
-        bad = np.flatnonzero(too_short)
-        frozen = np.isin(k, bad) | np.isin(k + 1, bad)
-        new_b[k[frozen]] = b[k[frozen]]
-        new_a[k[frozen] + 1] = a[k[frozen] + 1]
-    return new_b, new_a
+@jit
+def _scores(x, y, r, index, step, table, ox, oy, start, end, window, s):
+    kind = s[CORNER_SCORE]
+    if kind == TURN:
+        return turn_scores(x, y, table, ox, oy, start, end, window)
+    return slope_scores(r, np.diff(index), step, start, end, kind == DK_SIGNED)
 
 
-def _drop_small(
-    seq: Sequence, a: np.ndarray, b: np.ndarray, owner: np.ndarray, params: Mapping[str, Any]
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    length = np.hypot(seq.x[b] - seq.x[a], seq.y[b] - seq.y[a])
-    keep = (b - a + 1 >= params["min_points"]) & (length >= params["min_length"])
+@jit
+def _choose_corners(table, ox, oy, inv_r2, start, end, scores, sigma, s, grid):
+    """Steps 5-7: corner candidates and the threshold sweep; returns corners and the noise."""
+    fit, shared = int(s[FIT]), s[SHARED] != 0.0
+    n = table.shape[1] - 1
+    candidates = peak_positions(scores, start, end)
+    ranked, accepted, sse, segments, _, levels = sweep_levels(
+        fit, table, ox, oy, inv_r2, start, end, n, candidates, scores[candidates], grid,
+        s[USE_GRID] != 0.0, int(s[MAX_EVALUATIONS]), shared,
+    )  # fmt: skip
+    n_points = int(np.sum(end - start + 1))
+    criterion, penalty = int(s[CRITERION]), s[PENALTY]
+    best, _ = best_level(criterion, sse, segments, levels, n_points, sigma, penalty)
+    corners = level_corners(ranked, accepted, levels[best])
+    if s[NOISE_SIGMA] == AUTO and criterion == BIC:
+        # Second pass with the noise measured on the lines of the first choice.
+        a, b, _ = _cut(start, end, corners, shared)
+        sigma = _residual_sigma(fit, table, ox, oy, inv_r2, a, b, sigma)
+        best, _ = best_level(criterion, sse, segments, levels, n_points, sigma, penalty)
+        corners = level_corners(ranked, accepted, levels[best])
+    return corners, sigma
+
+
+@jit
+def _segments(x, y, table, ox, oy, inv_r2, start, end, corners, sigma, s):
+    """Runs ``[a, b]`` (and cluster of each) after cutting, refining, merging and bounding."""
+    fit, shared = int(s[FIT]), s[SHARED] != 0.0
+    a, b, owner = _cut(start, end, corners, shared)
+    if not shared:
+        a, b = _refine_splits(fit, table, ox, oy, inv_r2, a, b, owner)
+    if s[MERGE]:
+        segment_cost = s[PENALTY] * math.log(max(x.shape[0], 2)) * sigma * sigma
+        a, b, owner = merge_runs(fit, table, ox, oy, inv_r2, a, b, owner, segment_cost)
+    if s[MAX_RESIDUAL] != AUTO:
+        a, b, owner = split_runs(
+            x, y, fit, table, ox, oy, a, b, owner, s[MAX_RESIDUAL], int(s[MIN_POINTS])
+        )
+    length = np.hypot(x[b] - x[a], y[b] - y[a])
+    keep = (b - a + 1 >= s[MIN_POINTS]) & (length >= s[MIN_LENGTH])
     return a[keep], b[keep], owner[keep]
 
 
-def _corner_beams(
-    seq: Sequence,
-    moments: Moments,
-    fit: str,
-    a: np.ndarray,
-    b: np.ndarray,
-    owner: np.ndarray,
-    shared: bool,
-    ring: bool,
-    sigma: float | None,
-) -> tuple[np.ndarray, np.ndarray]:
+@jit
+def _residual_sigma(fit, table, ox, oy, inv_r2, a, b, fallback):
+    """Range noise from the fits of the runs ``[a, b]``: the median of ``sqrt(cost / (n - 2))``.
+
+    Only runs of :data:`MIN_RUN_FOR_NOISE` points or more count (short runs fit
+    their own noise); the median ignores the few runs that still hide a corner.
+    """
+    per_run = np.empty(a.shape[0])
+    count = 0
+    for k in range(a.shape[0]):
+        if b[k] - a[k] + 1 >= MIN_RUN_FOR_NOISE:
+            value = math.sqrt(run_cost(fit, table, ox, oy, inv_r2, a[k], b[k]) / (b[k] - a[k] - 1))
+            if math.isfinite(value):
+                per_run[count] = value
+                count += 1
+    if count == 0:
+        return fallback
+    return max(np.median(per_run[:count]), MIN_NOISE_SIGMA)
+
+
+MIN_RUN_FOR_NOISE = 8
+
+
+@jit
+def _cut(start, end, corners, shared):
+    """Runs ``[a, b]`` and their cluster number after cutting the clusters at ``corners``."""
+    a = np.sort(np.concatenate((start, corners + (0 if shared else 1))))
+    b = np.sort(np.concatenate((corners, end)))
+    owner = np.searchsorted(start, a, side="right") - 1
+    return a, b, owner
+
+
+@jit
+def _refine_splits(fit, table, ox, oy, inv_r2, a, b, owner):
+    """Move each cut (end ``b[k]`` / start ``a[k+1]``) by one position where that fits better.
+
+    Every cut is judged against the original neighbours; two cuts moving
+    towards each other that would leave a run of one point both stay put.
+    """
+    m = a.shape[0]
+    new_a, new_b = a.copy(), b.copy()
+    for k in range(m - 1):
+        if owner[k] != owner[k + 1]:
+            continue
+        best_cost, best_shift = math.inf, 0
+        for shift in (0, -1, 1):
+            cut = b[k] + shift
+            if cut - a[k] < 1 or b[k + 1] - cut - 1 < 1:
+                continue
+            total = run_cost(fit, table, ox, oy, inv_r2, a[k], cut) + run_cost(
+                fit, table, ox, oy, inv_r2, cut + 1, b[k + 1]
+            )
+            if total < best_cost - 1e-15:  # NaN never wins
+                best_cost, best_shift = total, shift
+        new_b[k] = b[k] + best_shift
+        new_a[k + 1] = new_b[k] + 1
+    too_short = new_b - new_a < 1
+    for k in range(m - 1):
+        if owner[k] == owner[k + 1] and (too_short[k] or too_short[k + 1]):
+            new_b[k], new_a[k + 1] = b[k], a[k + 1]
+    return new_a, new_b
+
+
+@jit
+def _corner_beams(x, y, index, table, ox, oy, fit, a, b, owner, shared, ring, sigma):
     """Beams of the corners where two kept segments of one cluster meet, and of jumps.
 
     A shared corner is its shared point; otherwise the point nearer the two
-    lines' intersection among those between the segments. With ``sigma`` given,
+    lines' intersection among those between the segments. With ``sigma >= 0``,
     two segments whose lines do not meet near their facing ends (farther than
     :data:`CORNER_REACH` times the local spacing plus three ``sigma``) are two
     surfaces at different depths joined by a mixed pixel or a small step: the
     junction is reported as a breakpoint (the last beam of the first segment).
     """
-    none = np.zeros(0, dtype=np.intp)
-    if a.size == 0:
-        return none, none
-    left = np.flatnonzero((owner[:-1] == owner[1:]) & (a[1:] - b[:-1] <= 2))
-    ends, starts = b[left], a[left + 1]
-    if ring and a.size >= 2 and a[0] == 0 and b[-1] == len(seq) - 1:
-        left = np.r_[left, a.size - 1]
-        ends, starts = np.r_[ends, b[-1]], np.r_[starts, a[0]]
-    if shared:
-        return seq.index[starts], none
-    lines = fit_runs(fit, moments, a, b)
-    right = (left + 1) % a.size
-    corner_x, corner_y = line_intersections(lines, left, right)
-    before_dist = np.hypot(seq.x[ends] - corner_x, seq.y[ends] - corner_y)
-    after_dist = np.hypot(seq.x[starts] - corner_x, seq.y[starts] - corner_y)
-    pick = np.where(after_dist < before_dist, starts, ends)
-    if sigma is None:
-        return seq.index[pick], none
-    spacing = np.hypot(seq.x[starts] - seq.x[ends], seq.y[starts] - seq.y[ends])
-    reach = CORNER_REACH * spacing + 3.0 * sigma
-    meets = np.maximum(before_dist, after_dist) <= reach  # NaN (parallel) is not a corner
-    return seq.index[pick[meets]], seq.index[ends[~meets]]
+    m = a.shape[0]
+    corners = np.zeros(m, dtype=np.int64)
+    jumps = np.zeros(m, dtype=np.int64)
+    n_corners = n_jumps = 0
+    for k in range(m):
+        right = k + 1
+        if right == m:
+            if not (ring and m >= 2 and a[0] == 0 and b[-1] == x.shape[0] - 1):
+                break
+            right = 0
+        elif owner[k] != owner[right] or a[right] - b[k] > 2:
+            continue
+        end, start = b[k], a[right]
+        if shared:
+            corners[n_corners] = index[start]
+            n_corners += 1
+            continue
+        rho_i, alpha_i, _ = fit_run(fit, table, ox, oy, a[k], b[k])
+        rho_j, alpha_j, _ = fit_run(fit, table, ox, oy, a[right], b[right])
+        cx, cy = line_intersection(rho_i, alpha_i, rho_j, alpha_j)
+        before = math.hypot(x[end] - cx, y[end] - cy)
+        after = math.hypot(x[start] - cx, y[start] - cy)
+        pick = start if after < before else end
+        if sigma >= 0.0:
+            reach = CORNER_REACH * math.hypot(x[start] - x[end], y[start] - y[end]) + 3.0 * sigma
+            if not max(before, after) <= reach:  # NaN (parallel lines) is not a corner
+                jumps[n_jumps] = index[end]
+                n_jumps += 1
+                continue
+        corners[n_corners] = index[pick]
+        n_corners += 1
+    return corners[:n_corners], jumps[:n_jumps]
 
 
 CORNER_REACH = 2.0

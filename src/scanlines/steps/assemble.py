@@ -8,11 +8,12 @@ from typing import Any
 
 import numpy as np
 
+from scanlines._jit import jit
 from scanlines.extraction import N_LINE_COLUMNS, Extraction
-from scanlines.steps.fit import Moments, fit_runs, line_covariances, point_residuals, run_labels
+from scanlines.steps.fit import FIT_CODES, Moments, covariances, fit_many, run_labels
 from scanlines.steps.points import Sequence
 
-__all__ = ["assemble", "empty_extraction"]
+__all__ = ["assemble", "assemble_runs", "empty_extraction", "empty_result", "from_arrays"]
 
 
 def empty_extraction(method: str, params: Mapping[str, Any], *, breakpoints=None, outliers=None):
@@ -53,47 +54,95 @@ def assemble(
     makes every decision independent of ``angle_min``; here they are rotated by
     ``angle_min``.
     """
-    if a.size == 0:
-        return empty_extraction(method, params, breakpoints=breakpoints, outliers=outliers)
-    lines = fit_runs(fit, moments, a, b)
-    position, run = run_labels(a, b, len(seq))
-    residual = point_residuals(seq.x, seq.y, lines.rho, lines.alpha, position, run)
-    count = (b - a + 1).astype(np.float64)
-    rms = np.sqrt(np.bincount(run, residual * residual, minlength=a.size) / count)
-    covariance = line_covariances(
-        seq.x, seq.y, seq.r, lines.rho, lines.alpha, position, run, range_sigma
+    ox, oy = moments.origin
+    arrays = assemble_runs(
+        seq.index,
+        seq.x,
+        seq.y,
+        seq.r,
+        np.asarray(a, dtype=np.int64),
+        np.asarray(b, dtype=np.int64),
+        FIT_CODES[fit],
+        moments.table,
+        ox,
+        oy,
+        float(angle_min),
+        float(range_sigma),
+        np.asarray(breakpoints, dtype=np.int64),
+        np.asarray(corners, dtype=np.int64),
+        np.asarray(outliers, dtype=np.int64),
     )
-    start = _project(seq.x[a], seq.y[a], lines.rho, lines.alpha)
-    end = _project(seq.x[b], seq.y[b], lines.rho, lines.alpha)
+    return from_arrays(arrays, method, params)
 
-    cos_t, sin_t = math.cos(angle_min), math.sin(angle_min)
-    table = np.empty((a.size, N_LINE_COLUMNS))
-    table[:, 0] = lines.rho
-    table[:, 1] = np.pi - np.mod(np.pi - (lines.alpha + angle_min), 2.0 * np.pi)
-    table[:, 2] = cos_t * start[0] - sin_t * start[1]
-    table[:, 3] = sin_t * start[0] + cos_t * start[1]
-    table[:, 4] = cos_t * end[0] - sin_t * end[1]
-    table[:, 5] = sin_t * end[0] + cos_t * end[1]
-    table[:, 6] = rms
 
-    first, last = seq.index[a], seq.index[b]
-    order = np.argsort(first, kind="stable")
+def from_arrays(arrays: tuple[np.ndarray, ...], method: str, params: Mapping[str, Any]):
+    """The :class:`Extraction` of :func:`assemble_runs`' output."""
+    first, last, n_points, lines, covariance, breakpoints, corners, outliers = arrays
     return Extraction(
-        first=first[order],
-        last=last[order],
-        n_points=(b - a + 1)[order],
-        lines=table[order],
-        covariances=covariance[order],
+        first=first,
+        last=last,
+        n_points=n_points,
+        lines=lines,
+        covariances=covariance,
         breakpoints=breakpoints,
-        corners=np.sort(corners),
-        outliers=np.sort(outliers),
+        corners=corners,
+        outliers=outliers,
         method=method,
         params=params,
     )
 
 
-def _project(x, y, rho, alpha):
-    """Foot of the perpendicular from ``(x, y)`` onto the line ``(rho, alpha)``."""
-    c, s = np.cos(alpha), np.sin(alpha)
-    off = x * c + y * s - rho
-    return x - off * c, y - off * s
+@jit
+def assemble_runs(
+    index, x, y, r, a, b, fit, table, ox, oy, angle_min, range_sigma, breakpoints, corners, outliers
+):
+    """Kernel of :func:`assemble`: ``first, last, n_points, lines, covariances, breakpoints,
+    corners, outliers``, segments in beam order, events sorted."""
+    rho, alpha, _ = fit_many(fit, table, ox, oy, a, b)
+    position, run = run_labels(a, b, x.shape[0])
+    covariance = covariances(x, y, r, rho, alpha, position, run, range_sigma)
+    m = a.shape[0]
+    lines = np.empty((m, 7))
+    cos_t, sin_t = math.cos(angle_min), math.sin(angle_min)
+    for k in range(m):
+        c, s = math.cos(alpha[k]), math.sin(alpha[k])
+        squares = 0.0
+        for p in range(a[k], b[k] + 1):
+            off = x[p] * c + y[p] * s - rho[k]
+            squares += off * off
+        lines[k, 0] = rho[k]
+        lines[k, 1] = math.pi - (math.pi - (alpha[k] + angle_min)) % (2.0 * math.pi)
+        for column, p in ((2, a[k]), (4, b[k])):
+            off = x[p] * c + y[p] * s - rho[k]  # foot of the perpendicular onto the line
+            px, py = x[p] - off * c, y[p] - off * s
+            lines[k, column] = cos_t * px - sin_t * py
+            lines[k, column + 1] = sin_t * px + cos_t * py
+        lines[k, 6] = math.sqrt(squares / (b[k] - a[k] + 1))
+    first, last = index[a], index[b]
+    order = np.argsort(first, kind="mergesort")
+    return (
+        first[order],
+        last[order],
+        (b - a + 1)[order],
+        lines[order],
+        covariance[order],
+        np.sort(breakpoints),
+        np.sort(corners),
+        np.sort(outliers),
+    )
+
+
+@jit
+def empty_result(breakpoints: np.ndarray, outliers: np.ndarray):
+    """:func:`assemble_runs`' output without segments."""
+    none = np.zeros(0, dtype=np.int64)
+    return (
+        none,
+        none.copy(),
+        none.copy(),
+        np.zeros((0, 7)),
+        np.zeros((0, 2, 2)),
+        np.sort(breakpoints),
+        none.copy(),
+        np.sort(outliers),
+    )

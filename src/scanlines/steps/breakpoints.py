@@ -46,6 +46,7 @@ from typing import Any
 
 import numpy as np
 
+from scanlines._jit import jit
 from scanlines.params import Param, choice, number
 from scanlines.scan import is_full_circle
 from scanlines.steps.points import Sequence, rotate
@@ -88,6 +89,12 @@ BREAKPOINT_PARAMS: dict[str, Param] = {
 }
 
 
+RULE_CODES = {name: code for code, name in enumerate(RULES)}
+ADAPTIVE, ABD, PDBS, FIXED = range(4)
+# Positions in the array form of a rule that the kernels take.
+_KIND, _K, _MARGIN, _LINE_TOL, _LAMBDA, _C0, _JUMP = range(7)
+
+
 @dataclass(frozen=True, slots=True)
 class BreakpointRule:
     """A clustering rule and its constants (see the module docstring)."""
@@ -113,6 +120,40 @@ class BreakpointRule:
             jump_distance=params["jump_distance"],
         )
 
+    def as_array(self) -> np.ndarray:
+        """The rule as the kernels take it (kind code first)."""
+        return rule_array(
+            RULE_CODES[self.name],
+            self.k,
+            self.noise_margin,
+            self.line_tolerance,
+            self.abd_lambda,
+            self.pdbs_c0,
+            self.jump_distance,
+        )
+
+
+@jit
+def rule_array(
+    kind: int,
+    k: float,
+    noise_margin: float,
+    line_tolerance: float,
+    abd_lambda: float,
+    pdbs_c0: float,
+    jump_distance: float,
+) -> np.ndarray:
+    """Array form of a :class:`BreakpointRule` (``kind`` one of ``ADAPTIVE ... FIXED``)."""
+    rule = np.empty(7)
+    rule[_KIND] = kind
+    rule[_K] = k
+    rule[_MARGIN] = noise_margin
+    rule[_LINE_TOL] = line_tolerance
+    rule[_LAMBDA] = abd_lambda
+    rule[_C0] = pdbs_c0
+    rule[_JUMP] = jump_distance
+    return rule
+
 
 @dataclass(frozen=True, slots=True)
 class Clusters:
@@ -135,35 +176,76 @@ def neighbour_distances(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     return np.hypot(np.diff(x), np.diff(y))
 
 
+@jit
+def gap_factor(rule: np.ndarray, gap: int, step: float) -> float:
+    """The part of the threshold that depends on the beam gap only (see :func:`threshold`)."""
+    kind = rule[_KIND]
+    dphi = gap * step
+    if kind == ADAPTIVE:
+        return rule[_K] * dphi
+    if kind == ABD:
+        margin = rule[_LAMBDA] - dphi
+        return math.sin(dphi) / math.sin(margin) if margin > 0.0 else math.inf
+    if kind == PDBS:
+        return math.sqrt(2.0 * (1.0 - math.cos(dphi)))
+    return 0.0
+
+
+@jit
+def scaled_threshold(rule: np.ndarray, factor: float, r_from: float, r_to: float) -> float:
+    """The threshold from :func:`gap_factor` and the two ranges."""
+    kind = rule[_KIND]
+    if kind in (ADAPTIVE, ABD):
+        return factor * r_from + rule[_MARGIN]
+    if kind == PDBS:
+        return rule[_C0] + factor * min(r_from, r_to)
+    return rule[_JUMP]
+
+
+@jit
+def threshold(rule: np.ndarray, r_from: float, r_to: float, gap: int, step: float) -> float:
+    """Largest distance ``D`` between returns ``r_from`` and ``r_to``, ``gap`` beams apart."""
+    return scaled_threshold(rule, gap_factor(rule, gap, step), r_from, r_to)
+
+
+@jit
+def _thresholds(rule, r_from, r_to, gap, step):
+    out = np.empty(r_from.shape[0])
+    for i in range(r_from.shape[0]):
+        out[i] = threshold(rule, r_from[i], r_to[i], gap[i], step)
+    return out
+
+
 def thresholds(
     rule: BreakpointRule, r_from: np.ndarray, r_to: np.ndarray, gap: np.ndarray, step: float
 ) -> np.ndarray:
-    """Largest distance ``D`` between returns ``r_from`` and ``r_to``, ``gap`` beams apart."""
-    dphi = gap * step
-    if rule.name == "adaptive":
-        return rule.k * r_from * dphi + rule.noise_margin
-    if rule.name == "abd":
-        margin = rule.abd_lambda - dphi
-        with np.errstate(divide="ignore", invalid="ignore"):
-            reach = np.where(margin > 0.0, r_from * np.sin(dphi) / np.sin(margin), np.inf)
-        return reach + rule.noise_margin
-    if rule.name == "pdbs":
-        return rule.pdbs_c0 + np.sqrt(2.0 * (1.0 - np.cos(dphi))) * np.minimum(r_from, r_to)
-    return np.full(np.shape(r_from), rule.jump_distance)
+    """:func:`threshold` for arrays of pairs."""
+    r_from, r_to, gap = np.broadcast_arrays(
+        np.asarray(r_from, dtype=np.float64), np.asarray(r_to, dtype=np.float64), np.asarray(gap)
+    )
+    flat = _thresholds(
+        rule.as_array(),
+        np.ascontiguousarray(r_from.ravel()),
+        np.ascontiguousarray(r_to.ravel()),
+        np.ascontiguousarray(gap.ravel(), dtype=np.int64),
+        float(step),
+    )
+    return flat.reshape(r_from.shape)
 
 
-def is_break(seq: Sequence, rule: BreakpointRule) -> np.ndarray:
-    """For each pair of consecutive positions, True where a cluster ends."""
-    d = neighbour_distances(seq.x, seq.y)
-    limit = thresholds(rule, seq.r[:-1], seq.r[1:], seq.gap, seq.step)
-    apart = ~(d < limit)
-    if rule.line_tolerance > 0.0:
-        apart &= ~continues_line(seq, d, rule.line_tolerance)
-    return (seq.gap > MAX_BRIDGED_GAP) | apart
+@jit
+def _distance_to_line(ax, ay, bx, by, px, py) -> float:
+    """Distance of ``P`` from the line through ``A`` and ``B`` (inf when ``A == B``)."""
+    ux, uy = bx - ax, by - ay
+    length = math.hypot(ux, uy)
+    if length == 0.0:
+        return math.inf
+    return abs(ux * (py - ay) - uy * (px - ax)) / length
 
 
-def continues_line(seq: Sequence, d: np.ndarray, tolerance: float) -> np.ndarray:
-    """Pairs ``(p, p+1)`` that continue the line of the pair before *and* of the pair after.
+@jit
+def continues_line_at(x, y, gap, d, p: int, tolerance: float) -> bool:
+    """Pair ``(p, p+1)`` continues the line of the pair before *and* of the pair after.
 
     ``P_{p+1}`` lies within ``tolerance`` of the line through ``P_{p-1}, P_p``, ``P_p``
     within ``tolerance`` of the line through ``P_{p+1}, P_{p+2}``, both neighbouring
@@ -173,19 +255,16 @@ def continues_line(seq: Sequence, d: np.ndarray, tolerance: float) -> np.ndarray
     apart but collinear and evenly spaced, so a distance threshold alone cuts the
     wall; a depth jump or a spike is neither.
     """
-    n = len(seq)
-    out = np.zeros(max(n - 1, 0), dtype=bool)
-    if n < 4:
-        return out
-    p = np.arange(1, n - 2)
-    x, y = seq.x, seq.y
+    if p < 1 or p > x.shape[0] - 3:
+        return False
+    if gap[p - 1] > MAX_BRIDGED_GAP or gap[p + 1] > MAX_BRIDGED_GAP:
+        return False
+    shorter = min(d[p - 1], d[p + 1])
+    if not (d[p] <= MAX_STEP_GROWTH * shorter and shorter > tolerance):
+        return False
     before = _distance_to_line(x[p - 1], y[p - 1], x[p], y[p], x[p + 1], y[p + 1])
     after = _distance_to_line(x[p + 2], y[p + 2], x[p + 1], y[p + 1], x[p], y[p])
-    neighbours_close = (seq.gap[p - 1] <= MAX_BRIDGED_GAP) & (seq.gap[p + 1] <= MAX_BRIDGED_GAP)
-    shorter = np.minimum(d[p - 1], d[p + 1])
-    steady = (d[p] <= MAX_STEP_GROWTH * shorter) & (shorter > tolerance)
-    out[p] = (before < tolerance) & (after < tolerance) & neighbours_close & steady
-    return out
+    return before < tolerance and after < tolerance
 
 
 MAX_STEP_GROWTH = 2.5
@@ -193,23 +272,72 @@ MAX_STEP_GROWTH = 2.5
 grow their spacing smoothly; a jump does not)."""
 
 
-def _distance_to_line(ax, ay, bx, by, px, py):
-    """Distance of ``P`` from the line through ``A`` and ``B`` (inf when ``A == B``)."""
-    ux, uy = bx - ax, by - ay
-    length = np.hypot(ux, uy)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        distance = np.abs(ux * (py - ay) - uy * (px - ax)) / length
-    return np.where(length > 0.0, distance, np.inf)
+@jit
+def break_flags(x, y, r, gap, step: float, rule: np.ndarray) -> np.ndarray:
+    """For each pair of consecutive positions, True where a cluster ends."""
+    n = x.shape[0]
+    out = np.zeros(max(n - 1, 0), dtype=np.bool_)
+    if n < 2:
+        return out
+    d = np.empty(n - 1)
+    for p in range(n - 1):
+        dx, dy = x[p + 1] - x[p], y[p + 1] - y[p]
+        d[p] = math.sqrt(dx * dx + dy * dy)
+    tolerance = rule[_LINE_TOL]
+    factors = np.array([gap_factor(rule, g, step) for g in range(MAX_BRIDGED_GAP + 1)])
+    for p in range(n - 1):
+        if gap[p] > MAX_BRIDGED_GAP:
+            out[p] = True
+        elif not d[p] < scaled_threshold(rule, factors[gap[p]], r[p], r[p + 1]):
+            out[p] = not (tolerance > 0.0 and continues_line_at(x, y, gap, d, p, tolerance))
+    return out
+
+
+def is_break(seq: Sequence, rule: BreakpointRule) -> np.ndarray:
+    """For each pair of consecutive positions, True where a cluster ends."""
+    return break_flags(seq.x, seq.y, seq.r, seq.gap, seq.step, rule.as_array())
+
+
+@jit
+def seam_break(x, y, r, index, n_beams: int, step: float, rule: np.ndarray) -> bool:
+    """The breakpoint test between the last and the first position of a full circle."""
+    gap = index[0] + n_beams - index[-1]
+    if gap > MAX_BRIDGED_GAP:
+        return True
+    d = math.hypot(x[0] - x[-1], y[0] - y[-1])
+    return not d < threshold(rule, r[-1], r[0], gap, step)
 
 
 def seam_is_break(seq: Sequence, rule: BreakpointRule) -> bool:
     """The same test between the last and the first position of a full circle."""
-    gap = seq.seam_gap()
-    if gap > MAX_BRIDGED_GAP:
-        return True
-    d = math.hypot(seq.x[0] - seq.x[-1], seq.y[0] - seq.y[-1])
-    limit = thresholds(rule, seq.r[-1:], seq.r[:1], np.array([gap]), seq.step)[0]
-    return not d < limit
+    return bool(seam_break(seq.x, seq.y, seq.r, seq.index, seq.n_beams, seq.step, rule.as_array()))
+
+
+@jit
+def cluster_bounds(breaks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Inclusive ``start, end`` positions of the runs between ``breaks`` (flags per pair)."""
+    n = breaks.shape[0] + 1
+    count = 1
+    for flag in breaks:
+        count += flag
+    start = np.empty(count, dtype=np.int64)
+    end = np.empty(count, dtype=np.int64)
+    start[0] = 0
+    c = 0
+    for p in range(n - 1):
+        if breaks[p]:
+            end[c] = p
+            c += 1
+            start[c] = p + 1
+    end[c] = n - 1
+    return start, end
+
+
+@jit
+def break_beams(index: np.ndarray, end: np.ndarray, seam_break: bool) -> np.ndarray:
+    """Breakpoint beams: the last beam of each cluster but the last (and it too at a seam)."""
+    count = end.shape[0] if seam_break else end.shape[0] - 1
+    return np.sort(index[end[:count]])
 
 
 def cluster(seq: Sequence, breaks: np.ndarray, *, seam_break: bool = False) -> Clusters:
@@ -219,15 +347,29 @@ def cluster(seq: Sequence, breaks: np.ndarray, *, seam_break: bool = False) -> C
     returns are not continuous; with a rotated sequence the caller passes the
     break that the rotation put at the end.
     """
-    n = len(seq)
-    if n == 0:
+    if len(seq) == 0:
         empty = np.zeros(0, dtype=np.intp)
         return Clusters(empty, empty, empty)
-    cut = np.flatnonzero(breaks)
-    start = np.r_[0, cut + 1].astype(np.intp)
-    end = np.r_[cut, n - 1].astype(np.intp)
-    bp_positions = np.r_[cut, n - 1] if seam_break else cut
-    return Clusters(start, end, np.sort(seq.index[bp_positions]).astype(np.intp))
+    start, end = cluster_bounds(np.asarray(breaks, dtype=np.bool_))
+    return Clusters(start, end, break_beams(seq.index, end, seam_break))
+
+
+@jit
+def seam_rotation(x, y, r, index, gap, n_beams: int, step: float, rule) -> tuple[int, bool, bool]:
+    """How a full circle is clustered: ``(rotate_to, seam_break, ring)``.
+
+    A full circle whose seam fails the test is clustered as it is (with the seam
+    break). One whose seam passes is rotated to start right after its first
+    gap, so that the cluster across the seam is one run of positions. One
+    without any gap is a closed ring: the caller picks where to cut it.
+    """
+    if seam_break(x, y, r, index, n_beams, step, rule):
+        return 0, True, False
+    breaks = break_flags(x, y, r, gap, step, rule)
+    for p in range(breaks.shape[0]):
+        if breaks[p]:
+            return p + 1, True, False
+    return 0, False, True
 
 
 def cluster_scan(
@@ -243,14 +385,14 @@ def cluster_scan(
 
     Returns the (possibly rotated) sequence, its clusters and whether it is a ring.
     """
-    breaks = is_break(seq, rule)
     if not is_full_circle(seq.n_beams, seq.step) or len(seq) < 3:
-        return seq, cluster(seq, breaks), False
-    if seam_is_break(seq, rule):
-        return seq, cluster(seq, breaks, seam_break=True), False
-    cut = np.flatnonzero(breaks)
-    if cut.size:
-        seq = rotate(seq, int(cut[0]) + 1)
-        return seq, cluster(seq, is_break(seq, rule), seam_break=True), False
-    seq = rotate(seq, ring_anchor(seq))
-    return seq, cluster(seq, np.zeros(len(seq) - 1, dtype=bool)), True
+        return seq, cluster(seq, is_break(seq, rule)), False
+    rotate_to, seam, ring = seam_rotation(
+        seq.x, seq.y, seq.r, seq.index, seq.gap, seq.n_beams, seq.step, rule.as_array()
+    )
+    if ring:
+        seq = rotate(seq, ring_anchor(seq))
+        return seq, cluster(seq, np.zeros(len(seq) - 1, dtype=bool)), True
+    if rotate_to:
+        seq = rotate(seq, rotate_to)
+    return seq, cluster(seq, is_break(seq, rule), seam_break=seam), False

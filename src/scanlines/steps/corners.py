@@ -24,11 +24,14 @@ References
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
+from scanlines._jit import jit
 from scanlines.steps.breakpoints import Clusters
-from scanlines.steps.fit import Moments, tls_lines
-from scanlines.steps.points import Sequence, rotate
+from scanlines.steps.fit import Moments, prefix_moments, tls_normal
+from scanlines.steps.points import Sequence
 
 __all__ = [
     "SCORES",
@@ -42,66 +45,100 @@ __all__ = [
 SCORES = ("turn", "dk", "dk_signed")
 
 
-def _interior(clusters: Clusters, n: int) -> np.ndarray:
+@jit
+def interior_mask(start: np.ndarray, end: np.ndarray, n: int) -> np.ndarray:
     """Mask of positions with a neighbour on both sides inside their cluster."""
-    inside = np.ones(n, dtype=bool)
-    inside[clusters.start] = False
-    inside[clusters.end] = False
+    inside = np.ones(n, dtype=np.bool_)
+    inside[start] = False
+    inside[end] = False
     return inside
+
+
+@jit
+def slope_scores(r, gap, step: float, start, end, signed: bool) -> np.ndarray:
+    """Kernel of :func:`slope_difference`."""
+    n = r.shape[0]
+    score = np.zeros(n)
+    if n < 3:
+        return score
+    slope = np.empty(n - 1)
+    for i in range(n - 1):
+        # tan(phi_i) between i and i+1 (eq. 12); a zero range gives no slope (score 0)
+        denominator = r[i] * step * gap[i]
+        slope[i] = (r[i + 1] - r[i]) / denominator if denominator != 0.0 else math.nan
+        if not signed:
+            slope[i] = abs(slope[i])
+    inside = interior_mask(start, end, n)
+    for i in range(1, n - 1):
+        value = slope[i - 1] - slope[i]
+        if inside[i] and math.isfinite(value):
+            score[i] = value
+    return score
 
 
 def slope_difference(seq: Sequence, clusters: Clusters, *, signed: bool = False) -> np.ndarray:
     """Eq. 13 at every position (0 where a neighbour lies outside the cluster)."""
-    n = len(seq)
+    return slope_scores(seq.r, seq.gap, seq.step, clusters.start, clusters.end, signed)
+
+
+@jit
+def heading(x, y, table, ox: float, oy: float, a: int, b: int) -> tuple[float, float]:
+    """Unit direction of the fitted line of run ``[a, b]``, oriented from ``a`` towards ``b``."""
+    nx, ny = tls_normal(table, ox, oy, a, b)[:2]
+    if -ny * (x[b] - x[a]) + nx * (y[b] - y[a]) >= 0.0:
+        return -ny, nx
+    return ny, -nx
+
+
+@jit
+def turn_scores(x, y, table, ox: float, oy: float, start, end, window: int) -> np.ndarray:
+    """Kernel of :func:`turn_angle`.
+
+    The line before ``p``, ``[p - w, p]``, is the line after ``p - w``: each run is
+    fitted once, except the shortened ones at a cluster's ends.
+    """
+    n = x.shape[0]
     score = np.zeros(n)
-    if n < 3:
-        return score
-    r = seq.r
-    with np.errstate(all="ignore"):
-        slope = np.diff(r) / (r[:-1] * seq.step * seq.gap)  # tan(phi_i) between i and i+1 (eq. 12)
-    if not signed:
-        slope = np.abs(slope)
-    inside = _interior(clusters, n)
-    with np.errstate(all="ignore"):
-        score[1:-1] = slope[:-1] - slope[1:]
-    score[~inside] = 0.0
-    return np.nan_to_num(score, nan=0.0, posinf=0.0, neginf=0.0)
+    after_x = np.empty(n)
+    after_y = np.empty(n)
+    for c in range(start.shape[0]):
+        for p in range(start[c], end[c] + 1):
+            after_x[p], after_y[p] = heading(x, y, table, ox, oy, p, min(p + window, end[c]))
+        for p in range(start[c] + 1, end[c]):
+            if p - window >= start[c]:
+                bx, by = after_x[p - window], after_y[p - window]
+            else:
+                bx, by = heading(x, y, table, ox, oy, start[c], p)
+            ux, uy = after_x[p], after_y[p]
+            score[p] = abs(math.atan2(bx * uy - by * ux, bx * ux + by * uy))
+    return score
 
 
 def turn_angle(seq: Sequence, clusters: Clusters, window: int, moments: Moments) -> np.ndarray:
     """Absolute turn (radians) between lines fitted to ``window`` points on each side."""
-    n = len(seq)
-    score = np.zeros(n)
-    position = np.flatnonzero(_interior(clusters, n))
-    if position.size == 0:
-        return score
-    cluster_of = np.searchsorted(clusters.start, position, side="right") - 1
-    lo = np.maximum(position - window, clusters.start[cluster_of])
-    hi = np.minimum(position + window, clusters.end[cluster_of])
-    before = _direction(seq, moments, lo, position)
-    after = _direction(seq, moments, position, hi)
-    score[position] = np.abs(np.angle(np.exp(1j * (after - before))))
-    return score
+    ox, oy = moments.origin
+    return turn_scores(
+        seq.x, seq.y, moments.table, ox, oy, clusters.start, clusters.end, int(window)
+    )
 
 
-def _direction(seq: Sequence, moments: Moments, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Heading of the fitted line of each run ``[a, b]``, oriented from ``a`` towards ``b``."""
-    alpha = tls_lines(moments, a, b).alpha
-    ux, uy = -np.sin(alpha), np.cos(alpha)
-    forward = ux * (seq.x[b] - seq.x[a]) + uy * (seq.y[b] - seq.y[a]) >= 0.0
-    return np.where(forward, alpha + np.pi / 2, alpha - np.pi / 2)
+@jit
+def peak_positions(score: np.ndarray, start: np.ndarray, end: np.ndarray) -> np.ndarray:
+    """Kernel of :func:`peak_candidates`."""
+    n = score.shape[0]
+    if n < 3:
+        return np.zeros(0, dtype=np.int64)
+    inside = interior_mask(start, end, n)
+    peak = np.zeros(n, dtype=np.bool_)
+    for i in range(1, n - 1):
+        here = abs(score[i])
+        peak[i] = inside[i] and here > abs(score[i - 1]) and here > abs(score[i + 1])
+    return np.flatnonzero(peak)
 
 
 def peak_candidates(score: np.ndarray, clusters: Clusters) -> np.ndarray:
     """Positions ``i`` with ``|s_i| > |s_{i-1}|`` and ``|s_i| > |s_{i+1}|`` inside a cluster."""
-    n = score.shape[0]
-    if n < 3:
-        return np.zeros(0, dtype=np.intp)
-    magnitude = np.abs(score)
-    peak = np.zeros(n, dtype=bool)
-    peak[1:-1] = (magnitude[1:-1] > magnitude[:-2]) & (magnitude[1:-1] > magnitude[2:])
-    peak &= _interior(clusters, n)
-    return np.flatnonzero(peak)
+    return peak_positions(np.asarray(score, dtype=np.float64), clusters.start, clusters.end)
 
 
 def corner_side(score: np.ndarray, candidates: np.ndarray) -> np.ndarray:
@@ -115,19 +152,34 @@ def corner_side(score: np.ndarray, candidates: np.ndarray) -> np.ndarray:
     return np.where(before, -1, 1)
 
 
-def strongest_turn(seq: Sequence, window: int) -> int:
+@jit
+def ring_anchor(x: np.ndarray, y: np.ndarray, window: int) -> int:
     """Position of the largest turn angle of a closed ring, scored cyclically.
 
     The ring is scored twice, as it is and rotated by half, and each position
     takes the score from the copy in which it lies farther from the ends.
     """
-    n = len(seq)
+    n = x.shape[0]
     half = n // 2
-    whole = Clusters(np.array([0]), np.array([n - 1]), np.zeros(0, dtype=np.intp))
-    direct = turn_angle(seq, whole, window, Moments(seq.x, seq.y))
-    turned_seq = rotate(seq, half)
-    turned = turn_angle(turned_seq, whole, window, Moments(turned_seq.x, turned_seq.y))
-    p = np.arange(n)
-    shifted = (p - half) % n
-    nearer_end = np.minimum(p, n - 1 - p) >= np.minimum(shifted, n - 1 - shifted)
-    return int(np.argmax(np.where(nearer_end, direct, turned[shifted])))
+    start = np.zeros(1, dtype=np.int64)
+    end = np.full(1, n - 1, dtype=np.int64)
+    table, ox, oy = prefix_moments(x, y)
+    direct = turn_scores(x, y, table, ox, oy, start, end, window)
+    order = np.concatenate((np.arange(half, n), np.arange(0, half)))
+    turned_x, turned_y = x[order], y[order]
+    table, ox, oy = prefix_moments(turned_x, turned_y)
+    turned = turn_scores(turned_x, turned_y, table, ox, oy, start, end, window)
+    best, best_score = 0, -math.inf
+    for p in range(n):
+        shifted = (p - half) % n
+        value = direct[p]
+        if min(p, n - 1 - p) < min(shifted, n - 1 - shifted):
+            value = turned[shifted]
+        if value > best_score:
+            best, best_score = p, value
+    return best
+
+
+def strongest_turn(seq: Sequence, window: int) -> int:
+    """Position of the largest turn angle of a closed ring (see :func:`ring_anchor`)."""
+    return int(ring_anchor(seq.x, seq.y, int(window)))

@@ -27,11 +27,8 @@ import math
 
 import numpy as np
 
-from scanlines.steps.breakpoints import (
-    MAX_BRIDGED_GAP,
-    BreakpointRule,
-    thresholds,
-)
+from scanlines._jit import jit
+from scanlines.steps.breakpoints import MAX_BRIDGED_GAP, BreakpointRule, threshold
 from scanlines.steps.points import Sequence
 
 __all__ = [
@@ -45,13 +42,29 @@ __all__ = [
 ]
 
 
+@jit
 def literal_noise(d: np.ndarray) -> np.ndarray:
     """Step 2 as written, on neighbour distances ``d`` (length n - 1): a mask of n points."""
     n = d.shape[0] + 1
-    noise = np.zeros(n, dtype=bool)
-    if n >= 5:
-        i = np.arange(2, n - 2)
-        noise[i] = (d[i - 1] > d[i - 2]) & (d[i] > d[i + 1])
+    noise = np.zeros(n, dtype=np.bool_)
+    for i in range(2, n - 2):
+        noise[i] = d[i - 1] > d[i - 2] and d[i] > d[i + 1]
+    return noise
+
+
+@jit
+def isolated_noise_mask(x, y, r, gap, step: float, rule: np.ndarray, breaks) -> np.ndarray:
+    """Kernel of :func:`isolated_noise` on the sequence's arrays."""
+    n = x.shape[0]
+    noise = np.zeros(n, dtype=np.bool_)
+    for i in range(1, n - 1):
+        if not (breaks[i - 1] and breaks[i]):
+            continue
+        skip_gap = gap[i - 1] + gap[i]
+        if skip_gap > MAX_BRIDGED_GAP:
+            continue
+        d_skip = math.hypot(x[i + 1] - x[i - 1], y[i + 1] - y[i - 1])
+        noise[i] = d_skip < threshold(rule, r[i - 1], r[i + 1], skip_gap, step)
     return noise
 
 
@@ -60,24 +73,55 @@ def isolated_noise(seq: Sequence, rule: BreakpointRule, breaks: np.ndarray) -> n
 
     ``breaks`` is :func:`~scanlines.steps.breakpoints.is_break` of ``seq``.
     """
-    n = len(seq)
-    noise = np.zeros(n, dtype=bool)
-    if n < 3:
-        return noise
-    centre = np.flatnonzero(breaks[:-1] & breaks[1:]) + 1
-    if centre.size == 0:
-        return noise
-    skip_gap = seq.gap[centre - 1] + seq.gap[centre]
-    before, after = centre - 1, centre + 1
-    d_skip = np.hypot(seq.x[after] - seq.x[before], seq.y[after] - seq.y[before])
-    limit = thresholds(rule, seq.r[before], seq.r[after], skip_gap, seq.step)
-    noise[centre] = (skip_gap <= MAX_BRIDGED_GAP) & (d_skip < limit)
-    return noise
+    return isolated_noise_mask(
+        seq.x, seq.y, seq.r, seq.gap, seq.step, rule.as_array(), np.asarray(breaks, dtype=np.bool_)
+    )
 
 
+@jit
 def run_ids(breaks: np.ndarray) -> np.ndarray:
     """Cluster number of every position, given the break flags between positions."""
-    return np.r_[0, np.cumsum(breaks)]
+    ids = np.zeros(breaks.shape[0] + 1, dtype=np.int64)
+    for p in range(breaks.shape[0]):
+        ids[p + 1] = ids[p] + breaks[p]
+    return ids
+
+
+@jit
+def window_means(x, y, noise, window: int, breaks) -> tuple[np.ndarray, np.ndarray]:
+    """Kernel of :func:`replace_by_window_mean`: the moved coordinates."""
+    n = x.shape[0]
+    ids = run_ids(breaks)
+    cluster_start = np.zeros(n, dtype=np.int64)
+    cluster_end = np.zeros(n, dtype=np.int64)
+    for p in range(1, n):
+        cluster_start[p] = cluster_start[p - 1] if ids[p] == ids[p - 1] else p
+    cluster_end[n - 1] = n - 1
+    for p in range(n - 2, -1, -1):
+        cluster_end[p] = cluster_end[p + 1] if ids[p] == ids[p + 1] else p
+    sum_x = np.zeros(n + 1)
+    sum_y = np.zeros(n + 1)
+    for p in range(n):
+        sum_x[p + 1] = sum_x[p] + x[p]
+        sum_y[p + 1] = sum_y[p] + y[p]
+    centres = np.flatnonzero(noise)
+    mean_x = np.empty(centres.shape[0])
+    mean_y = np.empty(centres.shape[0])
+    for j, i in enumerate(centres):
+        lo = max(i - window // 2, cluster_start[i])
+        hi = min(i - window // 2 + window - 1, cluster_end[i])
+        mean_x[j] = (sum_x[hi + 1] - sum_x[lo]) / (hi - lo + 1)
+        mean_y[j] = (sum_y[hi + 1] - sum_y[lo]) / (hi - lo + 1)
+    new_x, new_y = x.copy(), y.copy()
+    # Left neighbours first, then the points, then right neighbours: where two
+    # windows overlap, a point takes the mean of the noise point to its left.
+    for offset in (-1, 0, 1):
+        for j, i in enumerate(centres):
+            target = i + offset
+            if 0 <= target < n and ids[target] == ids[i]:
+                new_x[target] = mean_x[j]
+                new_y[target] = mean_y[j]
+    return new_x, new_y
 
 
 def replace_by_window_mean(
@@ -89,26 +133,11 @@ def replace_by_window_mean(
     raw cluster of ``i`` (``breaks`` from the raw data), and neighbours across a
     raw break are left alone.
     """
-    centres = np.flatnonzero(noise)
-    if centres.size == 0:
+    if not np.any(noise):
         return seq
-    ids = run_ids(breaks)
-    bounds = np.flatnonzero(np.r_[True, np.diff(ids) != 0, True])
-    cluster_start, cluster_end = bounds[:-1], bounds[1:] - 1
-    c = ids[centres]
-    lo = np.maximum(centres - window // 2, cluster_start[c])
-    hi = np.minimum(centres - window // 2 + window - 1, cluster_end[c])
-    sum_x, sum_y = np.r_[0.0, np.cumsum(seq.x)], np.r_[0.0, np.cumsum(seq.y)]
-    count = hi - lo + 1
-    mean_x = (sum_x[hi + 1] - sum_x[lo]) / count
-    mean_y = (sum_y[hi + 1] - sum_y[lo]) / count
-    x, y = seq.x.copy(), seq.y.copy()
-    for offset in (-1, 0, 1):
-        target = centres + offset
-        inside = (target >= 0) & (target < len(seq))
-        inside[inside] &= ids[target[inside]] == c[inside]
-        x[target[inside]] = mean_x[inside]
-        y[target[inside]] = mean_y[inside]
+    x, y = window_means(
+        seq.x, seq.y, np.asarray(noise, dtype=np.bool_), int(window), np.asarray(breaks, bool)
+    )
     return seq.with_points(x, y)
 
 
@@ -116,6 +145,25 @@ MIN_NOISE_SIGMA = 1e-3
 """Floor (metres) of the estimated noise: ranges logged to 1 mm or 1 cm carry at
 least this much quantisation noise, and a noise-free simulation must not make
 the criterion divide by zero."""
+
+
+@jit
+def noise_from_ranges(r, gap, cluster_start, cluster_end) -> float:
+    """Kernel of :func:`estimate_noise`."""
+    n = r.shape[0]
+    interior = np.ones(n, dtype=np.bool_)
+    interior[cluster_start] = False
+    interior[cluster_end] = False
+    second = np.empty(n)
+    count = 0
+    for i in range(1, n - 1):
+        if interior[i] and gap[i - 1] == 1 and gap[i] == 1:
+            second[count] = abs(r[i + 1] - 2.0 * r[i] + r[i - 1])
+            count += 1
+    if count < 3:
+        return MIN_NOISE_SIGMA
+    sigma = np.median(second[:count]) / (0.6745 * math.sqrt(6.0))
+    return max(sigma, MIN_NOISE_SIGMA)
 
 
 def estimate_noise(seq: Sequence, cluster_start: np.ndarray, cluster_end: np.ndarray) -> float:
@@ -128,21 +176,20 @@ def estimate_noise(seq: Sequence, cluster_start: np.ndarray, cluster_end: np.nda
     edges, gives ``sigma``. Triples across a missing beam or a cluster end are
     left out.
     """
-    n = len(seq)
-    interior = np.ones(n, dtype=bool)
-    interior[cluster_start] = False
-    interior[cluster_end] = False
-    if n >= 2:
-        interior[1:-1] &= (seq.gap[:-1] == 1) & (seq.gap[1:] == 1)
-    i = np.flatnonzero(interior)
-    if i.size < 3:
+    if len(seq) == 0:
         return MIN_NOISE_SIGMA
-    second = np.abs(seq.r[i + 1] - 2.0 * seq.r[i] + seq.r[i - 1])
-    sigma = float(np.median(second)) / (0.6745 * math.sqrt(6.0))
-    return max(sigma, MIN_NOISE_SIGMA)
+    return float(
+        noise_from_ranges(
+            seq.r,
+            seq.gap,
+            np.asarray(cluster_start, dtype=np.int64),
+            np.asarray(cluster_end, dtype=np.int64),
+        )
+    )
 
 
-def small_clusters(breaks: np.ndarray, min_points: int, *, seam_joined: bool = False) -> np.ndarray:
+@jit
+def small_clusters(breaks: np.ndarray, min_points: int, seam_joined: bool = False) -> np.ndarray:
     """Mask of the points of clusters with fewer than ``min_points`` returns.
 
     A cluster of one or two returns between two jumps is, far more often than a
@@ -150,9 +197,11 @@ def small_clusters(breaks: np.ndarray, min_points: int, *, seam_joined: bool = F
     echo. ``seam_joined`` counts the first and last clusters of a full circle
     whose seam is continuous as one.
     """
-    n = breaks.shape[0] + 1
     ids = run_ids(breaks)
     sizes = np.bincount(ids)
-    if seam_joined and sizes.size > 1:
+    if seam_joined and sizes.shape[0] > 1:
         sizes[0] = sizes[-1] = sizes[0] + sizes[-1]
-    return sizes[ids] < min_points if n else np.zeros(0, dtype=bool)
+    out = np.empty(ids.shape[0], dtype=np.bool_)
+    for p in range(ids.shape[0]):
+        out[p] = sizes[ids[p]] < min_points
+    return out

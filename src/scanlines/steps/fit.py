@@ -22,9 +22,12 @@ References
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
+
+from scanlines._jit import jit
 
 __all__ = [
     "FITS",
@@ -38,7 +41,32 @@ __all__ = [
 ]
 
 FITS = ("tls", "paper")
+FIT_CODES = {"tls": 0, "paper": 1}
+TLS, PAPER = 0, 1
 PAPER_SUBSETS = 5
+
+
+@jit
+def prefix_moments(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, float, float]:
+    """Running sums ``(Sx, Sy, Sxx, Sxy, Syy)`` (shape (5, n + 1)) about the mean point."""
+    n = x.shape[0]
+    ox = 0.0
+    oy = 0.0
+    for i in range(n):  # a plain loop: the same sum compiled or not (numpy's is pairwise)
+        ox += x[i]
+        oy += y[i]
+    if n:
+        ox, oy = ox / n, oy / n
+    table = np.zeros((5, n + 1))
+    for i in range(n):
+        u = x[i] - ox
+        v = y[i] - oy
+        table[0, i + 1] = table[0, i] + u
+        table[1, i + 1] = table[1, i] + v
+        table[2, i + 1] = table[2, i] + u * u
+        table[3, i + 1] = table[3, i] + u * v
+        table[4, i + 1] = table[4, i] + v * v
+    return table, ox, oy
 
 
 class Moments:
@@ -46,33 +74,30 @@ class Moments:
 
     Coordinates are taken relative to their mean, which keeps the sums well
     conditioned; ``origin`` is added back where absolute positions matter.
+    ``table`` holds the running sums of ``x, y, xx, xy, yy`` as rows.
     """
 
-    __slots__ = ("origin", "sx", "sxx", "sxy", "sy", "syy")
+    __slots__ = ("origin", "table")
 
     def __init__(self, x: np.ndarray, y: np.ndarray) -> None:
-        ox = float(x.mean()) if x.size else 0.0
-        oy = float(y.mean()) if y.size else 0.0
+        x = np.ascontiguousarray(x, dtype=np.float64)
+        y = np.ascontiguousarray(y, dtype=np.float64)
+        self.table, ox, oy = prefix_moments(x, y)
         self.origin = (ox, oy)
-        u, v = x - ox, y - oy
-        zero = np.zeros(1)
-        self.sx = np.concatenate((zero, np.cumsum(u)))
-        self.sy = np.concatenate((zero, np.cumsum(v)))
-        self.sxx = np.concatenate((zero, np.cumsum(u * u)))
-        self.sxy = np.concatenate((zero, np.cumsum(u * v)))
-        self.syy = np.concatenate((zero, np.cumsum(v * v)))
+
+    @property
+    def sx(self) -> np.ndarray:
+        return self.table[0]
+
+    @property
+    def sy(self) -> np.ndarray:
+        return self.table[1]
 
     def sums(self, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, ...]:
         """``n, Sx, Sy, Sxx, Sxy, Syy`` over inclusive runs ``[a, b]`` (relative coordinates)."""
         lo, hi = a, b + 1
-        return (
-            (hi - lo).astype(np.float64),
-            self.sx[hi] - self.sx[lo],
-            self.sy[hi] - self.sy[lo],
-            self.sxx[hi] - self.sxx[lo],
-            self.sxy[hi] - self.sxy[lo],
-            self.syy[hi] - self.syy[lo],
-        )
+        t = self.table
+        return ((hi - lo).astype(np.float64), *(t[row, hi] - t[row, lo] for row in range(5)))
 
 
 @dataclass(frozen=True, slots=True)
@@ -84,77 +109,158 @@ class Lines:
     sse: np.ndarray
 
 
-def _hesse(alpha: np.ndarray, rho: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+@jit
+def hesse(alpha: float, rho: float) -> tuple[float, float]:
     """Normalise to ``rho >= 0`` and ``alpha`` in ``(-pi, pi]``."""
-    flip = rho < 0.0
-    rho = np.where(flip, -rho, rho)
-    alpha = np.where(flip, alpha + np.pi, alpha)
-    alpha = np.pi - np.mod(np.pi - alpha, 2.0 * np.pi)
-    return alpha, rho
+    if rho < 0.0:
+        rho = -rho
+        alpha = alpha + math.pi
+    return math.pi - (math.pi - alpha) % (2.0 * math.pi), rho
+
+
+@jit
+def tls_normal(
+    table: np.ndarray, ox: float, oy: float, a: int, b: int
+) -> tuple[float, float, float, float]:
+    """Total-least-squares line of run ``[a, b]`` as ``(cos alpha, sin alpha, rho, sse)``.
+
+    The normal is the eigenvector of the smaller eigenvalue of the scatter
+    matrix, from the half-angle formulas (no trigonometric calls: this is the
+    innermost operation of the method). ``rho >= 0``; NaN for an empty run.
+    """
+    n = b + 1 - a
+    if n <= 0:
+        return math.nan, math.nan, math.nan, math.nan
+    sx = table[0, b + 1] - table[0, a]
+    sy = table[1, b + 1] - table[1, a]
+    mx, my = sx / n, sy / n
+    cxx = table[2, b + 1] - table[2, a] - sx * mx
+    cxy = table[3, b + 1] - table[3, a] - sx * my
+    cyy = table[4, b + 1] - table[4, a] - sy * my
+    spread = cyy - cxx
+    h = math.sqrt(spread * spread + 4.0 * cxy * cxy)
+    sse = max(0.5 * (cxx + cyy) - 0.5 * h, 0.0)
+    if h > 0.0:  # normal angle alpha = atan2(-2 cxy, cyy - cxx) / 2, in (-pi/2, pi/2]
+        nx = math.sqrt(max(0.5 * (1.0 + spread / h), 0.0))
+        ny = math.copysign(math.sqrt(max(0.5 * (1.0 - spread / h), 0.0)), -cxy)
+    else:
+        nx, ny = 1.0, 0.0
+    rho = (mx + ox) * nx + (my + oy) * ny
+    if rho < 0.0:
+        return -nx, -ny, -rho, sse
+    return nx, ny, rho, sse
+
+
+@jit
+def tls_run(table: np.ndarray, ox: float, oy: float, a: int, b: int) -> tuple[float, float, float]:
+    """Total-least-squares line ``(rho, alpha, sse)`` of run ``[a, b]``; NaN for an empty run."""
+    nx, ny, rho, sse = tls_normal(table, ox, oy, a, b)
+    return rho, math.atan2(ny, nx), sse
+
+
+@jit
+def paper_run(
+    table: np.ndarray, ox: float, oy: float, a: int, b: int
+) -> tuple[float, float, float]:
+    """Eq. 15-17 on the five sub-set means of run ``[a, b]``; ``sse`` is eq. 14.
+
+    NaN when the line has no slope (the x spread of the means is rounding
+    error next to their y spread) or the run is empty.
+    """
+    n = b + 1 - a
+    if n <= 0:
+        return math.nan, math.nan, math.nan
+    parts = min(n, PAPER_SUBSETS)
+    m = 0.0
+    sum_x = sum_y = sum_xx = sum_xy = sum_yy = 0.0
+    for j in range(parts):
+        lo = min(a + (j * n) // parts, a + n)
+        hi = min(a + ((j + 1) * n) // parts, a + n)
+        if hi <= lo:
+            continue
+        mean_x = (table[0, hi] - table[0, lo]) / (hi - lo)
+        mean_y = (table[1, hi] - table[1, lo]) / (hi - lo)
+        m += 1.0
+        sum_x += mean_x
+        sum_y += mean_y
+        sum_xx += mean_x * mean_x
+        sum_xy += mean_x * mean_y
+        sum_yy += mean_y * mean_y
+    denominator = m * sum_xx - sum_x * sum_x
+    if denominator <= 1e-18 * (m * sum_yy - sum_y * sum_y):
+        return math.nan, math.nan, math.nan
+    k = (m * sum_xy - sum_x * sum_y) / denominator
+    intercept = (sum_xx * sum_y - sum_x * sum_xy) / denominator
+    sx = table[0, b + 1] - table[0, a]
+    sy = table[1, b + 1] - table[1, a]
+    sxx = table[2, b + 1] - table[2, a]
+    sxy = table[3, b + 1] - table[3, a]
+    syy = table[4, b + 1] - table[4, a]
+    sse = syy - 2 * k * sxy - 2 * intercept * sy + k * k * sxx + 2 * k * intercept * sx
+    sse = max(sse + n * intercept * intercept, 0.0)
+    # y - oy = k (x - ox) + b  <=>  -k x + y = b + oy - k ox
+    norm = math.hypot(k, 1.0)
+    alpha = math.atan2(1.0 / norm, -k / norm)
+    rho = (intercept + oy - k * ox) / norm
+    alpha, rho = hesse(alpha, rho)
+    return rho, alpha, sse
+
+
+@jit
+def fit_run(
+    fit: int, table: np.ndarray, ox: float, oy: float, a: int, b: int
+) -> tuple[float, float, float]:
+    """Line of run ``[a, b]`` by fit code (:data:`TLS` or :data:`PAPER`)."""
+    if fit == PAPER:
+        return paper_run(table, ox, oy, a, b)
+    return tls_run(table, ox, oy, a, b)
+
+
+@jit
+def fit_many(
+    fit: int, table: np.ndarray, ox: float, oy: float, a: np.ndarray, b: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`fit_run` over runs ``[a[k], b[k]]``: arrays ``rho, alpha, sse``."""
+    count = a.shape[0]
+    rho = np.empty(count)
+    alpha = np.empty(count)
+    sse = np.empty(count)
+    for k in range(count):
+        rho[k], alpha[k], sse[k] = fit_run(fit, table, ox, oy, a[k], b[k])
+    return rho, alpha, sse
+
+
+@jit
+def line_intersection(rho_i: float, alpha_i: float, rho_j: float, alpha_j: float):
+    """Intersection ``(x, y)`` of two Hesse lines; NaN for parallel lines."""
+    det = math.sin(alpha_j - alpha_i)
+    if not abs(det) > 1e-12:
+        return math.nan, math.nan
+    x = (rho_i * math.sin(alpha_j) - rho_j * math.sin(alpha_i)) / det
+    y = (rho_j * math.cos(alpha_i) - rho_i * math.cos(alpha_j)) / det
+    return x, y
+
+
+def _fit(fit: int, moments: Moments, a: np.ndarray, b: np.ndarray) -> Lines:
+    ox, oy = moments.origin
+    a = np.asarray(a, dtype=np.int64)
+    b = np.asarray(b, dtype=np.int64)
+    return Lines(*fit_many(fit, moments.table, ox, oy, a, b))
 
 
 def tls_lines(moments: Moments, a: np.ndarray, b: np.ndarray) -> Lines:
     """Total-least-squares lines of runs ``[a, b]``; ``sse`` is the orthogonal error."""
-    n, sx, sy, sxx, sxy, syy = moments.sums(a, b)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        mx, my = sx / n, sy / n
-        cxx, cxy, cyy = sxx - sx * mx, sxy - sx * my, syy - sy * my
-    half_diff = 0.5 * (cxx - cyy)
-    alpha = 0.5 * np.arctan2(-2.0 * cxy, cyy - cxx)
-    sse = np.maximum(0.5 * (cxx + cyy) - np.hypot(half_diff, cxy), 0.0)
-    ox, oy = moments.origin
-    rho = (mx + ox) * np.cos(alpha) + (my + oy) * np.sin(alpha)
-    alpha, rho = _hesse(alpha, rho)
-    return Lines(rho, alpha, sse)
-
-
-def _subset_means(moments: Moments, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, ...]:
-    """Mean points of the (up to) five sub-sets of each run: arrays of shape (runs, 5)."""
-    n = b - a + 1
-    parts = np.minimum(n, PAPER_SUBSETS)
-    j = np.arange(PAPER_SUBSETS + 1)
-    edges = a[:, None] + (j[None, :] * n[:, None]) // np.maximum(parts, 1)[:, None]
-    edges = np.minimum(edges, (a + n)[:, None])
-    lo, hi = edges[:, :-1], edges[:, 1:]
-    used = (j[None, :-1] < parts[:, None]) & (hi > lo)
-    count = np.where(used, hi - lo, 1)
-    mean_x = np.where(used, (moments.sx[hi] - moments.sx[lo]) / count, 0.0)
-    mean_y = np.where(used, (moments.sy[hi] - moments.sy[lo]) / count, 0.0)
-    return mean_x, mean_y, used
+    return _fit(TLS, moments, a, b)
 
 
 def paper_lines(moments: Moments, a: np.ndarray, b: np.ndarray) -> Lines:
     """Eq. 15-17 on the five sub-set means of each run; ``sse`` is eq. 14 (vertical, squared)."""
-    mean_x, mean_y, used = _subset_means(moments, a, b)
-    m = used.sum(axis=1).astype(np.float64)
-    sum_x, sum_y = mean_x.sum(axis=1), mean_y.sum(axis=1)
-    sum_xx, sum_xy = (mean_x * mean_x).sum(axis=1), (mean_x * mean_y).sum(axis=1)
-    sum_yy = (mean_y * mean_y).sum(axis=1)
-    denominator = m * sum_xx - sum_x * sum_x
-    # No slope: the x spread is rounding error next to the y spread (slope beyond 1e9).
-    vertical = denominator <= 1e-18 * (m * sum_yy - sum_y * sum_y)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        k = np.where(vertical, np.nan, (m * sum_xy - sum_x * sum_y) / denominator)
-        intercept = np.where(vertical, np.nan, (sum_xx * sum_y - sum_x * sum_xy) / denominator)
-    n, sx, sy, sxx, sxy, syy = moments.sums(a, b)
-    # Intercept in relative coordinates is the same line; shift back to absolute below.
-    with np.errstate(invalid="ignore", over="ignore"):
-        sse = syy - 2 * k * sxy - 2 * intercept * sy + k * k * sxx + 2 * k * intercept * sx
-        sse = sse + n * intercept * intercept
-    sse = np.where(vertical, np.nan, np.maximum(sse, 0.0))
-    ox, oy = moments.origin
-    # y - oy = k (x - ox) + b  <=>  -k x + y = b + oy - k ox
-    norm = np.hypot(k, 1.0)
-    with np.errstate(invalid="ignore"):
-        alpha = np.arctan2(1.0 / norm, -k / norm)
-        rho = (intercept + oy - k * ox) / norm
-    alpha, rho = _hesse(alpha, rho)
-    return Lines(rho, alpha, sse)
+    return _fit(PAPER, moments, a, b)
 
 
 def fit_runs(fit: str, moments: Moments, a: np.ndarray, b: np.ndarray) -> Lines:
     """Dispatch to :func:`tls_lines` or :func:`paper_lines` by name."""
-    return paper_lines(moments, a, b) if fit == "paper" else tls_lines(moments, a, b)
+    return _fit(FIT_CODES[fit], moments, a, b)
 
 
 MIN_INCIDENCE_WEIGHT = 0.1
@@ -162,52 +268,112 @@ MIN_INCIDENCE_WEIGHT = 0.1
 seen closer to grazing, model errors, not range noise, dominate the residuals."""
 
 
+@jit
+def inverse_square_sums(r: np.ndarray) -> np.ndarray:
+    """Running sums of ``1 / r^2`` (a micrometre floor keeps one absurd range harmless)."""
+    out = np.zeros(r.shape[0] + 1)
+    for i in range(r.shape[0]):
+        ri = max(r[i], 1e-6)
+        out[i + 1] = out[i] + 1.0 / (ri * ri)
+    return out
+
+
+@jit
+def run_cost(
+    fit: int, table: np.ndarray, ox: float, oy: float, inv_r2: np.ndarray, a: int, b: int
+) -> float:
+    """Fitting error of run ``[a, b]``; in noise units when ``inv_r2`` (running sums) is given.
+
+    Range noise moves a return along its beam; on a line at incidence ``beta``
+    only ``cos(beta)`` of it shows as an orthogonal residual, so the error is
+    divided by the mean ``cos^2(beta_i) = (rho / r_i)^2`` of the run's points.
+    An empty ``inv_r2`` gives the plain error.
+    """
+    if fit == PAPER:
+        rho, _, sse = paper_run(table, ox, oy, a, b)
+    else:
+        _, _, rho, sse = tls_normal(table, ox, oy, a, b)
+    if inv_r2.shape[0] == 0 or b < a:
+        return sse
+    mean_inv_r2 = (inv_r2[b + 1] - inv_r2[a]) / (b - a + 1)
+    weight = rho * rho * mean_inv_r2
+    if weight != weight:  # NaN line: the cost stays NaN
+        return sse
+    return sse / min(max(weight, MIN_INCIDENCE_WEIGHT), 1.0)
+
+
+@jit
+def run_costs(
+    fit: int,
+    table: np.ndarray,
+    ox: float,
+    oy: float,
+    inv_r2: np.ndarray,
+    a: np.ndarray,
+    b: np.ndarray,
+) -> np.ndarray:
+    """:func:`run_cost` of each run ``[a[k], b[k]]``."""
+    out = np.empty(a.shape[0])
+    for k in range(a.shape[0]):
+        out[k] = run_cost(fit, table, ox, oy, inv_r2, a[k], b[k])
+    return out
+
+
 class RunCost:
     """Fitting error of runs ``[a, b]``, optionally in units of their expected noise.
 
-    Range noise moves a return along its beam; on a line at incidence ``beta``
-    only ``cos(beta)`` of it shows as an orthogonal residual. With ``r`` given,
-    each run's error is divided by the mean ``cos^2(beta_i) = (rho / r_i)^2`` of its
-    points, so one radial noise level serves walls seen head-on and slanted
-    alike. Without ``r`` it is the plain error of the fit.
+    With ``r`` given, each run's error is divided by the mean ``cos^2`` of the
+    incidence of its points (see :func:`run_cost`), so one radial noise level
+    serves walls seen head-on and slanted alike. Without ``r`` it is the plain
+    error of the fit.
     """
 
-    __slots__ = ("fit", "moments", "sum_inv_r2")
+    __slots__ = ("fit", "inv_r2", "moments")
 
     def __init__(self, moments: Moments, fit: str, r: np.ndarray | None = None) -> None:
         self.moments = moments
         self.fit = fit
-        if r is None:
-            self.sum_inv_r2 = None
-        else:  # a micrometre floor keeps one absurd range from poisoning the running sum
-            inverse = 1.0 / np.maximum(r, 1e-6) ** 2
-            self.sum_inv_r2 = np.concatenate(([0.0], np.cumsum(inverse)))
+        self.inv_r2 = (
+            np.zeros(0) if r is None else inverse_square_sums(np.asarray(r, dtype=np.float64))
+        )
 
     def many(self, *runs: tuple[np.ndarray, np.ndarray]) -> list[np.ndarray]:
-        """The cost of several sets of runs in one call (one fit over all of them)."""
+        """The cost of several sets of runs in one call."""
         sizes = [len(a) for a, _ in runs]
         joined = self(np.concatenate([a for a, _ in runs]), np.concatenate([b for _, b in runs]))
         return np.split(joined, np.cumsum(sizes)[:-1])
 
     def __call__(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        lines = fit_runs(self.fit, self.moments, a, b)
-        if self.sum_inv_r2 is None:
-            return lines.sse
-        mean_inv_r2 = (self.sum_inv_r2[b + 1] - self.sum_inv_r2[a]) / (b - a + 1)
-        with np.errstate(invalid="ignore", over="ignore"):
-            weight = np.clip(lines.rho * lines.rho * mean_inv_r2, MIN_INCIDENCE_WEIGHT, 1.0)
-        return lines.sse / weight
+        ox, oy = self.moments.origin
+        return run_costs(
+            FIT_CODES[self.fit],
+            self.moments.table,
+            ox,
+            oy,
+            self.inv_r2,
+            np.asarray(a, dtype=np.int64),
+            np.asarray(b, dtype=np.int64),
+        )
 
 
+@jit
 def run_labels(a: np.ndarray, b: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
     """Positions covered by runs ``[a, b]`` and the run number of each (runs may overlap)."""
-    lengths = b - a + 1
-    run = np.repeat(np.arange(a.shape[0]), lengths)
-    start_of_run = np.repeat(np.cumsum(lengths) - lengths, lengths)
-    position = np.repeat(a, lengths) + (np.arange(run.shape[0]) - start_of_run)
+    total = 0
+    for k in range(a.shape[0]):
+        total += max(b[k] - a[k] + 1, 0)
+    position = np.empty(total, dtype=np.int64)
+    run = np.empty(total, dtype=np.int64)
+    i = 0
+    for k in range(a.shape[0]):
+        for p in range(a[k], b[k] + 1):
+            position[i] = p
+            run[i] = k
+            i += 1
     return position, run
 
 
+@jit
 def point_residuals(
     x: np.ndarray,
     y: np.ndarray,
@@ -217,8 +383,12 @@ def point_residuals(
     run: np.ndarray,
 ) -> np.ndarray:
     """Signed orthogonal distance of each labelled point to its run's line."""
-    a = alpha[run]
-    return x[position] * np.cos(a) + y[position] * np.sin(a) - rho[run]
+    cos_a, sin_a = np.cos(alpha), np.sin(alpha)
+    out = np.empty(position.shape[0])
+    for i in range(position.shape[0]):
+        p, k = position[i], run[i]
+        out[i] = x[p] * cos_a[k] + y[p] * sin_a[k] - rho[k]
+    return out
 
 
 def line_covariances(
@@ -237,32 +407,52 @@ def line_covariances(
     at incidence ``cos(theta - alpha) = rho / r`` moves the point ``e rho / r``
     off the line. With ``s`` the point's position along the line from the run's
     centroid ``t0``, ``d alpha = -sum s e' / sum s^2`` and
-    ``d rho = mean(e') + t0 d alpha`` (after [2]_).
+    ``d rho = mean(e') + t0 d alpha`` (after [2]_). Degenerate runs (two
+    points, a paper fit without slope) give inf or NaN entries, not errors.
     """
-    runs = rho.shape[0]
-    if runs == 0:
-        return np.zeros((0, 2, 2))
-    # Degenerate runs (two points, a paper fit without slope) give inf/NaN, not errors.
     with np.errstate(all="ignore"):
-        return _covariances(x, y, r, rho, alpha, position, run, range_sigma)
+        return covariances(
+            np.asarray(x, dtype=np.float64),
+            np.asarray(y, dtype=np.float64),
+            np.asarray(r, dtype=np.float64),
+            np.asarray(rho, dtype=np.float64),
+            np.asarray(alpha, dtype=np.float64),
+            np.asarray(position, dtype=np.int64),
+            np.asarray(run, dtype=np.int64),
+            float(range_sigma),
+        )
 
 
-def _covariances(x, y, r, rho, alpha, position, run, range_sigma):
+@jit
+def covariances(x, y, r, rho, alpha, position, run, range_sigma):
+    """The kernel of :func:`line_covariances`: an array of shape (runs, 2, 2)."""
     runs = rho.shape[0]
-    a = alpha[run]
-    along = -x[position] * np.sin(a) + y[position] * np.cos(a)
-    var = (range_sigma * rho[run] / r[position]) ** 2
-    count = np.bincount(run, minlength=runs).astype(np.float64)
-    t0 = np.bincount(run, along, minlength=runs) / np.maximum(count, 1.0)
-    s = along - t0[run]
-    s2 = np.bincount(run, s * s, minlength=runs)
-    var_alpha = np.bincount(run, s * s * var, minlength=runs) / (s2 * s2)
-    var_mean = np.bincount(run, var, minlength=runs) / (count * count)
-    cov_mean_alpha = -np.bincount(run, s * var, minlength=runs) / (count * s2)
-    var_rho = var_mean + t0 * t0 * var_alpha + 2.0 * t0 * cov_mean_alpha
-    cov_rho_alpha = cov_mean_alpha + t0 * var_alpha
+    cos_a, sin_a = np.cos(alpha), np.sin(alpha)
+    count = np.zeros(runs)
+    along_sum = np.zeros(runs)
+    for i in range(position.shape[0]):
+        p, k = position[i], run[i]
+        count[k] += 1.0
+        along_sum[k] += -x[p] * sin_a[k] + y[p] * cos_a[k]
+    t0 = along_sum / np.maximum(count, 1.0)
+    s2 = np.zeros(runs)
+    s2_var = np.zeros(runs)
+    s_var = np.zeros(runs)
+    var_sum = np.zeros(runs)
+    for i in range(position.shape[0]):
+        p, k = position[i], run[i]
+        s = -x[p] * sin_a[k] + y[p] * cos_a[k] - t0[k]
+        var = (range_sigma * rho[k] / r[p]) ** 2
+        s2[k] += s * s
+        s2_var[k] += s * s * var
+        s_var[k] += s * var
+        var_sum[k] += var
     out = np.empty((runs, 2, 2))
-    out[:, 0, 0] = var_rho
-    out[:, 0, 1] = out[:, 1, 0] = cov_rho_alpha
-    out[:, 1, 1] = var_alpha
+    for k in range(runs):
+        var_alpha = s2_var[k] / (s2[k] * s2[k])
+        var_mean = var_sum[k] / (count[k] * count[k])
+        cov_mean_alpha = -s_var[k] / (count[k] * s2[k])
+        out[k, 0, 0] = var_mean + t0[k] * t0[k] * var_alpha + 2.0 * t0[k] * cov_mean_alpha
+        out[k, 0, 1] = out[k, 1, 0] = cov_mean_alpha + t0[k] * var_alpha
+        out[k, 1, 1] = var_alpha
     return out

@@ -25,18 +25,20 @@ References
 
 from __future__ import annotations
 
-import bisect
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from scanlines._jit import jit
 from scanlines.steps.breakpoints import Clusters
-from scanlines.steps.fit import RunCost
+from scanlines.steps.fit import FIT_CODES, RunCost, run_cost
 
 __all__ = ["CRITERIA", "Selection", "Sweep", "criterion_values", "sweep", "threshold_grid"]
 
 CRITERIA = ("bic", "sse")
+CRITERION_CODES = {"bic": 0, "sse": 1}
+BIC, SSE = 0, 1
 
 
 @dataclass(frozen=True, slots=True)
@@ -59,33 +61,45 @@ def threshold_grid(low: float, high: float, step: float, max_evaluations: int) -
     return low + step * np.arange(count)
 
 
-def _insert_in_rank_order(
-    clusters: Clusters, candidates: np.ndarray, shared: bool
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+@jit
+def insert_in_rank_order(
+    start: np.ndarray, end: np.ndarray, n: int, candidates: np.ndarray, shared: bool
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Insert candidates best first; return, per candidate, accepted flag and its parent run.
 
     A candidate is dropped when a part it would create is too short (Step 5: a
     corner needs at least two points on each side of it).
     """
-    starts = clusters.start.tolist()
-    ends = dict(zip(starts, clusters.end.tolist(), strict=True))
-    m = len(candidates)
-    accepted = np.zeros(m, dtype=bool)
-    parent_a = np.zeros(m, dtype=np.intp)
-    parent_b = np.zeros(m, dtype=np.intp)
-    for j, c in enumerate(candidates.tolist()):
-        k = bisect.bisect_right(starts, c) - 1
-        a = starts[k]
-        b = ends[a]
-        second = c if shared else c + 1
+    run_end = np.full(n, -1, dtype=np.int64)  # end of the run starting at a position
+    for c in range(start.shape[0]):
+        run_end[start[c]] = end[c]
+    m = candidates.shape[0]
+    accepted = np.zeros(m, dtype=np.bool_)
+    parent_a = np.zeros(m, dtype=np.int64)
+    parent_b = np.zeros(m, dtype=np.int64)
+    for j in range(m):
+        c = candidates[j]
+        a = c
+        while run_end[a] < 0:
+            a -= 1
+        b = run_end[a]
         if c - a < (2 if shared else 1) or b - c < 2:
             continue
         accepted[j] = True
         parent_a[j], parent_b[j] = a, b
-        ends[a] = c
-        bisect.insort(starts, second)
-        ends[second] = b
-    return accepted, parent_a, parent_b, np.where(shared, candidates, candidates + 1)
+        run_end[a] = c
+        run_end[c if shared else c + 1] = b
+    return accepted, parent_a, parent_b
+
+
+@jit
+def criterion_value(criterion: int, sse: float, segments: int, n_points: int, sigma, penalty):
+    """The criterion of one segmentation (smaller is better); NaN SSE counts as inf."""
+    if sse != sse:
+        sse = math.inf
+    if criterion == SSE:
+        return sse
+    return sse / (sigma * sigma) + penalty * math.log(max(n_points, 2)) * segments
 
 
 def criterion_values(
@@ -97,10 +111,13 @@ def criterion_values(
     penalty: float,
 ) -> np.ndarray:
     """The criterion for each evaluated segmentation (smaller is better)."""
-    sse = np.where(np.isnan(sse), np.inf, sse)
-    if criterion == "sse":
-        return sse
-    return sse / (sigma * sigma) + penalty * math.log(max(n_points, 2)) * segments
+    code = CRITERION_CODES[criterion]
+    return np.array(
+        [
+            criterion_value(code, v, k, n_points, sigma, penalty)
+            for v, k in zip(sse, segments, strict=True)
+        ]
+    )
 
 
 @dataclass(frozen=True, slots=True)
@@ -122,21 +139,91 @@ class Sweep:
 
     def corners(self, level: int) -> np.ndarray:
         """Positions of the corners of the cut at ``level``, sorted."""
-        return np.sort(self.ranked[:level][self.accepted[:level]])
+        return level_corners(self.ranked, self.accepted, level)
 
     def choose(self, criterion: str, sigma: float, penalty: float) -> Selection:
         """The best tried threshold by ``criterion`` (the first one on a tie)."""
-        values = criterion_values(
-            criterion,
-            self.sse[self.levels],
-            self.segments[self.levels],
-            self.n_points,
-            sigma,
-            penalty,
+        code = CRITERION_CODES[criterion]
+        best, values = best_level(
+            code, self.sse, self.segments, self.levels, self.n_points, sigma, penalty
         )
-        best = int(np.argmin(values))
         level = int(self.levels[best])
         return Selection(self.corners(level), float(self.thresholds[best]), self.thresholds, values)
+
+
+@jit
+def level_corners(ranked: np.ndarray, accepted: np.ndarray, level: int) -> np.ndarray:
+    """Sorted positions of the accepted candidates among the ``level`` best."""
+    return np.sort(ranked[:level][accepted[:level]])
+
+
+@jit
+def best_level(criterion: int, sse, segments, levels, n_points: int, sigma, penalty):
+    """Index of the best tried threshold (the first on a tie) and every criterion value."""
+    values = np.empty(levels.shape[0])
+    for t in range(levels.shape[0]):
+        level = levels[t]
+        values[t] = criterion_value(
+            criterion, sse[level], segments[level], n_points, sigma, penalty
+        )
+    return np.argmin(values), values
+
+
+@jit
+def sweep_levels(
+    fit: int,
+    table: np.ndarray,
+    ox: float,
+    oy: float,
+    inv_r2: np.ndarray,
+    start: np.ndarray,
+    end: np.ndarray,
+    n: int,
+    candidates: np.ndarray,
+    scores: np.ndarray,
+    grid: np.ndarray,
+    use_grid: bool,
+    max_evaluations: int,
+    shared: bool,
+):
+    """Kernel of :func:`sweep`: ``ranked, accepted, sse, segments, thresholds, levels``."""
+    magnitude = np.abs(scores)
+    order = np.argsort(-magnitude, kind="mergesort")
+    ranked, ranked_score = candidates[order], magnitude[order]
+    # Only candidates that some tried threshold keeps can change a cut.
+    if not use_grid:
+        useful = min(ranked.shape[0], max_evaluations)
+    elif grid.shape[0]:
+        useful = np.count_nonzero(ranked_score > np.min(grid))
+    else:
+        useful = 0
+    ranked, ranked_score = ranked[:useful], ranked_score[:useful]
+    accepted, parent_a, parent_b = insert_in_rank_order(start, end, n, ranked, shared)
+
+    base = 0.0
+    for c in range(start.shape[0]):
+        base += run_cost(fit, table, ox, oy, inv_r2, start[c], end[c])
+    sse = np.empty(useful + 1)
+    segments = np.empty(useful + 1, dtype=np.int64)
+    sse[0], segments[0] = base, start.shape[0]
+    for j in range(useful):
+        gain = 0.0
+        if accepted[j]:
+            a, b, c = parent_a[j], parent_b[j], ranked[j]
+            gain = (
+                run_cost(fit, table, ox, oy, inv_r2, a, c)
+                + run_cost(fit, table, ox, oy, inv_r2, c if shared else c + 1, b)
+                - run_cost(fit, table, ox, oy, inv_r2, a, b)
+            )
+        sse[j + 1] = sse[j] + gain
+        segments[j + 1] = segments[j] + accepted[j]
+    if not use_grid:
+        levels = np.arange(min(useful, max_evaluations) + 1)
+        thresholds = np.append(ranked_score, 0.0)[levels]
+    else:
+        thresholds = grid.copy()
+        levels = np.searchsorted(-ranked_score, -thresholds)  # count of scores > t
+    return ranked, accepted, sse, segments, thresholds, levels
 
 
 def sweep(
@@ -159,34 +246,29 @@ def sweep(
     point ends one segment and starts the next, as in the paper); otherwise into
     ``[a, c]`` and ``[c + 1, b]``.
     """
-    magnitude = np.abs(scores)
-    order = np.argsort(-magnitude, kind="stable")
-    ranked, ranked_score = candidates[order], magnitude[order]
-    # Only candidates that some tried threshold keeps can change a cut.
-    if grid is None:
-        useful = min(len(ranked), max_evaluations)
-    else:
-        useful = int(np.count_nonzero(ranked_score > np.min(grid))) if len(grid) else 0
-    ranked, ranked_score = ranked[:useful], ranked_score[:useful]
-    accepted, parent_a, parent_b, second = _insert_in_rank_order(clusters, ranked, shared)
-
-    base = cost(clusters.start, clusters.end).sum() if len(clusters) else 0.0
-    gain = np.zeros(len(ranked))
-    if accepted.any():
-        a, b, c, c2 = parent_a[accepted], parent_b[accepted], ranked[accepted], second[accepted]
-        before, after, whole = cost.many((a, c), (c2, b), (a, b))
-        gain[accepted] = before + after - whole
-    if grid is None:
-        levels = np.arange(min(len(ranked), max_evaluations) + 1)
-        thresholds = np.r_[ranked_score, 0.0][levels]
-    else:
-        thresholds = np.asarray(grid, dtype=float)
-        levels = np.searchsorted(-ranked_score, -thresholds, side="left")  # count of scores > t
+    ox, oy = cost.moments.origin
+    n = cost.moments.table.shape[1] - 1
+    ranked, accepted, sse, segments, thresholds, levels = sweep_levels(
+        FIT_CODES[cost.fit],
+        cost.moments.table,
+        ox,
+        oy,
+        cost.inv_r2,
+        clusters.start,
+        clusters.end,
+        n,
+        np.asarray(candidates, dtype=np.int64),
+        np.asarray(scores, dtype=np.float64),
+        np.zeros(0) if grid is None else np.asarray(grid, dtype=np.float64),
+        grid is not None,
+        int(max_evaluations),
+        bool(shared),
+    )
     return Sweep(
         ranked=ranked,
         accepted=accepted,
-        sse=base + np.r_[0.0, np.cumsum(gain)],
-        segments=len(clusters) + np.r_[0, np.cumsum(accepted)],
+        sse=sse,
+        segments=segments,
         thresholds=thresholds,
         levels=levels,
         n_points=int((clusters.end - clusters.start + 1).sum()) if len(clusters) else 0,

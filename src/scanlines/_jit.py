@@ -1,0 +1,58 @@
+"""The compiler of the hot path: numba when installed, plain Python otherwise.
+
+Every kernel in :mod:`scanlines.steps` and :mod:`scanlines.methods` is written once,
+in the subset of Python and numpy that numba compiles. With numba (a dependency
+of the package) the kernels are compiled on first use and cached next to the
+sources' fingerprint; without it (or with ``NUMBA_DISABLE_JIT=1``) the same
+functions run as ordinary Python: identical results, far slower.
+
+The cache lives in a directory named by a hash of the package's sources: numba
+checks only the file of the function it compiles, while a kernel inlines
+kernels of other files, so a changed step must invalidate every kernel. It is
+``$NUMBA_CACHE_DIR/scanlines-<hash>`` if that variable is set, else under
+``$XDG_CACHE_HOME`` (default ``~/.cache``).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any, TypeVar
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+try:
+    import numba
+except ImportError:  # pragma: no cover - exercised only without numba
+    numba = None
+
+__all__ = ["COMPILED", "jit"]
+
+COMPILED = numba is not None
+
+
+def _source_hash() -> str:
+    digest = hashlib.sha1()
+    for path in sorted(Path(__file__).parent.rglob("*.py")):
+        digest.update(path.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def _cache_dir() -> Path:
+    root = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "scanlines"
+    )
+    return Path(root) / f"numba-{_source_hash()}"
+
+
+if numba is not None:
+    numba.config.CACHE_DIR = str(_cache_dir())
+
+
+def jit(function: F) -> F:
+    """Compile ``function`` with numba (cached, no Python objects), if available."""
+    if numba is None:  # pragma: no cover
+        return function
+    return numba.njit(cache=True, nogil=True, error_model="numpy")(function)

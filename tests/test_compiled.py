@@ -1,0 +1,68 @@
+"""The kernels are one implementation: compiled and plain-Python runs agree exactly.
+
+``NUMBA_DISABLE_JIT=1`` runs every kernel as ordinary Python, which is also what
+the package does when numba is not installed.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+
+from scanlines import Extractor, _jit
+from scanlines.data import sample
+from scanlines.io import open_log
+
+SCRIPT = """
+import json, sys
+from scanlines import Extractor
+from scanlines.data import sample
+from scanlines.io import open_log
+scans = list(open_log(sample("intel")))[:3]
+out = []
+for preset in (None, "paper"):
+    for scan in scans:
+        e = Extractor(preset=preset)(scan)
+        out.append([e.first.tolist(), e.last.tolist(), e.breakpoints.tolist(),
+                    e.corners.tolist(), e.outliers.tolist(), e.lines.tolist()])
+json.dump(out, sys.stdout)
+"""
+
+
+def _run(disable_jit: bool) -> list:
+    env = dict(os.environ, NUMBA_DISABLE_JIT="1" if disable_jit else "0")
+    done = subprocess.run(
+        [sys.executable, "-c", SCRIPT], env=env, capture_output=True, text=True, check=True
+    )
+    return json.loads(done.stdout)
+
+
+def test_plain_python_kernels_give_the_compiled_results():
+    compiled, plain = _run(False), _run(True)
+    assert len(compiled) == len(plain) == 6
+    for fast, slow in zip(compiled, plain, strict=True):
+        assert fast[:5] == slow[:5]  # beam indices identical
+        np.testing.assert_allclose(
+            np.array(fast[5], dtype=float),
+            np.array(slow[5], dtype=float),
+            atol=1e-9,
+            equal_nan=True,
+        )
+
+
+def test_cache_directory_is_keyed_by_the_sources(monkeypatch, tmp_path):
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    directory = _jit._cache_dir()
+    assert directory.parent == tmp_path
+    assert directory.name == f"numba-{_jit._source_hash()}"
+
+
+def test_extractor_uses_the_compiled_path_for_adaptive():
+    scan = next(iter(open_log(sample("intel"))))
+    extractor = Extractor()
+    assert extractor._compiled is not None
+    assert len(extractor(scan)) > 0
