@@ -111,6 +111,7 @@ from scanlines.steps.breakpoints import (
     break_beams,
     break_flags,
     cluster_bounds,
+    neighbour_steps,
     rule_array,
     seam_break,
     seam_rotation,
@@ -258,12 +259,13 @@ def settings(params: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
 
 def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extraction:
     """Extract features from the valid returns ``seq`` of one scan."""
-    s, grid = settings(params)
-    full_circle = is_full_circle(seq.n_beams, seq.step)
-    arrays = extract_sequence(
-        seq.index, seq.r, seq.x, seq.y, seq.n_beams, seq.step, full_circle, angle_min, s, grid
-    )
-    return from_arrays(arrays, NAME, params)
+    ranges = np.zeros(seq.n_beams)
+    ranges[seq.index] = seq.r
+    valid = np.zeros(seq.n_beams, dtype=bool)
+    valid[seq.index] = True
+    bearing = seq.step * np.arange(seq.n_beams)
+    cos, sin = np.cos(bearing), np.sin(bearing)
+    return Compiled(params).one(ranges, valid, cos, sin, seq.step, angle_min)
 
 
 class Compiled:
@@ -282,7 +284,7 @@ class Compiled:
     def one(self, ranges, valid, cos, sin, step: float, angle_min: float) -> Extraction:
         """The extraction of one scan."""
         full_circle = is_full_circle(ranges.shape[0], step)
-        arrays = extract_ranges(
+        arrays = extract_scan(
             ranges, valid, cos, sin, abs(step), full_circle, angle_min, self.settings, self.grid
         )
         return from_arrays(arrays, NAME, self.params)
@@ -293,7 +295,7 @@ class Compiled:
         s, grid, params, step = self.settings, self.grid, self.params, abs(step)
         return [
             from_arrays(
-                extract_ranges(row, mask, cos, sin, step, full_circle, angle_min, s, grid),
+                extract_scan(row, mask, cos, sin, step, full_circle, angle_min, s, grid),
                 NAME,
                 params,
             )
@@ -301,26 +303,23 @@ class Compiled:
         ]
 
 
-@jit
-def extract_ranges(ranges, valid, cos, sin, step, full_circle, angle_min, s, grid):
-    """:func:`extract_sequence` of one scan's ranges (``valid``: beams with a return)."""
-    index = np.flatnonzero(valid)
-    r = ranges[index]
-    x = r * cos[index]
-    y = r * sin[index]
-    return extract_sequence(index, r, x, y, ranges.shape[0], step, full_circle, angle_min, s, grid)
-
-
 # --------------------------------------------------------------------------- the kernel
 
 
 @jit
-def extract_sequence(index, r, x, y, n_beams, step, full_circle, angle_min, s, grid):
-    """The whole method on the valid returns of one scan; arrays of the result.
+def extract_scan(ranges, valid, cos, sin, step, full_circle, angle_min, s, grid):
+    """The whole method on one scan; arrays of the result.
 
-    Returns ``first, last, n_points, lines, covariances, breakpoints, corners,
-    outliers`` as :func:`~scanlines.steps.assemble.from_arrays` takes them.
+    ``valid`` marks the beams with a return, ``cos, sin`` are the bearing tables
+    relative to beam 0. Returns ``first, last, n_points, lines, covariances,
+    breakpoints, corners, outliers`` as :func:`~scanlines.steps.assemble.from_arrays`
+    takes them.
     """
+    n_beams = ranges.shape[0]
+    index = np.flatnonzero(valid)
+    r = ranges[index]
+    x = r * cos[index]
+    y = r * sin[index]
     outliers = np.zeros(0, dtype=np.int64)
     if index.shape[0] == 0:
         return empty_result(outliers, outliers)
@@ -330,7 +329,7 @@ def extract_sequence(index, r, x, y, n_beams, step, full_circle, angle_min, s, g
         c, si = math.cos(angle_min), math.sin(angle_min)
         x, y = c * x - si * y, si * x + c * y
         angle_min = 0.0
-    gap = np.diff(index)
+    gap = _gaps(index, n_beams)
     sigma = s[NOISE_SIGMA]
     if sigma == AUTO:
         sigma = noise_from_ranges(r, gap, np.zeros(1, np.int64), np.full(1, r.shape[0] - 1))
@@ -344,7 +343,7 @@ def extract_sequence(index, r, x, y, n_beams, step, full_circle, angle_min, s, g
     )
     table, ox, oy = prefix_moments(x, y)
     inv_r2 = inverse_square_sums(r) if s[CRITERION] == BIC else np.zeros(0)
-    scores = _scores(x, y, r, index, step, table, ox, oy, start, end, window, s)
+    scores = _scores(x, y, r, index, n_beams, step, table, ox, oy, start, end, window, s)
     corners, sigma = _choose_corners(table, ox, oy, inv_r2, start, end, scores, sigma, s, grid)
     a, b, owner = _segments(x, y, table, ox, oy, inv_r2, start, end, corners, sigma, s)
     check_sigma = sigma if s[CORNER_CHECK] else -1.0
@@ -353,7 +352,7 @@ def extract_sequence(index, r, x, y, n_beams, step, full_circle, angle_min, s, g
     )
     return assemble_runs(
         index, x, y, r, a, b, fit, table, ox, oy, angle_min, s[RANGE_SIGMA],
-        np.unique(np.concatenate((breakpoints, jumps))), corner_beams, outliers,
+        sorted_union(breakpoints, jumps), corner_beams, outliers,
     )  # fmt: skip
 
 
@@ -377,11 +376,10 @@ def _denoise(index, r, x, y, n_beams, step, full_circle, rule, s):
     kind = s[DENOISE]
     if kind == NO_DENOISE or index.shape[0] < 3:
         return index, r, x, y, none
-    gap = np.diff(index)
+    gap = _gaps(index, n_beams)
     raw_breaks = break_flags(x, y, r, gap, step, rule)
     if kind == LITERAL:
-        d = np.hypot(np.diff(x), np.diff(y))
-        noise = literal_noise(d)
+        noise = literal_noise(np.hypot(x[1:] - x[:-1], y[1:] - y[:-1]))
         if noise.any():
             x, y = window_means(x, y, noise, int(s[WINDOW]), raw_breaks)
             r = np.hypot(x, y)
@@ -407,7 +405,20 @@ def _denoise(index, r, x, y, n_beams, step, full_circle, rule, s):
 @jit
 def _gaps(index, n_beams):
     """Beams between consecutive positions (a rotated full circle wraps once)."""
-    return np.diff(index) % n_beams
+    gap = np.empty(max(index.shape[0] - 1, 0), dtype=np.int64)
+    for p in range(gap.shape[0]):
+        gap[p] = (index[p + 1] - index[p]) % n_beams
+    return gap
+
+
+@jit
+def sorted_union(first, second):
+    """Sorted distinct values of two integer arrays."""
+    both = np.sort(np.concatenate((first, second)))
+    keep = np.ones(both.shape[0], dtype=np.bool_)
+    for i in range(1, both.shape[0]):
+        keep[i] = both[i] != both[i - 1]
+    return both[keep]
 
 
 @jit
@@ -422,11 +433,13 @@ def _slope_window(x, y, index, sigma, setting):
     """
     if setting != AUTO:
         return int(setting)
-    adjacent = np.flatnonzero(np.diff(index) == 1)
-    if adjacent.shape[0] == 0:
+    steps = neighbour_steps(x, y)
+    adjacent = np.empty(steps.shape[0], dtype=np.bool_)
+    for p in range(steps.shape[0]):
+        adjacent[p] = index[p + 1] - index[p] == 1
+    if not adjacent.any():
         return 3
-    steps = np.hypot(x[adjacent + 1] - x[adjacent], y[adjacent + 1] - y[adjacent])
-    spacing = np.median(steps)
+    spacing = np.median(steps[adjacent])
     wanted = 3 + 6 * sigma / spacing if spacing > 0.0 else math.inf
     return int(round(min(max(wanted, 3.0), SLOPE_WINDOW_MAX)))  # noqa: RUF046 (int for numba)
 
@@ -443,9 +456,10 @@ def _cluster_scan(index, r, x, y, n_beams, step, full_circle, rule, window):
     """
     n = index.shape[0]
     if not full_circle or n < 3:
-        start, end = cluster_bounds(break_flags(x, y, r, np.diff(index), step, rule))
+        start, end = cluster_bounds(break_flags(x, y, r, _gaps(index, n_beams), step, rule))
         return index, r, x, y, start, end, break_beams(index, end, False), False
-    rotate_to, seam, ring = seam_rotation(x, y, r, index, np.diff(index), n_beams, step, rule)
+    gap = _gaps(index, n_beams)
+    rotate_to, seam, ring = seam_rotation(x, y, r, index, gap, n_beams, step, rule)
     if ring:
         rotate_to = ring_anchor(x, y, window)
     if rotate_to:
@@ -459,11 +473,11 @@ def _cluster_scan(index, r, x, y, n_beams, step, full_circle, rule, window):
 
 
 @jit
-def _scores(x, y, r, index, step, table, ox, oy, start, end, window, s):
+def _scores(x, y, r, index, n_beams, step, table, ox, oy, start, end, window, s):
     kind = s[CORNER_SCORE]
     if kind == TURN:
         return turn_scores(x, y, table, ox, oy, start, end, window)
-    return slope_scores(r, np.diff(index), step, start, end, kind == DK_SIGNED)
+    return slope_scores(r, _gaps(index, n_beams), step, start, end, kind == DK_SIGNED)
 
 
 @jit
@@ -503,8 +517,10 @@ def _segments(x, y, table, ox, oy, inv_r2, start, end, corners, sigma, s):
         a, b, owner = split_runs(
             x, y, fit, table, ox, oy, a, b, owner, s[MAX_RESIDUAL], int(s[MIN_POINTS])
         )
-    length = np.hypot(x[b] - x[a], y[b] - y[a])
-    keep = (b - a + 1 >= s[MIN_POINTS]) & (length >= s[MIN_LENGTH])
+    keep = np.empty(a.shape[0], dtype=np.bool_)
+    for k in range(a.shape[0]):
+        length = math.sqrt((x[b[k]] - x[a[k]]) ** 2 + (y[b[k]] - y[a[k]]) ** 2)
+        keep[k] = b[k] - a[k] + 1 >= s[MIN_POINTS] and length >= s[MIN_LENGTH]
     return a[keep], b[keep], owner[keep]
 
 

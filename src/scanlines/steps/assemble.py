@@ -119,7 +119,7 @@ def assemble_runs(
             lines[k, column + 1] = sin_t * px + cos_t * py
         lines[k, 6] = math.sqrt(squares / (b[k] - a[k] + 1))
     first, last = index[a], index[b]
-    order = np.argsort(first, kind="mergesort")
+    order = np.argsort(first)  # beam indices are distinct: any sort is stable
     return (
         first[order],
         last[order],

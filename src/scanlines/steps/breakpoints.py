@@ -171,9 +171,19 @@ class Clusters:
         return int(self.start.shape[0])
 
 
+@jit
+def neighbour_steps(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """``d_i = |P_{i+1} - P_i|`` for consecutive points (eq. 4 / 19)."""
+    d = np.empty(max(x.shape[0] - 1, 0))
+    for p in range(d.shape[0]):
+        dx, dy = x[p + 1] - x[p], y[p + 1] - y[p]
+        d[p] = math.sqrt(dx * dx + dy * dy)
+    return d
+
+
 def neighbour_distances(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """``d_i = |P_{i+1} - P_i|`` for consecutive points (eq. 4 / 19)."""
-    return np.hypot(np.diff(x), np.diff(y))
+    return neighbour_steps(np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64))
 
 
 @jit
@@ -279,10 +289,7 @@ def break_flags(x, y, r, gap, step: float, rule: np.ndarray) -> np.ndarray:
     out = np.zeros(max(n - 1, 0), dtype=np.bool_)
     if n < 2:
         return out
-    d = np.empty(n - 1)
-    for p in range(n - 1):
-        dx, dy = x[p + 1] - x[p], y[p + 1] - y[p]
-        d[p] = math.sqrt(dx * dx + dy * dy)
+    d = neighbour_steps(x, y)
     tolerance = rule[_LINE_TOL]
     factors = np.array([gap_factor(rule, g, step) for g in range(MAX_BRIDGED_GAP + 1)])
     for p in range(n - 1):

@@ -170,6 +170,18 @@ def best_level(criterion: int, sse, segments, levels, n_points: int, sigma, pena
 
 
 @jit
+def rank_descending(values: np.ndarray) -> np.ndarray:
+    """Order of ``values`` from largest to smallest, equal values in index order."""
+    order = np.argsort(-values)
+    for i in range(1, order.shape[0]):  # insertion pass: restores index order among ties
+        j = i
+        while j > 0 and values[order[j]] == values[order[j - 1]] and order[j] < order[j - 1]:
+            order[j], order[j - 1] = order[j - 1], order[j]
+            j -= 1
+    return order
+
+
+@jit
 def sweep_levels(
     fit: int,
     table: np.ndarray,
@@ -188,7 +200,7 @@ def sweep_levels(
 ):
     """Kernel of :func:`sweep`: ``ranked, accepted, sse, segments, thresholds, levels``."""
     magnitude = np.abs(scores)
-    order = np.argsort(-magnitude, kind="mergesort")
+    order = rank_descending(magnitude)
     ranked, ranked_score = candidates[order], magnitude[order]
     # Only candidates that some tried threshold keeps can change a cut.
     if not use_grid:
