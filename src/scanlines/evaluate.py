@@ -21,6 +21,17 @@ A spec names a method, optionally a preset, parameter overrides and a label::
 written ``dkth_range=0,0.05``). The label defaults to the spec text without the
 label; labels must be unique within a run.
 
+The truth row
+-------------
+The spec ``truth`` (optionally ``truth@LABEL``; no preset or parameters) is not a
+method but a reference row (an oracle), built from each scene's truth by
+:func:`truth_extraction`: the true segments' beam runs, each fitted by total least
+squares to the scan's measured returns the truth says hit that segment's edge, with
+the true breakpoints and corners. It is scored like every method, with the same
+tolerances: the best any segmentation can do with exact boundaries, the ceiling of
+the segment metrics (its breakpoint and corner F1 are 1 by construction). It needs
+the truth, so it is not an extraction method and not in :func:`scanlines.methods`.
+
 Scenes and seeds
 ----------------
 Scene ``i`` of sensor ``s`` is ``random_scene(seed_i, s).scan(seed_i)`` with
@@ -42,7 +53,8 @@ Timing
 ------
 ``us`` is the wall time of the extraction call alone (``time.perf_counter_ns``), in
 microseconds; summaries report its median (and mean) per sensor and spec. With
-``workers > 1`` the processes share the machine, so times are less comparable.
+``workers > 1`` the processes share the machine, so times are less comparable. For
+the truth row it is the time of building the row from the truth.
 """
 
 from __future__ import annotations
@@ -68,6 +80,9 @@ from scanlines.sim.noise import NoiseModel
 from scanlines.sim.scenes import random_scene
 from scanlines.sim.sensors import SENSORS, get_sensor
 from scanlines.sim.truth import TrueSegments, Truth
+from scanlines.steps.assemble import assemble
+from scanlines.steps.fit import Moments, run_labels
+from scanlines.steps.points import Sequence as Returns
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -80,6 +95,7 @@ __all__ = [
     "DEFAULT_SCENES",
     "NOISES",
     "TABLE_COLUMNS",
+    "TRUTH",
     "EvalConfig",
     "EvalResult",
     "MethodSpec",
@@ -102,6 +118,7 @@ __all__ = [
     "save_scene_set",
     "scene_seed",
     "tolerance_caption",
+    "truth_extraction",
     "worst_scans",
 ]
 
@@ -120,6 +137,9 @@ WORST_BY = (
 )
 """How :func:`worst_scans` ranks scans."""
 
+TRUTH = "truth"
+"""Spec name of the truth row (see :func:`truth_extraction`); not a method."""
+
 SCENE_SET_FORMAT = "scanlines-scene-set"
 SCENE_SET_VERSION = 1
 
@@ -136,7 +156,7 @@ class MethodSpec:
     Attributes
     ----------
     method:
-        A name from :func:`scanlines.methods`.
+        A name from :func:`scanlines.methods`, or :data:`TRUTH` for the truth row.
     preset:
         A preset of the method, or ``None``.
     params:
@@ -167,8 +187,21 @@ class MethodSpec:
         """The overrides as ``NAME=VALUE&...`` (empty without overrides)."""
         return "&".join(f"{k}={v}" for k, v in self.params)
 
+    @property
+    def is_truth(self) -> bool:
+        """Whether this is the truth row (:data:`TRUTH`), not a method."""
+        return self.method == TRUTH
+
     def extractor(self) -> Extractor:
-        """The configured :class:`~scanlines.Extractor` (validates the spec)."""
+        """The configured :class:`~scanlines.Extractor` (validates the spec).
+
+        Raises
+        ------
+        ParameterError
+            For the truth row, which has no extractor (it needs the truth).
+        """
+        if self.is_truth:
+            raise ParameterError(f"{TRUTH!r} is built from the truth and has no extractor")
         return Extractor(self.method, self.preset, **dict(self.params))
 
     def to_dict(self) -> dict[str, Any]:
@@ -179,7 +212,9 @@ class MethodSpec:
             "method": self.method,
             "preset": self.preset,
             "params": dict(self.params),
-            "resolved": {k: _jsonable(v) for k, v in self.extractor().params.items()},
+            "resolved": {}
+            if self.is_truth
+            else {k: _jsonable(v) for k, v in self.extractor().params.items()},
         }
 
 
@@ -194,7 +229,7 @@ def parse_spec(text: str) -> MethodSpec:
     """
     try:
         spec = _split_spec(text.strip())
-        spec.extractor()
+        _check_spec(spec)
     except ParameterError as error:
         raise ParameterError(f"method spec {text!r}: {error}") from None
     return spec
@@ -252,10 +287,17 @@ def parse_specs(specs: Iterable[str | MethodSpec]) -> tuple[MethodSpec, ...]:
 
 def _validated(spec: MethodSpec) -> MethodSpec:
     try:
-        spec.extractor()
+        _check_spec(spec)
     except ParameterError as error:
         raise ParameterError(f"method spec {spec.text!r}: {error}") from None
     return spec
+
+
+def _check_spec(spec: MethodSpec) -> None:
+    if not spec.is_truth:
+        spec.extractor()
+    elif spec.preset or spec.params:
+        raise ParameterError(f"{TRUTH!r} takes no preset or parameters")
 
 
 # --------------------------------------------------------------------------- scenes
@@ -839,6 +881,72 @@ per-scan accuracy rate; ``sim. cm`` the mean environmental-similarity error;
 ``us/scan`` the median extraction time."""
 
 
+# --------------------------------------------------------------------------- the truth row
+
+
+def truth_extraction(scan: Scan, truth: Truth, *, range_sigma: float = 0.0) -> Extraction:
+    """The truth row of a scan: its true segments fitted to its own measured returns.
+
+    Every true segment becomes one segment over the same beams (``first`` and
+    ``last`` from the truth), fitted by total least squares, as the methods fit
+    (:func:`scanlines.steps.assemble.assemble`), to the scan's returns in that run
+    that the truth says hit the segment's edge (:attr:`Truth.true_return`: no
+    outliers, mixed pixels or dropouts). Breakpoints and corners are the true ones;
+    outliers are the returns of no surface (outliers and mixed pixels).
+
+    Parameters
+    ----------
+    scan, truth:
+        A simulated scan and its truth.
+    range_sigma:
+        Range noise in metres for the segments' covariances (they are not scored).
+
+    Returns
+    -------
+    Extraction
+        With ``method == "truth"``: the best any segmentation can do with exact
+        boundaries.
+    """
+    seg, n = truth.segments, truth.n_beams
+    spans = (seg.last - seg.first) % n + 1
+    beams, owner = run_labels(seg.first, seg.first + spans - 1, n)
+    beams %= n  # a segment across the seam of a full circle
+    keep = scan.valid[beams] & truth.true_return[beams] & (truth.edge[beams] == seg.edge[owner])
+    beams, owner = beams[keep], owner[keep]
+    b = np.cumsum(np.bincount(owner, minlength=len(seg))) - 1
+    a = np.concatenate(([0], b[:-1] + 1)).astype(np.intp)
+    r, bearing = scan.ranges[beams], scan.angle_increment * beams  # beam 0 at bearing 0
+    returns = Returns(
+        beams,
+        r,
+        r * np.cos(bearing),
+        r * np.sin(bearing),
+        np.diff(beams) % n,
+        abs(scan.angle_increment),
+        n,
+    )
+    return assemble(
+        returns,
+        a,
+        b,
+        fit="tls",
+        moments=Moments(returns.x, returns.y),
+        corners=truth.corners,
+        breakpoints=truth.breakpoints,
+        outliers=np.union1d(truth.outliers, truth.mixed_pixels),
+        angle_min=scan.angle_min,
+        range_sigma=range_sigma,
+        method=TRUTH,
+        params={"range_sigma": range_sigma},
+    )
+
+
+def _truth_row(case: SceneCase) -> Extraction:
+    """:func:`truth_extraction` of a scene, covariances from its preset's range noise."""
+    sigma = get_sensor(case.sensor).noise.sigma if case.noise == "realistic" else 0.0
+    return truth_extraction(case.scan, case.truth, range_sigma=sigma)
+
+
 # --------------------------------------------------------------------------- running
 
 
@@ -943,9 +1051,17 @@ def _counted(
         yield batch
 
 
+Runner = Callable[[SceneCase], "Extraction"]
+
+
 @lru_cache(maxsize=8)
-def _extractors(specs: tuple[MethodSpec, ...]) -> tuple[Extractor, ...]:
-    return tuple(s.extractor() for s in specs)
+def _runners(specs: tuple[MethodSpec, ...]) -> tuple[Runner, ...]:
+    """What each spec does with a scene: its extractor on the scan, or the truth row."""
+    return tuple(_truth_row if s.is_truth else _on_scan(s.extractor()) for s in specs)
+
+
+def _on_scan(extractor: Extractor) -> Runner:
+    return lambda case: extractor(case.scan)
 
 
 _WARM: set[tuple[MethodSpec, ...]] = set()
@@ -960,15 +1076,15 @@ def _run_job(
     one-off costs (lazy imports, caches) do not land in the times.
     """
     case = job if isinstance(job, SceneCase) else make_scene(*job)
-    extractors = _extractors(specs)
+    runners = _runners(specs)
     if specs not in _WARM:
-        for extractor in extractors:
-            extractor(case.scan)
+        for runner in runners:
+            runner(case)
         _WARM.add(specs)
     out = []
-    for spec, extractor in zip(specs, extractors, strict=True):
+    for spec, runner in zip(specs, runners, strict=True):
         start = time.perf_counter_ns()
-        extraction = extractor(case.scan)
+        extraction = runner(case)
         us = (time.perf_counter_ns() - start) / 1000.0
         out.append(
             ScanRecord(
@@ -1113,16 +1229,12 @@ def plot_worst(result: EvalResult, k: int = 4, *, size: float = 4.2) -> Figure:
     rows, cols = max(1, len(worst)), len(specs)
     width, height = max(size * cols, 7.0), size * rows + 1.6  # 1.6 in: title and legend
     fig, axes = plt.subplots(rows, cols, figsize=(width, height), squeeze=False)
-    extractors = _extractors(specs)
+    runners = _runners(specs)
     for row, item in zip(axes, worst, strict=False):
         case = result.case(item.sensor, item.scene)
-        for ax, spec, extractor, (_, f1) in zip(
-            row, specs, extractors, item.f1_by_label, strict=True
-        ):
+        for ax, spec, runner, (_, f1) in zip(row, specs, runners, item.f1_by_label, strict=True):
             title = f"{spec.label} | {item.sensor} #{item.scene} ({case.kind})\nevent F1 {f1:.2f}"
-            plot_truth_overlay(
-                case.scan, case.truth, extractor(case.scan), ax, title=title, legend=False
-            )
+            plot_truth_overlay(case.scan, case.truth, runner(case), ax, title=title, legend=False)
     if not worst:
         for ax in axes.flat:
             ax.axis("off")

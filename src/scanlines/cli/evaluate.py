@@ -15,14 +15,18 @@ if TYPE_CHECKING:
 
 SPEC_HELP = (
     "Method spec METHOD[:PRESET][?NAME=VALUE&...][@LABEL], e.g. adaptive, adaptive:paper, "
-    "'adaptive?k=4&fit=paper@k4'. Repeatable; default adaptive."
+    "'adaptive?k=4&fit=paper@k4'. Repeatable; default adaptive. 'truth' adds a reference row, "
+    "not a method: the true segments fitted by total least squares to their own true returns, "
+    "with the true breakpoints and corners; the best any segmentation can do with exact "
+    "boundaries: the ceiling of the segment metrics."
 )
 
 
 def register(app: typer.Typer) -> None:
     app.command(
         "eval",
-        help="Score methods on simulated scenes with exact ground truth: tables, CSV/JSON, plots.",
+        help="Score methods (and the 'truth' ceiling row) on simulated scenes with exact ground "
+        "truth: tables, CSV/JSON, plots.",
     )(guarded(eval_command))
 
 
