@@ -51,8 +51,17 @@ if numba is not None:
     numba.config.CACHE_DIR = str(_cache_dir())
 
 
-def jit(function: F) -> F:
-    """Compile ``function`` with numba (cached, no Python objects), if available."""
+def jit(function: F | None = None, *, inline: bool = False) -> Any:
+    """Compile ``function`` with numba (cached, no Python objects), if available.
+
+    ``inline=True`` (as ``@jit(inline=True)``) is for the small scalar helpers of
+    the inner loops (a line fit from running sums, a threshold): numba calls
+    between separately compiled functions are not inlined by LLVM, and such a
+    call costs more than the helper's arithmetic.
+    """
+    if function is None:
+        return lambda f: jit(f, inline=inline)
     if numba is None:  # pragma: no cover
         return function
-    return numba.njit(cache=True, nogil=True, error_model="numpy")(function)
+    options = {"inline": "always"} if inline else {}
+    return numba.njit(cache=True, nogil=True, error_model="numpy", **options)(function)

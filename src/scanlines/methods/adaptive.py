@@ -334,12 +334,12 @@ def extract_scan(ranges, valid, cos, sin, step, full_circle, angle_min, s, grid)
     if sigma == AUTO:
         sigma = noise_from_ranges(r, gap, np.zeros(1, np.int64), np.full(1, r.shape[0] - 1))
     rule = _rule(s, sigma)
-    index, r, x, y, outliers = _denoise(index, r, x, y, n_beams, step, full_circle, rule, s)
+    index, r, x, y, outliers, breaks = _denoise(index, r, x, y, n_beams, step, full_circle, rule, s)
     if index.shape[0] == 0:
         return empty_result(outliers, outliers)
     window = _slope_window(x, y, index, sigma, s[SLOPE_WINDOW])
     index, r, x, y, start, end, breakpoints, ring = _cluster_scan(
-        index, r, x, y, n_beams, step, full_circle, rule, window
+        index, r, x, y, n_beams, step, full_circle, rule, window, breaks
     )
     table, ox, oy = prefix_moments(x, y)
     inv_r2 = inverse_square_sums(r) if s[CRITERION] == BIC else np.zeros(0)
@@ -371,20 +371,23 @@ def _rule(s, sigma):
 
 @jit
 def _denoise(index, r, x, y, n_beams, step, full_circle, rule, s):
-    """Steps 2-3; returns the cleaned returns and the beams dropped as noise."""
+    """Steps 2-3; returns the cleaned returns, the beams dropped as noise and the
+    break flags of the cleaned returns when known (empty otherwise)."""
     none = np.zeros(0, dtype=np.int64)
+    unknown = np.zeros(0, dtype=np.bool_)
     kind = s[DENOISE]
     if kind == NO_DENOISE or index.shape[0] < 3:
-        return index, r, x, y, none
+        return index, r, x, y, none, unknown
     gap = _gaps(index, n_beams)
     raw_breaks = break_flags(x, y, r, gap, step, rule)
     if kind == LITERAL:
         noise = literal_noise(np.hypot(x[1:] - x[:-1], y[1:] - y[:-1]))
-        if noise.any():
-            x, y = window_means(x, y, noise, int(s[WINDOW]), raw_breaks)
-            r = np.hypot(x, y)
-        return index, r, x, y, none
+        if not noise.any():
+            return index, r, x, y, none, raw_breaks
+        x, y = window_means(x, y, noise, int(s[WINDOW]), raw_breaks)
+        return index, np.hypot(x, y), x, y, none, unknown
     noise = isolated_noise_mask(x, y, r, gap, step, rule, raw_breaks)
+    kept_breaks = raw_breaks
     if s[MIN_CLUSTER_POINTS] > 1:
         kept = np.flatnonzero(~noise)
         kx, ky, kr, ki = x[kept], y[kept], r[kept], index[kept]
@@ -393,13 +396,14 @@ def _denoise(index, r, x, y, n_beams, step, full_circle, rule, s):
             and kept.shape[0] >= 3
             and not seam_break(kx, ky, kr, ki, n_beams, step, rule)
         )
-        kept_breaks = break_flags(kx, ky, kr, _gaps(ki, n_beams), step, rule)
+        if noise.any():  # else the kept returns are all returns: same breaks
+            kept_breaks = break_flags(kx, ky, kr, _gaps(ki, n_beams), step, rule)
         small = small_clusters(kept_breaks, int(s[MIN_CLUSTER_POINTS]), joined)
         noise[kept[small]] = True
     if not noise.any():
-        return index, r, x, y, none
+        return index, r, x, y, none, raw_breaks
     keep = ~noise
-    return index[keep], r[keep], x[keep], y[keep], index[noise]
+    return index[keep], r[keep], x[keep], y[keep], index[noise], unknown
 
 
 @jit
@@ -448,15 +452,18 @@ SLOPE_WINDOW_MAX = 15
 
 
 @jit
-def _cluster_scan(index, r, x, y, n_beams, step, full_circle, rule, window):
+def _cluster_scan(index, r, x, y, n_beams, step, full_circle, rule, window, breaks):
     """Clusters, with the seam of a full circle joined (see ``steps.breakpoints.cluster_scan``).
 
+    ``breaks`` are the break flags of the returns if already known (else empty).
     Returns the (possibly rotated) returns, cluster bounds, breakpoint beams and
     whether the scan is one closed ring.
     """
     n = index.shape[0]
     if not full_circle or n < 3:
-        start, end = cluster_bounds(break_flags(x, y, r, _gaps(index, n_beams), step, rule))
+        if breaks.shape[0] != n - 1:
+            breaks = break_flags(x, y, r, _gaps(index, n_beams), step, rule)
+        start, end = cluster_bounds(breaks)
         return index, r, x, y, start, end, break_beams(index, end, False), False
     gap = _gaps(index, n_beams)
     rotate_to, seam, ring = seam_rotation(x, y, r, index, gap, n_beams, step, rule)

@@ -186,7 +186,7 @@ def neighbour_distances(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     return neighbour_steps(np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64))
 
 
-@jit
+@jit(inline=True)
 def gap_factor(rule: np.ndarray, gap: int, step: float) -> float:
     """The part of the threshold that depends on the beam gap only (see :func:`threshold`)."""
     kind = rule[_KIND]
@@ -201,7 +201,7 @@ def gap_factor(rule: np.ndarray, gap: int, step: float) -> float:
     return 0.0
 
 
-@jit
+@jit(inline=True)
 def scaled_threshold(rule: np.ndarray, factor: float, r_from: float, r_to: float) -> float:
     """The threshold from :func:`gap_factor` and the two ranges."""
     kind = rule[_KIND]
@@ -212,7 +212,7 @@ def scaled_threshold(rule: np.ndarray, factor: float, r_from: float, r_to: float
     return rule[_JUMP]
 
 
-@jit
+@jit(inline=True)
 def threshold(rule: np.ndarray, r_from: float, r_to: float, gap: int, step: float) -> float:
     """Largest distance ``D`` between returns ``r_from`` and ``r_to``, ``gap`` beams apart."""
     return scaled_threshold(rule, gap_factor(rule, gap, step), r_from, r_to)
@@ -243,7 +243,7 @@ def thresholds(
     return flat.reshape(r_from.shape)
 
 
-@jit
+@jit(inline=True)
 def _distance_to_line(ax, ay, bx, by, px, py) -> float:
     """Distance of ``P`` from the line through ``A`` and ``B`` (inf when ``A == B``)."""
     ux, uy = bx - ax, by - ay
@@ -253,7 +253,7 @@ def _distance_to_line(ax, ay, bx, by, px, py) -> float:
     return abs(ux * (py - ay) - uy * (px - ax)) / length
 
 
-@jit
+@jit(inline=True)
 def continues_line_at(x, y, gap, d, p: int, tolerance: float) -> bool:
     """Pair ``(p, p+1)`` continues the line of the pair before *and* of the pair after.
 

@@ -81,7 +81,7 @@ def slope_difference(seq: Sequence, clusters: Clusters, *, signed: bool = False)
     return slope_scores(seq.r, seq.gap, seq.step, clusters.start, clusters.end, signed)
 
 
-@jit
+@jit(inline=True)
 def heading(x, y, table, ox: float, oy: float, a: int, b: int) -> tuple[float, float]:
     """Unit direction of the fitted line of run ``[a, b]``, oriented from ``a`` towards ``b``."""
     nx, ny = tls_normal(table, ox, oy, a, b)[:2]

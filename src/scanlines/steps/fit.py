@@ -109,7 +109,7 @@ class Lines:
     sse: np.ndarray
 
 
-@jit
+@jit(inline=True)
 def hesse(alpha: float, rho: float) -> tuple[float, float]:
     """Normalise to ``rho >= 0`` and ``alpha`` in ``(-pi, pi]``."""
     if rho < 0.0:
@@ -118,7 +118,7 @@ def hesse(alpha: float, rho: float) -> tuple[float, float]:
     return math.pi - (math.pi - alpha) % (2.0 * math.pi), rho
 
 
-@jit
+@jit(inline=True)
 def tls_normal(
     table: np.ndarray, ox: float, oy: float, a: int, b: int
 ) -> tuple[float, float, float, float]:
@@ -151,7 +151,7 @@ def tls_normal(
     return nx, ny, rho, sse
 
 
-@jit
+@jit(inline=True)
 def tls_run(table: np.ndarray, ox: float, oy: float, a: int, b: int) -> tuple[float, float, float]:
     """Total-least-squares line ``(rho, alpha, sse)`` of run ``[a, b]``; NaN for an empty run."""
     nx, ny, rho, sse = tls_normal(table, ox, oy, a, b)
@@ -206,7 +206,7 @@ def paper_run(
     return rho, alpha, sse
 
 
-@jit
+@jit(inline=True)
 def fit_run(
     fit: int, table: np.ndarray, ox: float, oy: float, a: int, b: int
 ) -> tuple[float, float, float]:
@@ -230,7 +230,7 @@ def fit_many(
     return rho, alpha, sse
 
 
-@jit
+@jit(inline=True)
 def line_intersection(rho_i: float, alpha_i: float, rho_j: float, alpha_j: float):
     """Intersection ``(x, y)`` of two Hesse lines; NaN for parallel lines."""
     det = math.sin(alpha_j - alpha_i)
@@ -278,7 +278,7 @@ def inverse_square_sums(r: np.ndarray) -> np.ndarray:
     return out
 
 
-@jit
+@jit(inline=True)
 def run_cost(
     fit: int, table: np.ndarray, ox: float, oy: float, inv_r2: np.ndarray, a: int, b: int
 ) -> float:

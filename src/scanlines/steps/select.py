@@ -92,7 +92,7 @@ def insert_in_rank_order(
     return accepted, parent_a, parent_b
 
 
-@jit
+@jit(inline=True)
 def criterion_value(criterion: int, sse: float, segments: int, n_points: int, sigma, penalty):
     """The criterion of one segmentation (smaller is better); NaN SSE counts as inf."""
     if sse != sse:
