@@ -28,7 +28,7 @@ try:
 except ImportError:  # pragma: no cover - exercised only without numba
     numba = None
 
-__all__ = ["COMPILED", "jit"]
+__all__ = ["COMPILED", "cache_is_cold", "jit"]
 
 COMPILED = numba is not None
 
@@ -49,6 +49,11 @@ def _cache_dir() -> Path:
 
 if numba is not None:
     numba.config.CACHE_DIR = str(_cache_dir())
+
+
+def cache_is_cold() -> bool:
+    """True when the kernels of this version have not been compiled on this machine yet."""
+    return COMPILED and not any(Path(numba.config.CACHE_DIR).rglob("*.nbi"))
 
 
 def jit(function: F | None = None, *, inline: bool = False) -> Any:

@@ -30,6 +30,18 @@ def guarded(command: F) -> F:
     return wrapper  # type: ignore[return-value]
 
 
+def note_first_compilation() -> None:
+    """Say on stderr why the first run after an install or upgrade waits (numba compiling)."""
+    from scanlines._jit import cache_is_cold
+
+    if cache_is_cold():
+        print(
+            "scanlines: first run: compiling the extraction kernels (about a minute at most, "
+            "once; cached for later runs)",
+            file=sys.stderr,
+        )
+
+
 def parse_params(pairs: list[str] | None) -> dict[str, Any]:
     """``["k=3", "fit=tls"]`` -> ``{"k": "3", "fit": "tls"}`` (values validated by the method)."""
     params: dict[str, Any] = {}

@@ -8,7 +8,7 @@ from typing import Annotated, Any
 
 import typer
 
-from scanlines.cli.common import guarded, parse_params
+from scanlines.cli.common import guarded, note_first_compilation, parse_params
 
 LogArgument = Annotated[Path, typer.Argument(help="CARMEN log, ROS bag, .dat, .csv or .npz.")]
 FovOption = Annotated[
@@ -170,6 +170,7 @@ def run_command(
     if on_error not in ("fail", "skip"):
         raise ParameterError(f"--on-error must be fail or skip, got {on_error!r}")
     extractor = Extractor(method, preset, **parse_params(param))
+    note_first_compilation()
     selection = parse_slice(scans)
     options = reader_options(fov, angle_convention, topic, angle_min, angle_increment, on_error)
     with open_log(log, **options) as reader:
@@ -286,6 +287,7 @@ def demo_command(
 
     log = sample("intel")
     extractor = Extractor()
+    note_first_compilation()
     output.mkdir(parents=True, exist_ok=True)
     jsonl = output / "intel.jsonl"
     with open_log(log) as reader:
