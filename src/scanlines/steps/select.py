@@ -93,13 +93,16 @@ def insert_in_rank_order(
 
 
 @jit(inline=True)
-def criterion_value(criterion: int, sse: float, segments: int, n_points: int, sigma, penalty):
-    """The criterion of one segmentation (smaller is better); NaN SSE counts as inf."""
+def criterion_value(criterion: int, sse: float, segments: int, log_n: float, sigma, penalty):
+    """The criterion of one segmentation (smaller is better); NaN SSE counts as inf.
+
+    ``log_n`` is ``ln(max(n_points, 2))``, ``n_points`` the returns segmented.
+    """
     if sse != sse:
         sse = math.inf
     if criterion == SSE:
         return sse
-    return sse / (sigma * sigma) + penalty * math.log(max(n_points, 2)) * segments
+    return sse / (sigma * sigma) + penalty * log_n * segments
 
 
 def criterion_values(
@@ -112,12 +115,9 @@ def criterion_values(
 ) -> np.ndarray:
     """The criterion for each evaluated segmentation (smaller is better)."""
     code = CRITERION_CODES[criterion]
-    return np.array(
-        [
-            criterion_value(code, v, k, n_points, sigma, penalty)
-            for v, k in zip(sse, segments, strict=True)
-        ]
-    )
+    log_n = math.log(max(n_points, 2))
+    pairs = zip(sse, segments, strict=True)
+    return np.array([criterion_value(code, v, k, log_n, sigma, penalty) for v, k in pairs])
 
 
 @dataclass(frozen=True, slots=True)
@@ -161,11 +161,10 @@ def level_corners(ranked: np.ndarray, accepted: np.ndarray, level: int) -> np.nd
 def best_level(criterion: int, sse, segments, levels, n_points: int, sigma, penalty):
     """Index of the best tried threshold (the first on a tie) and every criterion value."""
     values = np.empty(levels.shape[0])
+    log_n = math.log(max(n_points, 2))
     for t in range(levels.shape[0]):
         level = levels[t]
-        values[t] = criterion_value(
-            criterion, sse[level], segments[level], n_points, sigma, penalty
-        )
+        values[t] = criterion_value(criterion, sse[level], segments[level], log_n, sigma, penalty)
     return np.argmin(values), values
 
 
@@ -212,9 +211,11 @@ def sweep_levels(
     ranked, ranked_score = ranked[:useful], ranked_score[:useful]
     accepted, parent_a, parent_b = insert_in_rank_order(start, end, n, ranked, shared)
 
+    cost_from = np.empty(n + 1)  # cost of the current run starting at a position
     base = 0.0
     for c in range(start.shape[0]):
-        base += run_cost(fit, table, ox, oy, inv_r2, start[c], end[c])
+        cost_from[start[c]] = run_cost(fit, table, ox, oy, inv_r2, start[c], end[c])
+        base += cost_from[start[c]]
     sse = np.empty(useful + 1)
     segments = np.empty(useful + 1, dtype=np.int64)
     sse[0], segments[0] = base, start.shape[0]
@@ -222,11 +223,11 @@ def sweep_levels(
         gain = 0.0
         if accepted[j]:
             a, b, c = parent_a[j], parent_b[j], ranked[j]
-            gain = (
-                run_cost(fit, table, ox, oy, inv_r2, a, c)
-                + run_cost(fit, table, ox, oy, inv_r2, c if shared else c + 1, b)
-                - run_cost(fit, table, ox, oy, inv_r2, a, b)
-            )
+            second = c if shared else c + 1
+            whole = cost_from[a]
+            cost_from[a] = run_cost(fit, table, ox, oy, inv_r2, a, c)
+            cost_from[second] = run_cost(fit, table, ox, oy, inv_r2, second, b)
+            gain = cost_from[a] + cost_from[second] - whole
         sse[j + 1] = sse[j] + gain
         segments[j + 1] = segments[j] + accepted[j]
     if not use_grid:
