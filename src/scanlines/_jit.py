@@ -6,7 +6,7 @@ of the package) the kernels are compiled on first use and cached next to the
 sources' fingerprint; without it (or with ``NUMBA_DISABLE_JIT=1``) the same
 functions run as ordinary Python: identical results, far slower.
 
-The cache lives in a directory named by a hash of the package's sources: numba
+The cache lives in a directory named by a hash of the kernels' sources: numba
 checks only the file of the function it compiles, while a kernel inlines
 kernels of other files, so a changed step must invalidate every kernel. It is
 ``$NUMBA_CACHE_DIR/scanlines-<hash>`` if that variable is set, else under
@@ -33,10 +33,16 @@ __all__ = ["COMPILED", "cache_is_cold", "jit"]
 COMPILED = numba is not None
 
 
+KERNEL_SOURCES = ("_jit.py", "steps/*.py", "methods/*.py")
+"""The package files that hold kernels (the cache key hashes them)."""
+
+
 def _source_hash() -> str:
+    package = Path(__file__).parent
     digest = hashlib.sha1()
-    for path in sorted(Path(__file__).parent.rglob("*.py")):
-        digest.update(path.read_bytes())
+    for pattern in KERNEL_SOURCES:
+        for path in sorted(package.glob(pattern)):
+            digest.update(path.read_bytes())
     return digest.hexdigest()[:16]
 
 
