@@ -12,6 +12,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 
 from scanlines import Extractor, _jit
 from scanlines.data import sample
@@ -22,28 +23,33 @@ import json, sys
 from scanlines import Extractor
 from scanlines.data import sample
 from scanlines.io import open_log
+method = sys.argv[1]
 scans = list(open_log(sample("intel")))[:3]
 out = []
-for preset in (None, "paper"):
+for preset in (None, "paper") if method == "adaptive" else (None,):
     for scan in scans:
-        e = Extractor(preset=preset)(scan)
+        e = Extractor(method, preset=preset)(scan)
         out.append([e.first.tolist(), e.last.tolist(), e.breakpoints.tolist(),
                     e.corners.tolist(), e.outliers.tolist(), e.lines.tolist()])
 json.dump(out, sys.stdout)
 """
 
 
-def _run(disable_jit: bool) -> list:
+COMPILED_METHODS = ("adaptive", "iepf", "pdbs", "split_merge")
+
+
+def _run(disable_jit: bool, method: str = "adaptive") -> list:
     env = dict(os.environ, NUMBA_DISABLE_JIT="1" if disable_jit else "0")
     done = subprocess.run(
-        [sys.executable, "-c", SCRIPT], env=env, capture_output=True, text=True, check=True
+        [sys.executable, "-c", SCRIPT, method], env=env, capture_output=True, text=True, check=True
     )
     return json.loads(done.stdout)
 
 
-def test_plain_python_kernels_give_the_compiled_results():
-    compiled, plain = _run(False), _run(True)
-    assert len(compiled) == len(plain) == 6
+@pytest.mark.parametrize("method", COMPILED_METHODS)
+def test_plain_python_kernels_give_the_compiled_results(method):
+    compiled, plain = _run(False, method), _run(True, method)
+    assert len(compiled) == len(plain) == (6 if method == "adaptive" else 3)
     for fast, slow in zip(compiled, plain, strict=True):
         assert fast[:5] == slow[:5]  # beam indices identical
         np.testing.assert_allclose(
@@ -64,5 +70,13 @@ def test_cache_directory_is_keyed_by_the_sources(monkeypatch, tmp_path):
 def test_extractor_uses_the_compiled_path_for_adaptive():
     scan = next(iter(open_log(sample("intel"))))
     extractor = Extractor()
+    assert extractor._compiled is not None
+    assert len(extractor(scan)) > 0
+
+
+@pytest.mark.parametrize("method", COMPILED_METHODS[1:])
+def test_extractor_uses_the_compiled_path_for_the_split_methods(method):
+    scan = next(iter(open_log(sample("intel"))))
+    extractor = Extractor(method)
     assert extractor._compiled is not None
     assert len(extractor(scan)) > 0

@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 
-from scanlines import Extraction, Scan, extract, method_info
+from scanlines import Extraction, Extractor, Scan, extract, method_info
+from scanlines.methods import REGISTRY
 from scanlines.metrics import Summary, aggregate, score
 from scanlines.sim import SimScan, random_scene
 from scanlines.steps.fit import Moments, tls_lines
@@ -238,6 +239,21 @@ def test_negative_increment_mirrors_the_beams(method):
     assert a.first.tolist() == b.first.tolist()
     np.testing.assert_allclose(b.lines[:, 0], a.lines[:, 0], atol=1e-9)
     np.testing.assert_allclose(np.abs(b.lines[:, 1]), np.abs(a.lines[:, 1]), atol=1e-9)
+
+
+@pytest.mark.parametrize("method", ["adaptive", "iepf", "pdbs", "split_merge"])
+@pytest.mark.parametrize("full_circle", [False, True])
+@pytest.mark.parametrize("clockwise", [False, True])
+def test_run_on_a_sequence_is_the_compiled_extractor(method, full_circle, clockwise):
+    scan = room_scan(0, full_circle=full_circle)
+    if clockwise:  # a negative increment: the points are mirrored, not the ranges
+        scan = Scan(scan.ranges, -scan.angle_min, -scan.angle_increment)
+    extractor = Extractor(method)
+    direct = extractor(scan)
+    via_run = REGISTRY[method].run(sequence_of(scan), scan.angle_min, extractor.params)
+    for name in ("first", "last", "breakpoints", "corners", "outliers"):
+        assert getattr(via_run, name).tolist() == getattr(direct, name).tolist()
+    np.testing.assert_array_equal(via_run.lines, direct.lines)
 
 
 # --------------------------------------------------------------------------- clustering rules

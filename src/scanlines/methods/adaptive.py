@@ -258,14 +258,13 @@ def settings(params: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
 
 
 def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extraction:
-    """Extract features from the valid returns ``seq`` of one scan."""
-    ranges = np.zeros(seq.n_beams)
-    ranges[seq.index] = seq.r
-    valid = np.zeros(seq.n_beams, dtype=bool)
-    valid[seq.index] = True
-    bearing = seq.step * np.arange(seq.n_beams)
-    cos, sin = np.cos(bearing), np.sin(bearing)
-    return Compiled(params).one(ranges, valid, cos, sin, seq.step, angle_min)
+    """Extract features from the valid returns ``seq`` of one scan (its own points)."""
+    s, grid = settings(params)
+    full_circle = is_full_circle(seq.n_beams, seq.step)
+    arrays = extract_points(
+        seq.index, seq.r, seq.x, seq.y, seq.n_beams, seq.step, full_circle, angle_min, s, grid
+    )
+    return from_arrays(arrays, NAME, params)
 
 
 class Compiled:
@@ -315,11 +314,15 @@ def extract_scan(ranges, valid, cos, sin, step, full_circle, angle_min, s, grid)
     breakpoints, corners, outliers`` as :func:`~scanlines.steps.assemble.from_arrays`
     takes them.
     """
-    n_beams = ranges.shape[0]
     index = np.flatnonzero(valid)
     r = ranges[index]
-    x = r * cos[index]
-    y = r * sin[index]
+    x, y = r * cos[index], r * sin[index]
+    n_beams = ranges.shape[0]
+    return _points_pipeline(index, r, x, y, n_beams, step, full_circle, angle_min, s, grid)
+
+
+def points_pipeline(index, r, x, y, n_beams, step, full_circle, angle_min, s, grid):
+    """The whole method on the valid returns (beam ``index``, range, point) of one scan."""
     outliers = np.zeros(0, dtype=np.int64)
     if index.shape[0] == 0:
         return empty_result(outliers, outliers)
@@ -354,6 +357,12 @@ def extract_scan(ranges, valid, cos, sin, step, full_circle, angle_min, s, grid)
         index, x, y, r, a, b, fit, table, ox, oy, angle_min, s[RANGE_SIGMA],
         sorted_union(breakpoints, jumps), corner_beams, outliers,
     )  # fmt: skip
+
+
+# One implementation, two entries: inlined into extract_scan (one compiled layer
+# less), and on its own for run(), which starts from a sequence's points.
+_points_pipeline = jit(inline=True)(points_pipeline)
+extract_points = jit(points_pipeline)
 
 
 @jit

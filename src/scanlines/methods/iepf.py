@@ -9,8 +9,8 @@ Horowitz [2]_; as compared by the paper [3]_, sec. 4.3-4.5):
    cluster's first and last point (measured to the chord as a segment, so that
    a cluster closing on itself is first cut at its far corner); if that distance
    exceeds ``split_distance``,
-   split there and repeat on both parts (one vectorised pass per recursion level,
-   :func:`scanlines.steps.segments.split_runs`); the split point joins the part
+   split there and repeat on both parts
+   (:func:`scanlines.steps.segments.split_runs`); the split point joins the part
    whose line it is nearer;
 3. fit each part by total least squares (:mod:`scanlines.steps.fit`), drop parts
    with fewer than ``min_points`` points or shorter than ``min_length``;
@@ -46,18 +46,24 @@ from typing import Any
 
 import numpy as np
 
+from scanlines._jit import jit
 from scanlines.extraction import Extraction
 from scanlines.params import Param, number, segment_params, with_default
-from scanlines.steps.assemble import empty_extraction
+from scanlines.scan import is_full_circle
+from scanlines.steps.assemble import empty_result, from_arrays
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS
-from scanlines.steps.fit import Moments
+from scanlines.steps.fit import prefix_moments
 from scanlines.steps.points import Sequence
 from scanlines.steps.segments import (
     EVENT_PARAMS,
     LITERAL_CLUSTERING,
-    cluster_sequence,
-    finish,
-    split_runs,
+    SPLIT_DISTANCE,
+    SPLIT_REFERENCE,
+    cluster_returns,
+    finish_runs,
+    settings,
+    split_runs_at_farthest,
+    valid_returns,
 )
 
 NAME = "iepf"
@@ -77,49 +83,95 @@ PARAMS: dict[str, Param] = {
 
 PRESETS: dict[str, dict[str, Any]] = {}
 
-_NO_OUTLIERS = np.zeros(0, dtype=np.intp)
-
 
 def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extraction:
     """Extract features from the valid returns ``seq`` of one scan."""
-    return split_extraction(seq, angle_min, params, method=NAME, reference="chord")
+    return Compiled(params).sequence(seq, angle_min)
 
 
-def split_extraction(
-    seq: Sequence,
-    angle_min: float,
-    params: Mapping[str, Any],
-    *,
-    method: str,
-    reference: str,
-    outliers: np.ndarray = _NO_OUTLIERS,
-) -> Extraction:
-    """Cluster, split every cluster recursively (``reference`` chord or fit) and assemble.
+class Compiled:
+    """The method with its parameters in kernel form: what :class:`~scanlines.Extractor` calls.
 
-    Shared by :mod:`~scanlines.methods.iepf` and :mod:`~scanlines.methods.pdbs`.
+    ``cos`` and ``sin`` are the bearing tables of the scan's beams relative to
+    beam 0; ``valid`` the mask of beams with a return. Shared with
+    :mod:`~scanlines.methods.pdbs`, which differs in its clustering rule only.
     """
-    if len(seq) == 0:
-        return empty_extraction(method, params, outliers=outliers)
-    seq, clusters, ring = cluster_sequence(seq, params)
-    moments = Moments(seq.x, seq.y)
-    a, b, group = split_runs(
-        seq,
-        moments,
-        clusters.start,
-        clusters.end,
-        np.arange(len(clusters)),
-        threshold=params["split_distance"],
-        reference=reference,
+
+    __slots__ = ("params", "settings")
+    name = NAME
+
+    def __init__(self, params: Mapping[str, Any]) -> None:
+        self.params = params
+        self.settings = settings(params, reference="chord")
+
+    def one(self, ranges, valid, cos, sin, step: float, angle_min: float) -> Extraction:
+        """The extraction of one scan."""
+        full_circle = is_full_circle(ranges.shape[0], step)
+        arrays = extract_scan(
+            ranges, valid, cos, sin, abs(step), full_circle, angle_min, self.settings
+        )
+        return from_arrays(arrays, self.name, self.params)
+
+    def many(self, stack, valid, cos, sin, step: float, angle_min: float) -> list[Extraction]:
+        """The extractions of a stack of scans of one sensor (C-contiguous float64 rows)."""
+        full_circle = is_full_circle(stack.shape[1], step)
+        s, step = self.settings, abs(step)
+        return [
+            from_arrays(
+                extract_scan(row, mask, cos, sin, step, full_circle, angle_min, s),
+                self.name,
+                self.params,
+            )
+            for row, mask in zip(stack, valid, strict=True)
+        ]
+
+    def sequence(self, seq: Sequence, angle_min: float) -> Extraction:
+        """The extraction of the valid returns ``seq`` of one scan (its points as given)."""
+        arrays = extract_returns(
+            np.ascontiguousarray(seq.index, dtype=np.int64),
+            *(np.ascontiguousarray(v, dtype=np.float64) for v in (seq.r, seq.x, seq.y)),
+            seq.n_beams,
+            seq.step,
+            is_full_circle(seq.n_beams, seq.step),
+            float(angle_min),
+            self.settings,
+        )
+        return from_arrays(arrays, self.name, self.params)
+
+
+# --------------------------------------------------------------------------- the kernel
+
+
+@jit
+def extract_scan(ranges, valid, cos, sin, step, full_circle, angle_min, s):
+    """The whole method on one scan; arrays of the result.
+
+    ``valid`` marks the beams with a return, ``cos, sin`` are the bearing tables
+    relative to beam 0. Returns ``first, last, n_points, lines, covariances,
+    breakpoints, corners, outliers`` as :func:`~scanlines.steps.assemble.from_arrays`
+    takes them.
+    """
+    index, r, x, y = valid_returns(ranges, valid, cos, sin)
+    return extract_returns(index, r, x, y, ranges.shape[0], step, full_circle, angle_min, s)
+
+
+# Inlined: extract_scan is its only compiled caller, and compiling it on its own would
+# optimise the whole method a second time (seconds of the cold start).
+@jit(inline=True)
+def extract_returns(index, r, x, y, n_beams, step, full_circle, angle_min, s):
+    """The whole method on the valid returns (beam ``index``, range, local ``x, y``) of a scan."""
+    none = np.zeros(0, dtype=np.int64)
+    if index.shape[0] == 0:
+        return empty_result(none, none)
+    index, r, x, y, _, start, end, breakpoints, ring = cluster_returns(
+        index, r, x, y, n_beams, step, full_circle, s
     )
-    return finish(
-        seq,
-        a,
-        b,
-        group,
-        clusters=clusters,
-        ring=ring,
-        outliers=outliers,
-        angle_min=angle_min,
-        method=method,
-        params=params,
+    table, ox, oy = prefix_moments(x, y)
+    clusters = np.arange(start.shape[0])
+    a, b, group = split_runs_at_farthest(
+        x, y, table, ox, oy, start, end, clusters, s[SPLIT_DISTANCE], int(s[SPLIT_REFERENCE])
     )
+    return finish_runs(
+        index, r, x, y, n_beams, full_circle, table, ox, oy, a, b, group, True, ring,
+        breakpoints, none, angle_min, s,
+    )  # fmt: skip

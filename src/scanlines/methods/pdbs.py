@@ -41,8 +41,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from scanlines.extraction import Extraction
-from scanlines.methods.iepf import PARAMS as IEPF_PARAMS
-from scanlines.methods.iepf import split_extraction
+from scanlines.methods import iepf
 from scanlines.params import Param, with_default
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS
 from scanlines.steps.points import Sequence
@@ -50,7 +49,7 @@ from scanlines.steps.points import Sequence
 NAME = "pdbs"
 
 PARAMS: dict[str, Param] = {
-    **IEPF_PARAMS,
+    **iepf.PARAMS,
     "breakpoints": with_default(
         BREAKPOINT_PARAMS["breakpoints"], "pdbs", "PDBS: Premebida and Nunes"
     ),
@@ -61,4 +60,11 @@ PRESETS: dict[str, dict[str, Any]] = {}
 
 def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extraction:
     """Extract features from the valid returns ``seq`` of one scan."""
-    return split_extraction(seq, angle_min, params, method=NAME, reference="chord")
+    return Compiled(params).sequence(seq, angle_min)
+
+
+class Compiled(iepf.Compiled):
+    """The method in kernel form: :class:`scanlines.methods.iepf.Compiled` under this name."""
+
+    __slots__ = ()
+    name = NAME

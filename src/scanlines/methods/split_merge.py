@@ -13,7 +13,7 @@ laser_line_extraction [3]_):
    are never farther apart);
 3. split: fit a total-least-squares line to each run, split at the interior
    point farthest from it while that distance exceeds ``split_distance``
-   (0.05 m, the package's ``min_split_dist``), one vectorised pass per level
+   (0.05 m, the package's ``min_split_dist``)
    (:func:`scanlines.steps.segments.split_runs`, ``reference="fit"``); the split
    point joins the part whose line it is nearer, so no point is lost;
 4. filter: runs with fewer than ``min_points`` (9, ``min_line_points``) points or
@@ -54,25 +54,37 @@ References
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
+from scanlines._jit import jit
 from scanlines.extraction import Extraction
 from scanlines.params import Param, number, segment_params, with_default
-from scanlines.steps.assemble import empty_extraction
+from scanlines.scan import is_full_circle
+from scanlines.steps.assemble import empty_result, from_arrays
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS
-from scanlines.steps.fit import Moments
+from scanlines.steps.fit import prefix_moments
 from scanlines.steps.points import Sequence
 from scanlines.steps.segments import (
     EVENT_PARAMS,
     LITERAL_CLUSTERING,
-    cluster_sequence,
-    drop_small,
-    finish,
-    merge_chi_square,
-    split_runs,
+    MERGE_CHI2,
+    MIN_LENGTH,
+    MIN_POINTS,
+    OUTLIER_DISTANCE,
+    RANGE_SIGMA,
+    SPLIT_DISTANCE,
+    SPLIT_REFERENCE,
+    cluster_returns,
+    drop_small_runs,
+    finish_runs,
+    merge_runs_chi_square,
+    settings,
+    split_runs_at_farthest,
+    valid_returns,
 )
 
 NAME = "split_merge"
@@ -110,66 +122,127 @@ PRESETS: dict[str, dict[str, Any]] = {}
 
 def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extraction:
     """Extract features from the valid returns ``seq`` of one scan."""
-    seq, outliers = _drop_outliers(seq, params["outlier_distance"], params["split_distance"])
-    if len(seq) == 0:
-        return empty_extraction(NAME, params, outliers=outliers)
-    seq, clusters, ring = cluster_sequence(seq, params)
-    moments = Moments(seq.x, seq.y)
-    a, b, group = split_runs(
-        seq,
-        moments,
-        clusters.start,
-        clusters.end,
-        np.arange(len(clusters)),
-        threshold=params["split_distance"],
-        reference="fit",
-    )
-    a, b, group = drop_small(
-        seq, a, b, group, min_points=params["min_points"], min_length=params["min_length"]
-    )
-    a, b, group = merge_chi_square(
-        seq,
-        moments,
-        a,
-        b,
-        group,
-        range_sigma=params["range_sigma"],
-        threshold=params["merge_chi2"],
-    )
-    return finish(
-        seq,
-        a,
-        b,
-        group,
-        clusters=clusters,
-        ring=ring,
-        outliers=outliers,
-        angle_min=angle_min,
-        method=NAME,
-        params=params,
-    )
+    return Compiled(params).sequence(seq, angle_min)
 
 
-def _drop_outliers(
-    seq: Sequence, outlier_distance: float, line_distance: float
-) -> tuple[Sequence, np.ndarray]:
-    """Step 1: the sequence without isolated returns, and their beams."""
-    n = len(seq)
+class Compiled:
+    """The method with its parameters in kernel form: what :class:`~scanlines.Extractor` calls.
+
+    ``cos`` and ``sin`` are the bearing tables of the scan's beams relative to
+    beam 0; ``valid`` the mask of beams with a return.
+    """
+
+    __slots__ = ("params", "settings")
+
+    def __init__(self, params: Mapping[str, Any]) -> None:
+        self.params = params
+        self.settings = settings(params, reference="fit")
+
+    def one(self, ranges, valid, cos, sin, step: float, angle_min: float) -> Extraction:
+        """The extraction of one scan."""
+        full_circle = is_full_circle(ranges.shape[0], step)
+        arrays = extract_scan(
+            ranges, valid, cos, sin, abs(step), full_circle, angle_min, self.settings
+        )
+        return from_arrays(arrays, NAME, self.params)
+
+    def many(self, stack, valid, cos, sin, step: float, angle_min: float) -> list[Extraction]:
+        """The extractions of a stack of scans of one sensor (C-contiguous float64 rows)."""
+        full_circle = is_full_circle(stack.shape[1], step)
+        s, step = self.settings, abs(step)
+        return [
+            from_arrays(
+                extract_scan(row, mask, cos, sin, step, full_circle, angle_min, s),
+                NAME,
+                self.params,
+            )
+            for row, mask in zip(stack, valid, strict=True)
+        ]
+
+    def sequence(self, seq: Sequence, angle_min: float) -> Extraction:
+        """The extraction of the valid returns ``seq`` of one scan (its points as given)."""
+        arrays = extract_returns(
+            np.ascontiguousarray(seq.index, dtype=np.int64),
+            *(np.ascontiguousarray(v, dtype=np.float64) for v in (seq.r, seq.x, seq.y)),
+            seq.n_beams,
+            seq.step,
+            is_full_circle(seq.n_beams, seq.step),
+            float(angle_min),
+            self.settings,
+        )
+        return from_arrays(arrays, NAME, self.params)
+
+
+# --------------------------------------------------------------------------- the kernel
+
+
+@jit
+def extract_scan(ranges, valid, cos, sin, step, full_circle, angle_min, s):
+    """The whole method on one scan; arrays of the result.
+
+    ``valid`` marks the beams with a return, ``cos, sin`` are the bearing tables
+    relative to beam 0. Returns ``first, last, n_points, lines, covariances,
+    breakpoints, corners, outliers`` as :func:`~scanlines.steps.assemble.from_arrays`
+    takes them.
+    """
+    index, r, x, y = valid_returns(ranges, valid, cos, sin)
+    return extract_returns(index, r, x, y, ranges.shape[0], step, full_circle, angle_min, s)
+
+
+# Inlined: extract_scan is its only compiled caller, and compiling it on its own would
+# optimise the whole method a second time (seconds of the cold start).
+@jit(inline=True)
+def extract_returns(index, r, x, y, n_beams, step, full_circle, angle_min, s):
+    """The whole method on the valid returns (beam ``index``, range, local ``x, y``) of a scan."""
+    index, r, x, y, outliers = _drop_outliers(
+        index, r, x, y, s[OUTLIER_DISTANCE], s[SPLIT_DISTANCE]
+    )
+    if index.shape[0] == 0:
+        return empty_result(np.zeros(0, dtype=np.int64), outliers)
+    index, r, x, y, _, start, end, breakpoints, ring = cluster_returns(
+        index, r, x, y, n_beams, step, full_circle, s
+    )
+    table, ox, oy = prefix_moments(x, y)
+    clusters = np.arange(start.shape[0])
+    a, b, group = split_runs_at_farthest(
+        x, y, table, ox, oy, start, end, clusters, s[SPLIT_DISTANCE], int(s[SPLIT_REFERENCE])
+    )
+    a, b, group = drop_small_runs(x, y, a, b, group, s[MIN_POINTS], s[MIN_LENGTH])
+    a, b, group = merge_runs_chi_square(
+        x, y, r, table, ox, oy, a, b, group, s[RANGE_SIGMA], s[MERGE_CHI2]
+    )
+    return finish_runs(
+        index, r, x, y, n_beams, full_circle, table, ox, oy, a, b, group, True, ring,
+        breakpoints, outliers, angle_min, s,
+    )  # fmt: skip
+
+
+@jit
+def _drop_outliers(index, r, x, y, outlier_distance: float, line_distance: float):
+    """Step 1: the returns without isolated ones, and the beams of those dropped.
+
+    A return is isolated when its range differs by more than
+    ``outlier_distance`` from both neighbours' and it lies farther than
+    ``line_distance`` from the line through them (at the ends of the scan, the
+    two neighbours on one side).
+    """
+    n = index.shape[0]
     if n < 3:
-        return seq, np.zeros(0, dtype=np.intp)
-    p = np.arange(n)
-    one = np.clip(np.where(p == 0, 1, p - 1), 0, n - 1)
-    other = np.clip(np.where(p == 0, 2, np.where(p == n - 1, n - 3, p + 1)), 0, n - 1)
-    apart = (np.abs(seq.r - seq.r[one]) > outlier_distance) & (
-        np.abs(seq.r - seq.r[other]) > outlier_distance
-    )
-    dx, dy = seq.x[other] - seq.x[one], seq.y[other] - seq.y[one]
-    length = np.hypot(dx, dy)
-    px, py = seq.x - seq.x[one], seq.y - seq.y[one]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        off = np.abs(px * dy - py * dx) / length
-    off = np.where(length > 0.0, off, np.hypot(px, py))
-    outlier = apart & (off > line_distance)
-    if not outlier.any():
-        return seq, np.zeros(0, dtype=np.intp)
-    return seq.subset(~outlier), seq.index[outlier]
+        return index, r, x, y, np.zeros(0, dtype=np.int64)
+    outlier = np.zeros(n, dtype=np.bool_)
+    for p in range(n):
+        one = 1 if p == 0 else p - 1
+        other = 2 if p == 0 else (n - 3 if p == n - 1 else p + 1)
+        apart = abs(r[p] - r[one]) > outlier_distance and abs(r[p] - r[other]) > outlier_distance
+        if not apart:
+            continue
+        dx, dy = x[other] - x[one], y[other] - y[one]
+        px, py = x[p] - x[one], y[p] - y[one]
+        length = math.hypot(dx, dy)
+        off = abs(px * dy - py * dx) / length if length > 0.0 else math.hypot(px, py)
+        outlier[p] = off > line_distance
+    dropped = np.flatnonzero(outlier)
+    if dropped.shape[0] == 0:
+        return index, r, x, y, dropped
+    kept = np.flatnonzero(~outlier)
+    return index[kept], r[kept], x[kept], y[kept], index[dropped]

@@ -2,7 +2,9 @@
 
 A *run* is an inclusive interval ``[a, b]`` of sequence positions (see
 :mod:`scanlines.steps.points`); ``group`` numbers the cluster (or the line) each run
-came from. Everything here works on many runs at once.
+came from. The steps are compiled kernels (:mod:`scanlines._jit`) that the methods
+chain into one kernel per scan; the functions named in the sections below are
+their thin numpy-facing wrappers, for methods that still run as Python code.
 
 Clustering and assembly
     :func:`cluster_sequence` clusters by the method's ``breakpoints`` rule (or
@@ -15,9 +17,9 @@ Splitting
     threshold from the chord from its first to its last point) and of
     split-and-merge [3]_ (``reference="fit"``: ... from the run's
     total-least-squares line). Either way the cut is at the interior point
-    farthest from the chord (see :func:`split_runs`). One pass handles every run
-    of one recursion level; the loop is over levels. The split point joins the
-    part whose line (fitted without it) it is nearer, so no point is lost.
+    farthest from the chord (see :func:`split_runs`), and the runs are split
+    depth first. The split point joins the part whose line (fitted without it)
+    it is nearer, so no point is lost.
 Runs from inlier masks
     :func:`inlier_runs` turns the consensus set of one line (RANSAC, Hough) into
     runs that are contiguous in beam order: consecutive inliers stay in one run
@@ -87,47 +89,65 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from scanlines._jit import jit
 from scanlines.extraction import Extraction
 from scanlines.params import Param, int_at_least, number
 from scanlines.scan import is_full_circle
-from scanlines.steps.assemble import assemble
+from scanlines.steps.assemble import assemble_runs, from_arrays
 from scanlines.steps.breakpoints import (
+    ABD,
+    ADAPTIVE,
     BREAKPOINT_PARAMS,
+    FIXED,
     MAX_BRIDGED_GAP,
-    BreakpointRule,
+    RULE_CODES,
     Clusters,
-    cluster_scan,
+    break_beams,
+    break_flags,
+    cluster_bounds,
+    rule_array,
+    seam_rotation,
 )
-from scanlines.steps.corners import strongest_turn
-from scanlines.steps.denoise import estimate_noise
+from scanlines.steps.corners import ring_anchor
+from scanlines.steps.denoise import MIN_NOISE_SIGMA, noise_from_ranges
 from scanlines.steps.fit import (
+    TLS,
     Lines,
     Moments,
-    line_covariances,
-    point_residuals,
+    covariances,
+    fit_many,
+    line_intersection,
+    prefix_moments,
     run_labels,
     tls_lines,
+    tls_run,
 )
-from scanlines.steps.points import Sequence
+from scanlines.steps.points import Sequence, rotate
 
 __all__ = [
     "BRIDGE_RETURNS",
     "EVENT_PARAMS",
     "LITERAL_CLUSTERING",
     "LineFinder",
+    "cluster_returns",
     "cluster_sequence",
     "consensus_extraction",
     "consensus_segments",
     "drop_small",
     "finish",
+    "finish_runs",
     "inlier_runs",
     "line_difference",
     "line_intersections",
     "merge_chi_square",
+    "merge_runs_chi_square",
     "pair_chi_square",
     "remove_positions",
     "segment_events",
+    "settings",
     "split_runs",
+    "split_runs_at_farthest",
+    "valid_returns",
 ]
 
 EVENT_PARAMS: dict[str, Param] = {
@@ -157,15 +177,148 @@ NO_CLUSTERING = "none"
 
 _EMPTY = np.zeros(0, dtype=np.intp)
 
-# The ring anchor (a full circle without any gap) is the strongest turn-angle corner.
-_RING_WINDOW = 5
+RING_WINDOW = 5
+"""Points fitted on each side of the turn angle that anchors a ring (a full circle
+without any gap is cut at its strongest corner)."""
+
+# --------------------------------------------------------------------------- settings
+# The kernels take a method's parameters as one float array; these name its slots.
+(
+    RULE_KIND, K, NOISE_K, LINE_K, ABD_LAMBDA, PDBS_C0, JUMP_DISTANCE,
+    MIN_POINTS, MIN_LENGTH, RANGE_SIGMA, CORNER_BEAMS, CORNER_DISTANCE, CORNER_ANGLE,
+    SPLIT_DISTANCE, SPLIT_REFERENCE, OUTLIER_DISTANCE, MERGE_CHI2, N_SETTINGS,
+) = range(18)  # fmt: skip
+NO_RULE = -1.0
+"""``RULE_KIND`` of ``breakpoints="none"``: one cluster of every return."""
+CHORD, FIT = 0, 1
+REFERENCE_CODES = {"chord": CHORD, "fit": FIT}
 
 
-def _ring_anchor(seq: Sequence) -> int:
-    return strongest_turn(seq, _RING_WINDOW)
+def settings(params: Mapping[str, Any], reference: str = "chord") -> np.ndarray:
+    """The kernels' form of a method's resolved ``params`` (angles in radians).
+
+    ``reference`` is the split's distance reference (``"chord"`` or ``"fit"``);
+    parameters a method does not have (``split_distance``, ``outlier_distance``,
+    ``merge_chi2``) are NaN.
+    """
+    s = np.full(N_SETTINGS, math.nan)
+    name = params["breakpoints"]
+    s[RULE_KIND] = NO_RULE if name == NO_CLUSTERING else RULE_CODES[name]
+    s[K], s[PDBS_C0], s[JUMP_DISTANCE] = params["k"], params["pdbs_c0"], params["jump_distance"]
+    s[NOISE_K], s[LINE_K] = params.get("noise_k", 0.0), params.get("line_k", 0.0)
+    s[ABD_LAMBDA] = math.radians(params["abd_lambda"])
+    s[MIN_POINTS], s[MIN_LENGTH] = params["min_points"], params["min_length"]
+    s[RANGE_SIGMA] = params["range_sigma"]
+    s[CORNER_BEAMS], s[CORNER_DISTANCE] = params["corner_beams"], params["corner_distance"]
+    s[CORNER_ANGLE] = math.radians(params["corner_angle"])
+    s[SPLIT_REFERENCE] = REFERENCE_CODES[reference]
+    for slot, key in (
+        (SPLIT_DISTANCE, "split_distance"),
+        (OUTLIER_DISTANCE, "outlier_distance"),
+        (MERGE_CHI2, "merge_chi2"),
+    ):
+        s[slot] = params.get(key, math.nan)
+    return s
 
 
 # --------------------------------------------------------------------------- clustering
+
+
+@jit
+def valid_returns(ranges, valid, cos, sin):
+    """``index, r, x, y`` of the beams with a return (local frame: bearing tables ``cos, sin``)."""
+    count = 0
+    for i in range(valid.shape[0]):
+        count += valid[i]
+    index = np.empty(count, dtype=np.int64)
+    r = np.empty(count)
+    x = np.empty(count)
+    y = np.empty(count)
+    p = 0
+    for i in range(valid.shape[0]):
+        if valid[i]:
+            index[p], r[p] = i, ranges[i]
+            x[p], y[p] = ranges[i] * cos[i], ranges[i] * sin[i]
+            p += 1
+    return index, r, x, y
+
+
+@jit
+def beam_gaps(index: np.ndarray, n_beams: int) -> np.ndarray:
+    """Beams between consecutive positions (a rotated full circle wraps once)."""
+    gap = np.empty(max(index.shape[0] - 1, 0), dtype=np.int64)
+    for p in range(gap.shape[0]):
+        gap[p] = (index[p + 1] - index[p]) % n_beams
+    return gap
+
+
+@jit
+def clustering_rule(s: np.ndarray, r: np.ndarray, gap: np.ndarray) -> np.ndarray:
+    """The breakpoint rule of settings ``s`` in array form, its noise terms from ranges ``r``.
+
+    The noise is estimated (from the whole scan) only when the rule uses it.
+    ``breakpoints="none"`` gives a rule that cuts at missing beams only.
+    """
+    kind = s[RULE_KIND]
+    if kind == NO_RULE:
+        return rule_array(FIXED, s[K], 0.0, 0.0, s[ABD_LAMBDA], s[PDBS_C0], math.inf)
+    sigma = 0.0
+    noisy_rule = kind in (ADAPTIVE, ABD) and s[NOISE_K] > 0.0
+    if noisy_rule or s[LINE_K] > 0.0:
+        n = r.shape[0]
+        sigma = MIN_NOISE_SIGMA
+        if n:
+            sigma = noise_from_ranges(r, gap, np.zeros(1, np.int64), np.full(1, n - 1, np.int64))
+    return rule_array(
+        int(kind),
+        s[K],
+        s[NOISE_K] * math.sqrt(2.0) * sigma,
+        s[LINE_K] * math.sqrt(5.0) * sigma,
+        s[ABD_LAMBDA],
+        s[PDBS_C0],
+        s[JUMP_DISTANCE],
+    )
+
+
+@jit
+def rotated(values: np.ndarray, shift: int) -> np.ndarray:
+    """``values`` rotated so that position ``shift`` comes first."""
+    return np.concatenate((values[shift:], values[:shift]))
+
+
+@jit
+def cluster_returns(index, r, x, y, n_beams: int, step: float, full_circle: bool, s):
+    """Kernel of :func:`cluster_sequence` on the returns' arrays.
+
+    Returns ``index, r, x, y`` (rotated for a full circle), the rotation
+    ``shift`` (the old position now first), the clusters' inclusive bounds
+    ``start, end``, the breakpoint beams and whether the scan is one closed ring.
+    """
+    n = index.shape[0]
+    none = np.zeros(0, dtype=np.int64)
+    rule = clustering_rule(s, r, beam_gaps(index, n_beams))
+    whole = s[RULE_KIND] == NO_RULE
+    if n == 0 and not whole:
+        return index, r, x, y, 0, none, none.copy(), none.copy(), False
+    shift, seam, ring = 0, False, False
+    if full_circle and n >= 3:
+        shift, seam, ring = seam_rotation(
+            x, y, r, index, beam_gaps(index, n_beams), n_beams, step, rule
+        )
+        if ring:
+            shift = ring_anchor(x, y, RING_WINDOW)
+        if shift:
+            index, r, x, y = (
+                rotated(index, shift),
+                rotated(r, shift),
+                rotated(x, shift),
+                rotated(y, shift),
+            )
+    if ring or whole:
+        start, end = np.zeros(1, np.int64), np.full(1, n - 1, np.int64)
+        return index, r, x, y, shift, start, end, none, ring
+    start, end = cluster_bounds(break_flags(x, y, r, beam_gaps(index, n_beams), step, rule))
+    return index, r, x, y, shift, start, end, break_beams(index, end, seam), False
 
 
 def cluster_sequence(seq: Sequence, params: Mapping[str, Any]) -> tuple[Sequence, Clusters, bool]:
@@ -174,26 +327,73 @@ def cluster_sequence(seq: Sequence, params: Mapping[str, Any]) -> tuple[Sequence
     ``breakpoints="none"`` (methods that work on the whole scan) returns one
     cluster over every return; a full circle is still rotated to start after a gap
     of missing beams (or, without any, at its strongest corner), so that no run
-    needs to cross the end of the sequence.
+    needs to cross the end of the sequence. The adaptive and ABD rules' noise
+    margin and the line-continuation bridge use the range noise estimated from
+    the scan.
 
     Returns the (possibly rotated) sequence, its clusters and whether the scan is
     one closed ring (a full circle without any break).
     """
-    name = params["breakpoints"]
-    if name == NO_CLUSTERING:
-        rule = BreakpointRule(name="fixed", jump_distance=math.inf)
-        seq, _, ring = cluster_scan(seq, rule, _ring_anchor)
-        whole = Clusters(np.array([0], dtype=np.intp), np.array([len(seq) - 1]), _EMPTY)
-        return seq, whole, ring
-    sigma = 0.0
-    noisy_rule = name in ("adaptive", "abd") and params.get("noise_k", 0.0) > 0.0
-    if noisy_rule or params.get("line_k", 0.0) > 0.0:
-        sigma = estimate_noise(seq, np.array([0]), np.array([len(seq) - 1]))
-    rule = BreakpointRule.from_params(dict(params), sigma)
-    return cluster_scan(seq, rule, _ring_anchor)
+    *_, shift, start, end, breakpoints, ring = cluster_returns(
+        *_returns(seq),
+        seq.n_beams,
+        seq.step,
+        is_full_circle(seq.n_beams, seq.step),
+        settings(params),
+    )
+    if shift or ring:
+        seq = rotate(seq, int(shift))
+    return seq, Clusters(start, end, breakpoints), bool(ring)
+
+
+def _returns(seq: Sequence) -> tuple[np.ndarray, ...]:
+    """``index, r, x, y`` of ``seq`` as the kernels take them."""
+    return (
+        np.ascontiguousarray(seq.index, dtype=np.int64),
+        *(np.ascontiguousarray(v, dtype=np.float64) for v in (seq.r, seq.x, seq.y)),
+    )
+
+
+def _ints(values: np.ndarray) -> np.ndarray:
+    return np.ascontiguousarray(values, dtype=np.int64)
+
+
+def _floats(values: np.ndarray) -> np.ndarray:
+    return np.ascontiguousarray(values, dtype=np.float64)
 
 
 # --------------------------------------------------------------------------- distances
+
+
+@jit(inline=True)
+def chord_distance(x: np.ndarray, y: np.ndarray, a: int, b: int, p: int) -> float:
+    """Distance of point ``p`` to the chord from point ``a`` to point ``b``.
+
+    The chord is the segment between the two points: a point whose foot lies
+    beyond an end is measured to that end. For a cluster that nearly closes on
+    itself (a room seen all round) the chord is short and its line points
+    anywhere; measured to the segment, the farthest point is the far corner,
+    not an arbitrary point of the side opposite the chord.
+    """
+    dx, dy = x[b] - x[a], y[b] - y[a]
+    px, py = x[p] - x[a], y[p] - y[a]
+    length2 = dx * dx + dy * dy
+    t = 0.0
+    if length2 > 0.0:
+        t = (px * dx + py * dy) / length2
+        if t < 0.0:
+            t = 0.0
+        elif t > 1.0:
+            t = 1.0
+    return math.hypot(px - t * dx, py - t * dy)
+
+
+@jit
+def _chord_distances(x, y, a, b, position, run):
+    out = np.empty(position.shape[0])
+    for i in range(position.shape[0]):
+        out[i] = chord_distance(x, y, a[run[i]], b[run[i]], position[i])
+    return out
 
 
 def chord_distances(
@@ -204,43 +404,103 @@ def chord_distances(
     position: np.ndarray,
     run: np.ndarray,
 ) -> np.ndarray:
-    """Distance of each labelled point to the chord from its run's first to last point.
-
-    The chord is the segment between the two points: a point whose foot lies
-    beyond an end is measured to that end. For a cluster that nearly closes on
-    itself (a room seen all round) the chord is short and its line points
-    anywhere; measured to the segment, the farthest point is the far corner,
-    not an arbitrary point of the side opposite the chord.
-    """
-    ax, ay = x[a][run], y[a][run]
-    dx, dy = (x[b] - x[a])[run], (y[b] - y[a])[run]
-    px, py = x[position] - ax, y[position] - ay
-    length2 = dx * dx + dy * dy
-    with np.errstate(invalid="ignore", divide="ignore"):
-        t = np.clip((px * dx + py * dy) / length2, 0.0, 1.0)
-    t = np.where(length2 > 0.0, t, 0.0)
-    return np.hypot(px - t * dx, py - t * dy)
+    """Distance of each labelled point to the chord of its run (see :func:`chord_distance`)."""
+    return _chord_distances(_floats(x), _floats(y), _ints(a), _ints(b), _ints(position), _ints(run))
 
 
-def line_distances(
-    x: np.ndarray, y: np.ndarray, lines: Lines, position: np.ndarray, run: np.ndarray
-) -> np.ndarray:
-    """Orthogonal distance of each labelled point to its run's line."""
-    return np.abs(point_residuals(x, y, lines.rho, lines.alpha, position, run))
-
-
-def _farthest(
-    distance: np.ndarray, run: np.ndarray, lengths: np.ndarray, position: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Largest ``distance`` of each run and the first position where it occurs."""
-    offsets = np.cumsum(lengths) - lengths
-    worst = np.maximum.reduceat(distance, offsets)
-    hit = np.flatnonzero(distance == worst[run])
-    _, first = np.unique(run[hit], return_index=True)
-    return worst, position[hit[first]]
+@jit(inline=True)
+def line_residual(x: np.ndarray, y: np.ndarray, p: int, rho: float, alpha: float) -> float:
+    """Orthogonal distance of point ``p`` to the line ``(rho, alpha)``."""
+    return abs(x[p] * math.cos(alpha) + y[p] * math.sin(alpha) - rho)
 
 
 # --------------------------------------------------------------------------- splitting
+
+
+@jit(inline=True)
+def farthest_from_chord(x: np.ndarray, y: np.ndarray, a: int, b: int) -> tuple[float, int]:
+    """Largest distance of an interior point of run ``[a, b]`` from its chord, and that point.
+
+    The first of equally far points; ``(-inf, a)`` without an interior point.
+    """
+    worst, at = -math.inf, a
+    for p in range(a + 1, b):
+        distance = chord_distance(x, y, a, b, p)
+        if distance > worst:  # NaN never wins
+            worst, at = distance, p
+    return worst, at
+
+
+@jit(inline=True)
+def farthest_from_line(x, y, table, ox: float, oy: float, a: int, b: int) -> float:
+    """Largest distance of an interior point of run ``[a, b]`` from the run's TLS line."""
+    rho, alpha, _ = tls_run(table, ox, oy, a, b)
+    c, s = math.cos(alpha), math.sin(alpha)
+    worst = -math.inf
+    for p in range(a + 1, b):
+        distance = abs(x[p] * c + y[p] * s - rho)
+        if distance > worst:
+            worst = distance
+    return worst
+
+
+@jit(inline=True)
+def split_side(x, y, table, ox: float, oy: float, a: int, b: int, at: int) -> int:
+    """Last position of the first part when run ``[a, b]`` is split at ``at``: ``at`` or ``at - 1``.
+
+    The split point joins the part whose TLS line (fitted without it) it is
+    nearer; next to an end (one point on that side) it joins that short side, the
+    long side being the one it does not fit.
+    """
+    if at - a < 2:
+        return at
+    if b - at < 2:
+        return at - 1
+    rho, alpha, _ = tls_run(table, ox, oy, a, at - 1)
+    to_left = line_residual(x, y, at, rho, alpha)
+    rho, alpha, _ = tls_run(table, ox, oy, at + 1, b)
+    to_right = line_residual(x, y, at, rho, alpha)
+    return at - 1 if to_left > to_right else at
+
+
+@jit
+def split_runs_at_farthest(x, y, table, ox, oy, a, b, group, threshold: float, reference: int):
+    """Kernel of :func:`split_runs`: each run split recursively, depth first.
+
+    Returns ``a, b, group`` of the final runs, each input run's parts in order
+    (so sequence order for disjoint runs given in order).
+    """
+    capacity = 0
+    for k in range(a.shape[0]):
+        capacity += max(b[k] - a[k] + 1, 1)  # every final run holds a point of its input
+    out_a = np.empty(capacity, dtype=np.int64)
+    out_b = np.empty(capacity, dtype=np.int64)
+    out_group = np.empty(capacity, dtype=np.int64)
+    # The stack holds runs still to test; every one of them ends as one output or more.
+    stack_a = np.empty(capacity, dtype=np.int64)
+    stack_b = np.empty(capacity, dtype=np.int64)
+    stack_group = np.empty(capacity, dtype=np.int64)
+    top = 0
+    for k in range(a.shape[0] - 1, -1, -1):
+        stack_a[top], stack_b[top], stack_group[top] = a[k], b[k], group[k]
+        top += 1
+    count = 0
+    while top:
+        top -= 1
+        lo, hi, g = stack_a[top], stack_b[top], stack_group[top]
+        if hi - lo >= 2:
+            worst, at = farthest_from_chord(x, y, lo, hi)
+            if reference == FIT:
+                worst = farthest_from_line(x, y, table, ox, oy, lo, hi)
+            if worst > threshold:
+                cut = split_side(x, y, table, ox, oy, lo, hi, at)
+                stack_a[top], stack_b[top], stack_group[top] = cut + 1, hi, g
+                stack_a[top + 1], stack_b[top + 1], stack_group[top + 1] = lo, cut, g
+                top += 2
+                continue
+        out_a[count], out_b[count], out_group[count] = lo, hi, g
+        count += 1
+    return out_a[:count], out_b[:count], out_group[:count]
 
 
 def split_runs(
@@ -279,68 +539,11 @@ def split_runs(
         The final runs in sequence order. Every point of the input runs is in
         exactly one of them.
     """
-    done: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
-    a, b, group = (np.asarray(v, dtype=np.intp) for v in (a, b, group))
-    while a.size:
-        splittable = b - a >= 2
-        done.append((a[~splittable], b[~splittable], group[~splittable]))
-        a, b, group = a[splittable], b[splittable], group[splittable]
-        if a.size == 0:
-            break
-        worst, at = _worst_points(seq, moments, a, b, "chord")
-        if reference == "fit":
-            worst, _ = _worst_points(seq, moments, a, b, "fit")
-        split = worst > threshold
-        done.append((a[~split], b[~split], group[~split]))
-        a, b, group, at = a[split], b[split], group[split], at[split]
-        cut = _side_of_split_point(seq, moments, a, b, at)
-        a, b, group = np.r_[a, cut + 1], np.r_[cut, b], np.r_[group, group]
-    return _ordered(done)
-
-
-def _worst_points(
-    seq: Sequence, moments: Moments, a: np.ndarray, b: np.ndarray, reference: str
-) -> tuple[np.ndarray, np.ndarray]:
-    """Farthest interior point of each run (length >= 3) from its chord or line."""
-    position, run = run_labels(a, b, len(seq))
-    if reference == "chord":
-        distance = chord_distances(seq.x, seq.y, a, b, position, run)
-    else:
-        distance = line_distances(seq.x, seq.y, tls_lines(moments, a, b), position, run)
-    end = (position == a[run]) | (position == b[run])
-    distance = np.where(end | np.isnan(distance), -np.inf, distance)
-    return _farthest(distance, run, b - a + 1, position)
-
-
-def _side_of_split_point(
-    seq: Sequence, moments: Moments, a: np.ndarray, b: np.ndarray, at: np.ndarray
-) -> np.ndarray:
-    """Last position of the first part: ``at`` or ``at - 1``.
-
-    The split point joins the part whose TLS line (fitted without it) it is
-    nearer; next to an end (one point on that side) it joins that short side, the
-    long side being the one it does not fit.
-    """
-    if a.size == 0:
-        return at
-    left = tls_lines(moments, a, np.maximum(at - 1, a))
-    right = tls_lines(moments, np.minimum(at + 1, b), b)
-    index = np.arange(a.size)
-    to_left = np.abs(point_residuals(seq.x, seq.y, left.rho, left.alpha, at, index))
-    to_right = np.abs(point_residuals(seq.x, seq.y, right.rho, right.alpha, at, index))
-    joins_left = ~(to_left > to_right)
-    joins_left = np.where(at - a < 2, True, np.where(b - at < 2, False, joins_left))
-    return np.where(joins_left, at, at - 1)
-
-
-def _ordered(
-    parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]],
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    if not parts:
-        return _EMPTY, _EMPTY, _EMPTY
-    a = np.concatenate([p[0] for p in parts]).astype(np.intp)
-    b = np.concatenate([p[1] for p in parts]).astype(np.intp)
-    group = np.concatenate([p[2] for p in parts]).astype(np.intp)
+    ox, oy = moments.origin
+    a, b, group = split_runs_at_farthest(
+        _floats(seq.x), _floats(seq.y), moments.table, ox, oy, _ints(a), _ints(b), _ints(group),
+        float(threshold), REFERENCE_CODES[reference],
+    )  # fmt: skip
     order = np.argsort(a, kind="stable")
     return a[order], b[order], group[order]
 
@@ -581,6 +784,31 @@ def _covered(n: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
 # --------------------------------------------------------------------------- merging
 
 
+@jit(inline=True)
+def wrap_angle(angle: float) -> float:
+    """``angle`` wrapped to ``(-pi, pi]``."""
+    return math.pi - (math.pi - angle) % (2.0 * math.pi)
+
+
+@jit(inline=True)
+def hesse_difference(rho_1: float, alpha_1: float, rho_2: float, alpha_2: float):
+    """``(rho_1 - rho_2, alpha_1 - alpha_2)`` of two Hesse lines (see :func:`line_difference`)."""
+    direct = wrap_angle(alpha_1 - alpha_2)
+    flipped = wrap_angle(alpha_1 - alpha_2 + math.pi)
+    if abs(flipped) < abs(direct):
+        return rho_1 + rho_2, flipped
+    return rho_1 - rho_2, direct
+
+
+@jit
+def _line_differences(rho_1, alpha_1, rho_2, alpha_2):
+    d_rho = np.empty(rho_1.shape[0])
+    d_alpha = np.empty(rho_1.shape[0])
+    for i in range(rho_1.shape[0]):
+        d_rho[i], d_alpha[i] = hesse_difference(rho_1[i], alpha_1[i], rho_2[i], alpha_2[i])
+    return d_rho, d_alpha
+
+
 def line_difference(
     rho_1: np.ndarray, alpha_1: np.ndarray, rho_2: np.ndarray, alpha_2: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -590,29 +818,83 @@ def line_difference(
     and ``(-rho, alpha + pi)``); of the two the one with the smaller angle
     difference is used.
     """
-    direct = _wrap(alpha_1 - alpha_2)
-    flipped = _wrap(alpha_1 - alpha_2 + np.pi)
-    flip = np.abs(flipped) < np.abs(direct)
-    return np.where(flip, rho_1 + rho_2, rho_1 - rho_2), np.where(flip, flipped, direct)
+    values = np.broadcast_arrays(
+        *(np.asarray(v, dtype=np.float64) for v in (rho_1, alpha_1, rho_2, alpha_2))
+    )
+    d_rho, d_alpha = _line_differences(*(np.ascontiguousarray(v.ravel()) for v in values))
+    return d_rho.reshape(values[0].shape), d_alpha.reshape(values[0].shape)
 
 
-def _wrap(angle: np.ndarray) -> np.ndarray:
-    return np.pi - np.mod(np.pi - angle, 2.0 * np.pi)
+@jit(inline=True)
+def chi_square(rho_1, alpha_1, rho_2, alpha_2, covariance_1, covariance_2) -> float:
+    """``dL^T (P_1 + P_2)^-1 dL`` of two lines; NaN where the sum is singular."""
+    d_rho, d_alpha = hesse_difference(rho_1, alpha_1, rho_2, alpha_2)
+    p = covariance_1[0, 0] + covariance_2[0, 0]
+    q = covariance_1[0, 1] + covariance_2[0, 1]
+    s = covariance_1[1, 1] + covariance_2[1, 1]
+    det = p * s - q * q
+    if not det > 0.0:  # degenerate runs carry inf/NaN covariances
+        return math.nan
+    return (s * d_rho * d_rho - 2.0 * q * d_rho * d_alpha + p * d_alpha * d_alpha) / det
+
+
+@jit
+def _pair_chi_squares(rho, alpha, covariance, first, second):
+    out = np.empty(first.shape[0])
+    for i in range(first.shape[0]):
+        j, k = first[i], second[i]
+        out[i] = chi_square(rho[j], alpha[j], rho[k], alpha[k], covariance[j], covariance[k])
+    return out
 
 
 def pair_chi_square(
     lines: Lines, covariance: np.ndarray, first: np.ndarray, second: np.ndarray
 ) -> np.ndarray:
     """``dL^T (P_1 + P_2)^-1 dL`` of line pairs; NaN where the sum is singular."""
-    d_rho, d_alpha = line_difference(
-        lines.rho[first], lines.alpha[first], lines.rho[second], lines.alpha[second]
+    return _pair_chi_squares(
+        _floats(lines.rho), _floats(lines.alpha), _floats(covariance), _ints(first), _ints(second)
     )
-    with np.errstate(all="ignore"):  # degenerate runs carry inf/NaN covariances
-        total = covariance[first] + covariance[second]
-        p, q, s = total[:, 0, 0], total[:, 0, 1], total[:, 1, 1]
-        det = p * s - q * q
-        value = (s * d_rho * d_rho - 2.0 * q * d_rho * d_alpha + p * d_alpha * d_alpha) / det
-    return np.where(det > 0.0, value, np.nan)
+
+
+@jit
+def run_covariance(x, y, r, rho: float, alpha: float, a: int, b: int, range_sigma: float):
+    """Covariance of the line ``(rho, alpha)`` of run ``[a, b]`` (shape (2, 2))."""
+    position, run = run_labels(np.full(1, a), np.full(1, b), x.shape[0])
+    return covariances(x, y, r, np.full(1, rho), np.full(1, alpha), position, run, range_sigma)[0]
+
+
+@jit
+def merge_runs_chi_square(x, y, r, table, ox, oy, a, b, group, range_sigma, threshold):
+    """Kernel of :func:`merge_chi_square` (returns new arrays)."""
+    a, b, group = a.copy(), b.copy(), group.copy()
+    m = a.shape[0]
+    rho, alpha, _ = fit_many(TLS, table, ox, oy, a, b)
+    position, run = run_labels(a, b, x.shape[0])
+    covariance = covariances(x, y, r, rho, alpha, position, run, range_sigma)
+    while m >= 2:
+        best, best_value = -1, math.inf
+        for k in range(m - 1):
+            if group[k] != group[k + 1]:
+                continue
+            value = chi_square(
+                rho[k], alpha[k], rho[k + 1], alpha[k + 1], covariance[k], covariance[k + 1]
+            )
+            if value != value:
+                value = math.inf
+            if best < 0 or value < best_value:
+                best, best_value = k, value
+        if best < 0 or not best_value < threshold:
+            break
+        b[best] = b[best + 1]
+        for k in range(best + 1, m - 1):  # delete run best + 1
+            a[k], b[k], group[k] = a[k + 1], b[k + 1], group[k + 1]
+            rho[k], alpha[k], covariance[k] = rho[k + 1], alpha[k + 1], covariance[k + 1]
+        m -= 1
+        rho[best], alpha[best], _ = tls_run(table, ox, oy, a[best], b[best])
+        covariance[best] = run_covariance(
+            x, y, r, rho[best], alpha[best], a[best], b[best], range_sigma
+        )
+    return a[:m], b[:m], group[:m]
 
 
 def merge_chi_square(
@@ -630,42 +912,142 @@ def merge_chi_square(
     The pair with the smallest chi-square below ``threshold`` is merged (the
     runs and everything between them), refitted, and the test repeated.
     """
-    a, b, group = a.copy(), b.copy(), group.copy()
-    while a.size >= 2:
-        pair = np.flatnonzero(group[:-1] == group[1:])
-        if pair.size == 0:
-            break
-        lines = tls_lines(moments, a, b)
-        position, run = run_labels(a, b, len(seq))
-        covariance = line_covariances(
-            seq.x, seq.y, seq.r, lines.rho, lines.alpha, position, run, range_sigma
-        )
-        value = pair_chi_square(lines, covariance, pair, pair + 1)
-        value = np.where(np.isnan(value), np.inf, value)
-        best = int(np.argmin(value))
-        if not value[best] < threshold:
-            break
-        k = int(pair[best])
-        b[k] = b[k + 1]
-        a, b, group = np.delete(a, k + 1), np.delete(b, k + 1), np.delete(group, k + 1)
-    return a, b, group
+    ox, oy = moments.origin
+    x, y, r = _floats(seq.x), _floats(seq.y), _floats(seq.r)
+    return merge_runs_chi_square(
+        x, y, r, moments.table, ox, oy, _ints(a), _ints(b), _ints(group),
+        float(range_sigma), float(threshold),
+    )  # fmt: skip
 
 
 # --------------------------------------------------------------------------- events
+
+
+@jit
+def _line_intersections(rho, alpha, first, second):
+    x = np.empty(first.shape[0])
+    y = np.empty(first.shape[0])
+    for i in range(first.shape[0]):
+        j, k = first[i], second[i]
+        x[i], y[i] = line_intersection(rho[j], alpha[j], rho[k], alpha[k])
+    return x, y
 
 
 def line_intersections(
     lines: Lines, first: np.ndarray, second: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """Intersection of line pairs (NaN for parallel lines)."""
-    ai, aj = lines.alpha[first], lines.alpha[second]
-    ri, rj = lines.rho[first], lines.rho[second]
-    det = np.sin(aj - ai)
-    parallel = ~(np.abs(det) > 1e-12)
-    with np.errstate(all="ignore"):
-        x = (ri * np.sin(aj) - rj * np.sin(ai)) / det
-        y = (rj * np.cos(ai) - ri * np.cos(aj)) / det
-    return np.where(parallel, np.nan, x), np.where(parallel, np.nan, y)
+    return _line_intersections(
+        _floats(lines.rho), _floats(lines.alpha), _ints(first), _ints(second)
+    )
+
+
+@jit
+def sorted_distinct(values: np.ndarray) -> np.ndarray:
+    """The distinct values of an integer array, ascending."""
+    ordered = np.sort(values)
+    count = min(ordered.shape[0], 1)
+    for i in range(1, ordered.shape[0]):
+        if ordered[i] != ordered[count - 1]:
+            ordered[count] = ordered[i]
+            count += 1
+    return ordered[:count]
+
+
+@jit(inline=True)
+def nearest_return(
+    x, y, cx: float, cy: float, low: int, end: int, start: int, high: int, reach: int, widest: int
+) -> int:
+    """Position nearest ``(cx, cy)`` among ``end - reach .. start + reach`` (within ``low..high``).
+
+    A pair that wraps (the last segment and the first) counts on past the end of
+    the sequence. The candidates run on to ``end + reach + widest``, ``widest``
+    the most positions between the facing ends of any pair of the scan (as the
+    vectorised implementation had it); those beyond ``high`` count as ``end``.
+    """
+    n = x.shape[0]
+    if start < end:
+        high += n
+    best, best_distance = -1, math.inf
+    for offset in range(-reach, reach + 1 + widest):
+        candidate = end + offset
+        if candidate < low or candidate > high:
+            candidate = end
+        candidate %= n
+        distance = math.hypot(x[candidate] - cx, y[candidate] - cy)
+        if distance != distance:
+            distance = math.inf
+        if best < 0 or distance < best_distance:
+            best, best_distance = candidate, distance
+    return best
+
+
+@jit
+def run_events(
+    x,
+    y,
+    index,
+    n_beams,
+    table,
+    ox,
+    oy,
+    a,
+    b,
+    group,
+    clustered,
+    wrap,
+    corner_beams,
+    corner_distance,
+    corner_angle,
+):
+    """Kernel of :func:`segment_events`: ``corners, breakpoints`` (sorted distinct beams).
+
+    ``clustered``: only segments of one ``group`` can meet and no breakpoints are
+    derived; ``corner_angle`` in radians.
+    """
+    none = np.zeros(0, dtype=np.int64)
+    m = a.shape[0]
+    if m == 0 or (m == 1 and not wrap):
+        return none, none.copy()
+    pairs = m if wrap and m >= 2 else m - 1
+    first = np.empty(pairs, dtype=np.int64)
+    count = widest = 0
+    for k in range(pairs):
+        following = (k + 1) % m
+        if clustered and group[k] != group[following]:
+            continue
+        first[count] = k
+        count += 1
+        span = a[following] - b[k]
+        widest = max(widest, span + x.shape[0] if span < 0 else span)
+    rho, alpha, _ = fit_many(TLS, table, ox, oy, a, b)
+    reach = int(corner_beams)
+    corners = np.empty(count, dtype=np.int64)
+    jumps = np.empty(count, dtype=np.int64)
+    n_corners = n_jumps = 0
+    for c in range(count):
+        i = first[c]
+        j = (i + 1) % m
+        end, start = b[i], a[j]
+        _, turn = hesse_difference(rho[i], alpha[i], rho[j], alpha[j])
+        turns = abs(turn) >= corner_angle
+        cx, cy = line_intersection(rho[i], alpha[i], rho[j], alpha[j])
+        to_end = math.hypot(x[end] - cx, y[end] - cy)
+        to_start = math.hypot(x[start] - cx, y[start] - cy)
+        near = (index[start] - index[end]) % max(n_beams, 1) <= corner_beams
+        if near and turns and to_end <= corner_distance and to_start <= corner_distance:
+            at = nearest_return(x, y, cx, cy, a[i], end, start, b[j], reach, widest)
+            corners[n_corners] = index[at]
+            n_corners += 1
+            continue
+        if clustered:
+            continue
+        end_off = line_residual(x, y, end, rho[j], alpha[j])
+        start_off = line_residual(x, y, start, rho[i], alpha[i])
+        if not (near and not turns and end_off <= corner_distance and start_off <= corner_distance):
+            jumps[n_jumps] = index[end]
+            n_jumps += 1
+    return sorted_distinct(corners[:n_corners]), sorted_distinct(jumps[:n_jumps])
 
 
 def segment_events(
@@ -702,63 +1084,29 @@ def segment_events(
     corners, breakpoints:
         Sorted beam indices.
     """
-    m = a.size
-    if m == 0 or (m == 1 and not wrap):
-        return _EMPTY, _EMPTY
-    first = np.arange(m - 1) if not (wrap and m >= 2) else np.arange(m)
-    second = (first + 1) % m
-    if group is not None:
-        first = first[group[first] == group[second]]
-        second = (first + 1) % m
-    end, start = b[first], a[second]
-    lines = tls_lines(moments, a, b)
-    _, turn = line_difference(
-        lines.rho[first], lines.alpha[first], lines.rho[second], lines.alpha[second]
-    )
-    turns = np.abs(turn) >= math.radians(corner_angle)
-    cx, cy = line_intersections(lines, first, second)
-    to_end = np.hypot(seq.x[end] - cx, seq.y[end] - cy)
-    to_start = np.hypot(seq.x[start] - cx, seq.y[start] - cy)
-    near = (seq.index[start] - seq.index[end]) % max(seq.n_beams, 1) <= corner_beams
-    corner = near & turns & (to_end <= corner_distance) & (to_start <= corner_distance)
-    end_off = np.abs(point_residuals(seq.x, seq.y, lines.rho, lines.alpha, end, second))
-    start_off = np.abs(point_residuals(seq.x, seq.y, lines.rho, lines.alpha, start, first))
-    continues = near & ~turns & (end_off <= corner_distance) & (start_off <= corner_distance)
-    at = _nearest_return(seq, cx, cy, a[first], end, start, b[second], corner_beams)
-    corners = np.unique(seq.index[at[corner]])
-    if group is not None:
-        return corners, _EMPTY
-    return corners, np.unique(seq.index[end[~corner & ~continues]])
+    a = _ints(a)
+    ox, oy = moments.origin
+    return run_events(
+        _floats(seq.x), _floats(seq.y), _ints(seq.index), int(seq.n_beams), moments.table, ox, oy,
+        a, _ints(b), _ints(a if group is None else group), group is not None, bool(wrap),
+        float(corner_beams), float(corner_distance), math.radians(corner_angle),
+    )  # fmt: skip
 
 
-def _nearest_return(
-    seq: Sequence,
-    cx: np.ndarray,
-    cy: np.ndarray,
-    low: np.ndarray,
-    end: np.ndarray,
-    start: np.ndarray,
-    high: np.ndarray,
-    reach: int,
-) -> np.ndarray:
-    """Position nearest ``(cx, cy)`` among ``end - reach .. start + reach`` (within ``low..high``).
+# --------------------------------------------------------------------------- assembly
 
-    A pair that wraps (the last segment and the first) counts on past the end of
-    the sequence.
-    """
-    if end.size == 0:
-        return end
-    n = len(seq)
-    wraps = start < end
-    start = np.where(wraps, start + n, start)
-    high = np.where(wraps, high + n, high)
-    offsets = np.arange(-reach, reach + 1 + int(np.max(start - end)))
-    candidate = end[:, None] + offsets[None, :]
-    inside = (candidate >= low[:, None]) & (candidate <= high[:, None])
-    candidate = np.where(inside, candidate, end[:, None]) % n
-    distance = np.hypot(seq.x[candidate] - cx[:, None], seq.y[candidate] - cy[:, None])
-    distance = np.where(np.isnan(distance), np.inf, distance)
-    return candidate[np.arange(end.size), np.argmin(distance, axis=1)]
+
+@jit
+def drop_small_runs(x, y, a, b, group, min_points: float, min_length: float):
+    """Kernel of :func:`drop_small`."""
+    kept_a, kept_b, kept_group = a.copy(), b.copy(), group.copy()
+    count = 0
+    for k in range(a.shape[0]):
+        length = math.hypot(x[b[k]] - x[a[k]], y[b[k]] - y[a[k]])
+        if b[k] - a[k] + 1 >= max(min_points, 2.0) and length >= min_length:
+            kept_a[count], kept_b[count], kept_group[count] = a[k], b[k], group[k]
+            count += 1
+    return kept_a[:count], kept_b[:count], kept_group[:count]
 
 
 def drop_small(
@@ -771,9 +1119,51 @@ def drop_small(
     min_length: float,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Runs with at least ``min_points`` points and an end-to-end length of ``min_length``."""
-    length = np.hypot(seq.x[b] - seq.x[a], seq.y[b] - seq.y[a])
-    keep = (b - a + 1 >= max(min_points, 2)) & (length >= min_length)
-    return a[keep], b[keep], group[keep]
+    return drop_small_runs(
+        _floats(seq.x), _floats(seq.y), _ints(a), _ints(b), _ints(group),
+        float(min_points), float(min_length),
+    )  # fmt: skip
+
+
+@jit
+def finish_runs(
+    index,
+    r,
+    x,
+    y,
+    n_beams,
+    full_circle,
+    table,
+    ox,
+    oy,
+    a,
+    b,
+    group,
+    clustered,
+    ring,
+    breakpoints,
+    outliers,
+    angle_min,
+    s,
+):
+    """Kernel of :func:`finish`: the result arrays, as
+    :func:`~scanlines.steps.assemble.assemble_runs` returns them.
+
+    ``table, ox, oy`` are the prefix moments of ``x, y``; ``clustered`` whether
+    ``breakpoints`` come from the method's clustering (else they are derived
+    from the jumps between segments).
+    """
+    a, b, group = drop_small_runs(x, y, a, b, group, s[MIN_POINTS], s[MIN_LENGTH])
+    corners, jumps = run_events(
+        x, y, index, n_beams, table, ox, oy, a, b, group, clustered,
+        ring if clustered else full_circle, s[CORNER_BEAMS], s[CORNER_DISTANCE], s[CORNER_ANGLE],
+    )  # fmt: skip
+    if not clustered:
+        breakpoints = jumps
+    return assemble_runs(
+        index, x, y, r, a, b, TLS, table, ox, oy, angle_min, s[RANGE_SIGMA],
+        sorted_distinct(breakpoints), corners, sorted_distinct(outliers),
+    )  # fmt: skip
 
 
 def finish(
@@ -794,34 +1184,12 @@ def finish(
     ``clusters`` is the method's clustering (its breakpoints are reported and
     corners stay inside clusters), or ``None`` for a method on the whole scan.
     """
-    a, b, group = drop_small(
-        seq, a, b, group, min_points=params["min_points"], min_length=params["min_length"]
-    )
-    moments = Moments(seq.x, seq.y)
-    full = is_full_circle(seq.n_beams, seq.step)
-    corners, derived = segment_events(
-        seq,
-        moments,
-        a,
-        b,
-        group=None if clusters is None else group,
-        wrap=ring if clusters is not None else full,
-        corner_beams=params["corner_beams"],
-        corner_distance=params["corner_distance"],
-        corner_angle=params["corner_angle"],
-    )
-    breakpoints = derived if clusters is None else clusters.breakpoints
-    return assemble(
-        seq,
-        a,
-        b,
-        fit="tls",
-        moments=moments,
-        corners=corners,
-        breakpoints=np.unique(breakpoints).astype(np.intp),
-        outliers=np.unique(outliers).astype(np.intp),
-        angle_min=angle_min,
-        range_sigma=params["range_sigma"],
-        method=method,
-        params=params,
-    )
+    index, r, x, y = _returns(seq)
+    table, ox, oy = prefix_moments(x, y)
+    arrays = finish_runs(
+        index, r, x, y, int(seq.n_beams), is_full_circle(seq.n_beams, seq.step), table, ox, oy,
+        _ints(a), _ints(b), _ints(group), clusters is not None, bool(ring),
+        _EMPTY.astype(np.int64) if clusters is None else _ints(clusters.breakpoints),
+        _ints(outliers), float(angle_min), settings(params),
+    )  # fmt: skip
+    return from_arrays(arrays, method, params)
