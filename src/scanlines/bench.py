@@ -654,6 +654,7 @@ def machine_info() -> dict[str, Any]:
         "platform": platform.platform(),
         "python": f"{platform.python_implementation()} {platform.python_version()}",
         "numpy": np.__version__,
+        "numba": _numba_version(),
         "blas": _blas(),
         "openblas_env": {k: os.environ[k] for k in thread_vars if k.startswith("OPENBLAS")},
         "thread_env": {k: os.environ[k] for k in thread_vars if not k.startswith("OPENBLAS")},
@@ -684,6 +685,16 @@ def _cpu_from_proc() -> tuple[str | None, int | None]:
     if physical_id is not None and core_id is not None:
         cores.add((physical_id, core_id))
     return model, (len(cores) or None)
+
+
+def _numba_version() -> str | None:
+    from scanlines._jit import COMPILED
+
+    if not COMPILED:
+        return None
+    import numba
+
+    return numba.__version__
 
 
 def _blas() -> str | None:
@@ -1127,6 +1138,9 @@ def _machine_lines(result: BenchResult) -> list[str]:
         f"- OS: {m['platform']}",
         f"- Python: {m['python']}",
         f"- numpy: {m['numpy']}" + (f", BLAS: {m['blas']}" if m.get("blas") else ""),
+        f"- numba: {m.get('numba') or 'not installed (kernels run as plain Python)'}; "
+        "adaptive, iepf, pdbs and split_merge run as compiled kernels, line_tracking, "
+        "line_regression, ransac and hough as numpy",
         f"- OPENBLAS environment variables: {openblas}",
         f"- Other thread-count variables (OMP_NUM_THREADS, MKL_NUM_THREADS): {threads}",
         f"- Load average: {load}",

@@ -1447,9 +1447,10 @@ def _headline_section(result: ReproduceResult) -> str:
             "points that lie on a segment, so a method that drops more points (outliers, "
             "short clusters) or cuts walls into more, shorter segments scores lower without "
             "describing the room better. It needs no ground truth, which is why the matched "
-            "scores of Tables 1 and 3 are the stronger evidence. The times compare numpy "
-            "implementations whose cost is mostly per-call overhead (see "
-            "`docs/PERFORMANCE.md`), not the paper's MATLAB code.\n",
+            "scores of Tables 1 and 3 are the stronger evidence. The times compare our "
+            "implementations, not the paper's MATLAB code: adaptive, iepf, pdbs and "
+            "split_merge run as compiled kernels (numba), the other methods as numpy (see "
+            "`docs/PERFORMANCE.md`).\n",
             *[_nonfinite_note(r) for r in result.real if _nonfinite_note(r)],
         ]
     )
