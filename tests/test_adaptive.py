@@ -225,3 +225,32 @@ def test_corner_check_turns_a_bridged_depth_step_into_a_breakpoint():
         assert checked.corners.size == 0
         assert checked.breakpoints.tolist() == [step]
         assert len(checked.segments) == 2
+
+
+def _proportional_noise_corridor(seed: int) -> Scan:
+    """A corridor seen along its length at 0.35 deg with range noise of 1.5 % of the range
+    (as a URG-04LX beyond 1 m): near returns are quiet, far ones noisy."""
+    walls = [((0.3, -0.8), (9.0, -0.8)), ((0.3, 0.8), (9.0, 0.8)), ((9.0, -0.8), (9.0, 0.8))]
+    step = math.radians(0.35)
+    angles = math.radians(-120) + step * np.arange(683)
+    ranges = cast(walls, angles)
+    noise = np.random.default_rng(seed).normal(0.0, 1.0, ranges.size)
+    ranges = ranges + np.where(np.isfinite(ranges), 0.015 * ranges * noise, 0.0)
+    return Scan(ranges, math.radians(-120), step)
+
+
+def test_range_noise_model_keeps_far_noisy_walls_whole():
+    constant = range_model = 0
+    for seed in range(5):
+        scan = _proportional_noise_corridor(seed)
+        constant += len(extract(scan).breakpoints)
+        range_model += len(extract(scan, noise_model="range").breakpoints)
+    # three walls meeting at corners: no true breakpoint in this scene
+    assert range_model < constant / 2, (range_model, constant)
+
+
+def test_range_noise_model_changes_nothing_without_noise_growth():
+    scan = scan_of(square_room(), fov_deg=270, step_deg=0.5, sigma=0.01, seed=2)
+    a, b = extract(scan), extract(scan, noise_model="range")
+    assert a.breakpoints.tolist() == b.breakpoints.tolist()
+    assert a.first.tolist() == b.first.tolist()

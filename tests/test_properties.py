@@ -69,6 +69,7 @@ def assigned_beams(result: Extraction, k: int, n: int) -> np.ndarray:
 
 default = Extractor()
 paper = Extractor(preset="paper")
+range_noise = Extractor(noise_model="range")
 settings_fast = settings(
     max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow]
 )
@@ -85,6 +86,13 @@ def test_default_never_fails_and_orders_segments(scan):
 @given(scans())
 def test_paper_preset_never_fails_and_orders_segments(scan):
     result = paper(scan)
+    check_order(result, len(scan), scan.full_circle)
+
+
+@settings_fast
+@given(scans())
+def test_range_noise_model_never_fails_and_orders_segments(scan):
+    result = range_noise(scan)
     check_order(result, len(scan), scan.full_circle)
 
 

@@ -20,6 +20,8 @@ VARIANTS = {
     "abd_lambda=15": {"abd_lambda": 15},
     "abd_lambda=20": {"abd_lambda": 20},
     "abd_lambda=20, mcp=1": {"abd_lambda": 20, "min_cluster_points": 1},
+    "noise_model=constant": {"noise_model": "constant"},
+    "noise_model=range": {"noise_model": "range"},
 }
 
 

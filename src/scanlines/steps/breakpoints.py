@@ -92,7 +92,7 @@ BREAKPOINT_PARAMS: dict[str, Param] = {
 RULE_CODES = {name: code for code, name in enumerate(RULES)}
 ADAPTIVE, ABD, PDBS, FIXED = range(4)
 # Positions in the array form of a rule that the kernels take.
-_KIND, _K, _MARGIN, _LINE_TOL, _LAMBDA, _C0, _JUMP = range(7)
+_KIND, _K, _MARGIN, _LINE_TOL, _LAMBDA, _C0, _JUMP, _FAR_MARGIN, _GROWTH, _FAR_RANGE = range(10)
 
 
 @dataclass(frozen=True, slots=True)
@@ -144,7 +144,7 @@ def rule_array(
     jump_distance: float,
 ) -> np.ndarray:
     """Array form of a :class:`BreakpointRule` (``kind`` one of ``ADAPTIVE ... FIXED``)."""
-    rule = np.empty(7)
+    rule = np.zeros(10)
     rule[_KIND] = kind
     rule[_K] = k
     rule[_MARGIN] = noise_margin
@@ -153,6 +153,19 @@ def rule_array(
     rule[_C0] = pdbs_c0
     rule[_JUMP] = jump_distance
     return rule
+
+
+@jit
+def with_margin_growth(rule: np.ndarray, far_margin: float, growth: float, far_range: float):
+    """The rule with a noise margin that grows with range where the noise does.
+
+    The margin at range ``r`` becomes ``max(noise_margin, far_margin + growth (r -
+    far_range))``: sensors whose range noise is a share of the range (the
+    URG-04LX: 1 % beyond 1 m) need a wider margin far away than near.
+    """
+    out = rule.copy()
+    out[_FAR_MARGIN], out[_GROWTH], out[_FAR_RANGE] = far_margin, growth, far_range
+    return out
 
 
 @dataclass(frozen=True, slots=True)
@@ -206,7 +219,8 @@ def scaled_threshold(rule: np.ndarray, factor: float, r_from: float, r_to: float
     """The threshold from :func:`gap_factor` and the two ranges."""
     kind = rule[_KIND]
     if kind in (ADAPTIVE, ABD):
-        return factor * r_from + rule[_MARGIN]
+        far = rule[_FAR_MARGIN] + rule[_GROWTH] * (r_from - rule[_FAR_RANGE])
+        return factor * r_from + max(rule[_MARGIN], far)
     if kind == PDBS:
         return rule[_C0] + factor * min(r_from, r_to)
     return rule[_JUMP]

@@ -166,6 +166,42 @@ def noise_from_ranges(r, gap, cluster_start, cluster_end) -> float:
     return max(sigma, MIN_NOISE_SIGMA)
 
 
+@jit
+def noise_growth(r, gap, cluster_start, cluster_end) -> tuple[float, float, float]:
+    """How the range noise grows with range: ``(sigma_far, slope, far_range)``.
+
+    The triples of :func:`estimate_noise` are split at their median range; the
+    robust noise of each half and the median range of each half give a line
+    ``sigma(r) = sigma_far + slope (r - far_range)`` (``slope >= 0``, 0 when the
+    noise does not grow, as on sensors with a constant range error).
+    """
+    n = r.shape[0]
+    interior = np.ones(n, dtype=np.bool_)
+    interior[cluster_start] = False
+    interior[cluster_end] = False
+    second = np.empty(n)
+    at = np.empty(n)
+    count = 0
+    for i in range(1, n - 1):
+        if interior[i] and gap[i - 1] == 1 and gap[i] == 1:
+            second[count] = abs(r[i + 1] - 2.0 * r[i] + r[i - 1])
+            at[count] = r[i]
+            count += 1
+    if count < 6:
+        return 0.0, 0.0, 0.0
+    second, at = second[:count], at[:count]
+    middle = np.median(at)
+    near, far = at <= middle, at > middle
+    if not far.any():
+        return 0.0, 0.0, 0.0
+    scale = 0.6745 * math.sqrt(6.0)
+    sigma_near, sigma_far = np.median(second[near]) / scale, np.median(second[far]) / scale
+    near_range, far_range = np.median(at[near]), np.median(at[far])
+    if far_range <= near_range:
+        return 0.0, 0.0, 0.0
+    return sigma_far, max((sigma_far - sigma_near) / (far_range - near_range), 0.0), far_range
+
+
 def estimate_noise(seq: Sequence, cluster_start: np.ndarray, cluster_end: np.ndarray) -> float:
     """Robust range-noise estimate from the scan itself, in metres.
 
