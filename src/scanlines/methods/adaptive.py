@@ -120,7 +120,7 @@ from scanlines.steps.breakpoints import (
     break_flags,
     cluster_bounds,
     neighbour_steps,
-    rule_array,
+    noise_rule,
     seam_break,
     seam_rotation,
     with_margin_growth,
@@ -389,15 +389,10 @@ extract_points = jit(points_pipeline)
 
 @jit
 def _rule(s, sigma):
-    return rule_array(
-        int(s[RULE_KIND]),
-        s[K],
-        s[NOISE_K] * math.sqrt(2.0) * sigma,
-        s[LINE_K] * math.sqrt(5.0) * sigma,
-        s[ABD_LAMBDA],
-        s[PDBS_C0],
-        s[JUMP_DISTANCE],
-    )
+    return noise_rule(
+        int(s[RULE_KIND]), s[K], s[NOISE_K], s[LINE_K], s[ABD_LAMBDA], s[PDBS_C0],
+        s[JUMP_DISTANCE], sigma,
+    )  # fmt: skip
 
 
 @jit

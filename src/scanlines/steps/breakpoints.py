@@ -156,6 +156,26 @@ def rule_array(
 
 
 @jit
+def noise_rule(kind, k, noise_k, line_k, abd_lambda_rad, pdbs_c0, jump_distance, sigma):
+    """:func:`rule_array` with the noise terms in units of the range noise ``sigma``.
+
+    The margin is ``noise_k`` standard deviations of a difference of two ranges
+    (``sqrt(2) sigma``), the line tolerance ``line_k`` standard deviations of an
+    extrapolation from two points (``sqrt(5) sigma``), as in
+    :meth:`BreakpointRule.from_params`.
+    """
+    return rule_array(
+        kind,
+        k,
+        noise_k * math.sqrt(2.0) * sigma,
+        line_k * math.sqrt(5.0) * sigma,
+        abd_lambda_rad,
+        pdbs_c0,
+        jump_distance,
+    )
+
+
+@jit
 def with_margin_growth(rule: np.ndarray, far_margin: float, growth: float, far_range: float):
     """The rule with a noise margin that grows with range where the noise does.
 

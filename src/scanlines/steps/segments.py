@@ -105,6 +105,7 @@ from scanlines.steps.breakpoints import (
     break_beams,
     break_flags,
     cluster_bounds,
+    noise_rule,
     rule_array,
     seam_rotation,
 )
@@ -269,14 +270,8 @@ def clustering_rule(s: np.ndarray, r: np.ndarray, gap: np.ndarray) -> np.ndarray
         sigma = MIN_NOISE_SIGMA
         if n:
             sigma = noise_from_ranges(r, gap, np.zeros(1, np.int64), np.full(1, n - 1, np.int64))
-    return rule_array(
-        int(kind),
-        s[K],
-        s[NOISE_K] * math.sqrt(2.0) * sigma,
-        s[LINE_K] * math.sqrt(5.0) * sigma,
-        s[ABD_LAMBDA],
-        s[PDBS_C0],
-        s[JUMP_DISTANCE],
+    return noise_rule(
+        int(kind), s[K], s[NOISE_K], s[LINE_K], s[ABD_LAMBDA], s[PDBS_C0], s[JUMP_DISTANCE], sigma
     )
 
 
