@@ -57,7 +57,7 @@ def main() -> None:
     start, end, breakpoints = clustered[4], clustered[5], clustered[6]
     table, ox, oy = fit.prefix_moments(x, y)
     inv_r2 = fit.inverse_square_sums(r)
-    scores = ad._scores(x, y, r, index, n_beams, step, table, ox, oy, start, end, window, s)
+    scores = ad._scores(x, y, r, index, n_beams, step, table, start, end, window, s)
     corners, sigma2 = ad._choose_corners(table, ox, oy, inv_r2, start, end, scores, sigma, s, grid)
     a, b, owner = ad._segments(x, y, table, ox, oy, inv_r2, start, end, corners, sigma2, s)
     cut = ad._cut(start, end, corners, False)
@@ -76,7 +76,7 @@ def main() -> None:
         ),
         "running sums": lambda: fit.prefix_moments(x, y),
         "turn-angle scores": lambda: ad._scores(
-            x, y, r, index, n_beams, step, table, ox, oy, start, end, window, s
+            x, y, r, index, n_beams, step, table, start, end, window, s
         ),
         "candidates + sweep + choice": lambda: ad._choose_corners(
             table, ox, oy, inv_r2, start, end, scores, sigma, s, grid

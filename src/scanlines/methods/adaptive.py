@@ -368,7 +368,7 @@ def points_pipeline(index, r, x, y, n_beams, step, full_circle, angle_min, s, gr
     )
     table, ox, oy = prefix_moments(x, y)
     inv_r2 = inverse_square_sums(r) if s[CRITERION] == BIC else np.zeros(0)
-    scores = _scores(x, y, r, index, n_beams, step, table, ox, oy, start, end, window, s)
+    scores = _scores(x, y, r, index, n_beams, step, table, start, end, window, s)
     corners, sigma = _choose_corners(table, ox, oy, inv_r2, start, end, scores, sigma, s, grid)
     a, b, owner = _segments(x, y, table, ox, oy, inv_r2, start, end, corners, sigma, s)
     check_sigma = sigma if s[CORNER_CHECK] else -1.0
@@ -506,10 +506,10 @@ def _cluster_scan(index, r, x, y, n_beams, step, full_circle, rule, window, brea
 
 
 @jit
-def _scores(x, y, r, index, n_beams, step, table, ox, oy, start, end, window, s):
+def _scores(x, y, r, index, n_beams, step, table, start, end, window, s):
     kind = s[CORNER_SCORE]
     if kind == TURN:
-        return turn_scores(x, y, table, ox, oy, start, end, window)
+        return turn_scores(x, y, table, start, end, window)
     return slope_scores(r, _gaps(index, n_beams), step, start, end, kind == DK_SIGNED)
 
 

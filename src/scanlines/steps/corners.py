@@ -30,7 +30,7 @@ import numpy as np
 
 from scanlines._jit import jit
 from scanlines.steps.breakpoints import Clusters
-from scanlines.steps.fit import Moments, prefix_moments, tls_normal
+from scanlines.steps.fit import Moments, prefix_moments, tls_axis
 from scanlines.steps.points import Sequence
 
 __all__ = [
@@ -82,16 +82,16 @@ def slope_difference(seq: Sequence, clusters: Clusters, *, signed: bool = False)
 
 
 @jit(inline=True)
-def heading(x, y, table, ox: float, oy: float, a: int, b: int) -> tuple[float, float]:
+def heading(x, y, table, a: int, b: int) -> tuple[float, float]:
     """Unit direction of the fitted line of run ``[a, b]``, oriented from ``a`` towards ``b``."""
-    nx, ny = tls_normal(table, ox, oy, a, b)[:2]
+    nx, ny = tls_axis(table, a, b)[:2]
     if -ny * (x[b] - x[a]) + nx * (y[b] - y[a]) >= 0.0:
         return -ny, nx
     return ny, -nx
 
 
 @jit
-def turn_scores(x, y, table, ox: float, oy: float, start, end, window: int) -> np.ndarray:
+def turn_scores(x, y, table, start, end, window: int) -> np.ndarray:
     """Kernel of :func:`turn_angle`.
 
     The line before ``p``, ``[p - w, p]``, is the line after ``p - w``: each run is
@@ -103,12 +103,12 @@ def turn_scores(x, y, table, ox: float, oy: float, start, end, window: int) -> n
     after_y = np.empty(n)
     for c in range(start.shape[0]):
         for p in range(start[c], end[c] + 1):
-            after_x[p], after_y[p] = heading(x, y, table, ox, oy, p, min(p + window, end[c]))
+            after_x[p], after_y[p] = heading(x, y, table, p, min(p + window, end[c]))
         for p in range(start[c] + 1, end[c]):
             if p - window >= start[c]:
                 bx, by = after_x[p - window], after_y[p - window]
             else:
-                bx, by = heading(x, y, table, ox, oy, start[c], p)
+                bx, by = heading(x, y, table, start[c], p)
             ux, uy = after_x[p], after_y[p]
             score[p] = abs(math.atan2(bx * uy - by * ux, bx * ux + by * uy))
     return score
@@ -116,10 +116,7 @@ def turn_scores(x, y, table, ox: float, oy: float, start, end, window: int) -> n
 
 def turn_angle(seq: Sequence, clusters: Clusters, window: int, moments: Moments) -> np.ndarray:
     """Absolute turn (radians) between lines fitted to ``window`` points on each side."""
-    ox, oy = moments.origin
-    return turn_scores(
-        seq.x, seq.y, moments.table, ox, oy, clusters.start, clusters.end, int(window)
-    )
+    return turn_scores(seq.x, seq.y, moments.table, clusters.start, clusters.end, int(window))
 
 
 @jit
@@ -163,12 +160,11 @@ def ring_anchor(x: np.ndarray, y: np.ndarray, window: int) -> int:
     half = n // 2
     start = np.zeros(1, dtype=np.int64)
     end = np.full(1, n - 1, dtype=np.int64)
-    table, ox, oy = prefix_moments(x, y)
-    direct = turn_scores(x, y, table, ox, oy, start, end, window)
+    direct = turn_scores(x, y, prefix_moments(x, y)[0], start, end, window)
     order = np.concatenate((np.arange(half, n), np.arange(0, half)))
     turned_x, turned_y = x[order], y[order]
-    table, ox, oy = prefix_moments(turned_x, turned_y)
-    turned = turn_scores(turned_x, turned_y, table, ox, oy, start, end, window)
+    table = prefix_moments(turned_x, turned_y)[0]
+    turned = turn_scores(turned_x, turned_y, table, start, end, window)
     best, best_score = 0, -math.inf
     for p in range(n):
         shifted = (p - half) % n

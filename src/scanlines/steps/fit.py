@@ -1,7 +1,9 @@
 """Line fitting for runs of points (sec. 2.4 and Step 8 of [1]_).
 
-Two fits, both evaluated for many runs at once from prefix sums, so the
-threshold sweep can score a whole segmentation in a few array operations:
+Two fits, each of a run ``[a, b]`` in O(1) from running sums (:func:`prefix_moments`),
+so the threshold sweep can score every segmentation it tries without refitting
+points. The kernels take one run (``tls_run``, ``paper_run``, ``run_cost``); the
+wrappers (``tls_lines``, ``paper_lines``, ``RunCost``) take arrays of runs:
 
 ``"tls"``    total least squares in Hesse normal form ``x cos a + y sin a = rho``:
              minimises orthogonal distances, represents every line (vertical
@@ -119,18 +121,15 @@ def hesse(alpha: float, rho: float) -> tuple[float, float]:
 
 
 @jit(inline=True)
-def tls_normal(
-    table: np.ndarray, ox: float, oy: float, a: int, b: int
-) -> tuple[float, float, float, float]:
-    """Total-least-squares line of run ``[a, b]`` as ``(cos alpha, sin alpha, rho, sse)``.
+def tls_axis(table: np.ndarray, a: int, b: int) -> tuple[float, float, float, float, float]:
+    """Normal of the total-least-squares line of run ``[a, b]``, up to its sign.
 
-    The normal is the eigenvector of the smaller eigenvalue of the scatter
-    matrix, from the half-angle formulas (no trigonometric calls: this is the
-    innermost operation of the method). ``rho >= 0``; NaN for an empty run.
+    Returns ``(nx, ny, sse, mx, my)``: the eigenvector of the smaller eigenvalue
+    of the scatter matrix, from the half-angle formulas (no trigonometric calls:
+    this is the innermost operation of the method), the orthogonal error, and
+    the run's centroid relative to the table's origin. The run must not be empty.
     """
     n = b + 1 - a
-    if n <= 0:
-        return math.nan, math.nan, math.nan, math.nan
     sx = table[0, b + 1] - table[0, a]
     sy = table[1, b + 1] - table[1, a]
     mx, my = sx / n, sy / n
@@ -145,6 +144,20 @@ def tls_normal(
         ny = math.copysign(math.sqrt(max(0.5 * (1.0 - spread / h), 0.0)), -cxy)
     else:
         nx, ny = 1.0, 0.0
+    return nx, ny, sse, mx, my
+
+
+@jit(inline=True)
+def tls_normal(
+    table: np.ndarray, ox: float, oy: float, a: int, b: int
+) -> tuple[float, float, float, float]:
+    """Total-least-squares line of run ``[a, b]`` as ``(cos alpha, sin alpha, rho, sse)``.
+
+    ``rho >= 0``; NaN for an empty run.
+    """
+    if b < a:
+        return math.nan, math.nan, math.nan, math.nan
+    nx, ny, sse, mx, my = tls_axis(table, a, b)
     rho = (mx + ox) * nx + (my + oy) * ny
     if rho < 0.0:
         return -nx, -ny, -rho, sse
