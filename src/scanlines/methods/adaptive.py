@@ -111,8 +111,7 @@ from scanlines.params import (
     optional,
     segment_params,
 )
-from scanlines.scan import is_full_circle
-from scanlines.steps.assemble import assemble_runs, empty_result, from_arrays
+from scanlines.steps.assemble import CompiledMethod, assemble_runs, empty_result
 from scanlines.steps.breakpoints import (
     BREAKPOINT_PARAMS,
     RULE_CODES,
@@ -275,47 +274,25 @@ def settings(params: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
 
 def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extraction:
     """Extract features from the valid returns ``seq`` of one scan (its own points)."""
-    s, grid = settings(params)
-    full_circle = is_full_circle(seq.n_beams, seq.step)
-    arrays = extract_points(
-        seq.index, seq.r, seq.x, seq.y, seq.n_beams, seq.step, full_circle, angle_min, s, grid
-    )
-    return from_arrays(arrays, NAME, params)
+    return Compiled(params).sequence(seq, angle_min)
 
 
-class Compiled:
-    """The method with its parameters in kernel form: what :class:`~scanlines.Extractor` calls.
+class Compiled(CompiledMethod):
+    """The method in kernel form (see :class:`~scanlines.steps.assemble.CompiledMethod`)."""
 
-    ``cos`` and ``sin`` are the bearing tables of the scan's beams relative to
-    beam 0; ``valid`` the mask of beams with a return.
-    """
+    __slots__ = ()
+    name = NAME
 
-    __slots__ = ("grid", "params", "settings")
+    def arguments(self, params: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+        return settings(params)
 
-    def __init__(self, params: Mapping[str, Any]) -> None:
-        self.params = params
-        self.settings, self.grid = settings(params)
+    @staticmethod
+    def scan_kernel(*args):
+        return extract_scan(*args)
 
-    def one(self, ranges, valid, cos, sin, step: float, angle_min: float) -> Extraction:
-        """The extraction of one scan."""
-        full_circle = is_full_circle(ranges.shape[0], step)
-        arrays = extract_scan(
-            ranges, valid, cos, sin, abs(step), full_circle, angle_min, self.settings, self.grid
-        )
-        return from_arrays(arrays, NAME, self.params)
-
-    def many(self, stack, valid, cos, sin, step: float, angle_min: float) -> list[Extraction]:
-        """The extractions of a stack of scans of one sensor (C-contiguous float64 rows)."""
-        full_circle = is_full_circle(stack.shape[1], step)
-        s, grid, params, step = self.settings, self.grid, self.params, abs(step)
-        return [
-            from_arrays(
-                extract_scan(row, mask, cos, sin, step, full_circle, angle_min, s, grid),
-                NAME,
-                params,
-            )
-            for row, mask in zip(stack, valid, strict=True)
-        ]
+    @staticmethod
+    def returns_kernel(*args):
+        return extract_points(*args)
 
 
 # --------------------------------------------------------------------------- the kernel

@@ -63,8 +63,7 @@ import numpy as np
 from scanlines._jit import jit
 from scanlines.extraction import Extraction
 from scanlines.params import Param, number, segment_params, with_default
-from scanlines.scan import is_full_circle
-from scanlines.steps.assemble import empty_result, from_arrays
+from scanlines.steps.assemble import CompiledMethod, empty_result
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS
 from scanlines.steps.fit import prefix_moments
 from scanlines.steps.points import Sequence
@@ -125,52 +124,22 @@ def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extractio
     return Compiled(params).sequence(seq, angle_min)
 
 
-class Compiled:
-    """The method with its parameters in kernel form: what :class:`~scanlines.Extractor` calls.
+class Compiled(CompiledMethod):
+    """The method in kernel form (see :class:`~scanlines.steps.assemble.CompiledMethod`)."""
 
-    ``cos`` and ``sin`` are the bearing tables of the scan's beams relative to
-    beam 0; ``valid`` the mask of beams with a return.
-    """
+    __slots__ = ()
+    name = NAME
 
-    __slots__ = ("params", "settings")
+    def arguments(self, params: Mapping[str, Any]) -> tuple[np.ndarray]:
+        return (settings(params, reference="fit"),)
 
-    def __init__(self, params: Mapping[str, Any]) -> None:
-        self.params = params
-        self.settings = settings(params, reference="fit")
+    @staticmethod
+    def scan_kernel(*args):
+        return extract_scan(*args)
 
-    def one(self, ranges, valid, cos, sin, step: float, angle_min: float) -> Extraction:
-        """The extraction of one scan."""
-        full_circle = is_full_circle(ranges.shape[0], step)
-        arrays = extract_scan(
-            ranges, valid, cos, sin, abs(step), full_circle, angle_min, self.settings
-        )
-        return from_arrays(arrays, NAME, self.params)
-
-    def many(self, stack, valid, cos, sin, step: float, angle_min: float) -> list[Extraction]:
-        """The extractions of a stack of scans of one sensor (C-contiguous float64 rows)."""
-        full_circle = is_full_circle(stack.shape[1], step)
-        s, step = self.settings, abs(step)
-        return [
-            from_arrays(
-                extract_scan(row, mask, cos, sin, step, full_circle, angle_min, s),
-                NAME,
-                self.params,
-            )
-            for row, mask in zip(stack, valid, strict=True)
-        ]
-
-    def sequence(self, seq: Sequence, angle_min: float) -> Extraction:
-        """The extraction of the valid returns ``seq`` of one scan (its points as given)."""
-        arrays = extract_returns(
-            np.ascontiguousarray(seq.index, dtype=np.int64),
-            *(np.ascontiguousarray(v, dtype=np.float64) for v in (seq.r, seq.x, seq.y)),
-            seq.n_beams,
-            seq.step,
-            is_full_circle(seq.n_beams, seq.step),
-            float(angle_min),
-            self.settings,
-        )
-        return from_arrays(arrays, NAME, self.params)
+    @staticmethod
+    def returns_kernel(*args):
+        return extract_returns(*args)
 
 
 # --------------------------------------------------------------------------- the kernel

@@ -10,10 +10,18 @@ import numpy as np
 
 from scanlines._jit import jit
 from scanlines.extraction import N_LINE_COLUMNS, Extraction
+from scanlines.scan import is_full_circle
 from scanlines.steps.fit import FIT_CODES, Moments, covariances, fit_many, run_labels
 from scanlines.steps.points import Sequence
 
-__all__ = ["assemble", "assemble_runs", "empty_extraction", "empty_result", "from_arrays"]
+__all__ = [
+    "CompiledMethod",
+    "assemble",
+    "assemble_runs",
+    "empty_extraction",
+    "empty_result",
+    "from_arrays",
+]
 
 
 def empty_extraction(method: str, params: Mapping[str, Any], *, breakpoints=None, outliers=None):
@@ -90,6 +98,63 @@ def from_arrays(arrays: tuple[np.ndarray, ...], method: str, params: Mapping[str
         method=method,
         params=params,
     )
+
+
+class CompiledMethod:
+    """A method whose kernels go from a scan to :func:`assemble_runs`' arrays.
+
+    What :class:`~scanlines.Extractor` calls when a method module defines a
+    ``Compiled`` subclass. A subclass sets ``name``, ``scan_kernel(ranges, valid,
+    cos, sin, step, full_circle, angle_min, *args)``, ``returns_kernel(index, r, x,
+    y, n_beams, step, full_circle, angle_min, *args)`` (both as ``staticmethod``)
+    and :meth:`arguments`, the kernels' last arguments built once from the
+    parameters. ``cos`` and ``sin`` are the bearing tables of the beams relative
+    to beam 0; ``valid`` the mask of beams with a return.
+    """
+
+    __slots__ = ("args", "params")
+    name = ""
+
+    def __init__(self, params: Mapping[str, Any]) -> None:
+        self.params = params
+        self.args = self.arguments(params)
+
+    def arguments(self, params: Mapping[str, Any]) -> tuple[Any, ...]:
+        raise NotImplementedError
+
+    def one(self, ranges, valid, cos, sin, step: float, angle_min: float) -> Extraction:
+        """The extraction of one scan."""
+        full_circle = is_full_circle(ranges.shape[0], step)
+        arrays = self.scan_kernel(
+            ranges, valid, cos, sin, abs(step), full_circle, angle_min, *self.args
+        )
+        return from_arrays(arrays, self.name, self.params)
+
+    def many(self, stack, valid, cos, sin, step: float, angle_min: float) -> list[Extraction]:
+        """The extractions of a stack of scans of one sensor (C-contiguous float64 rows)."""
+        full_circle = is_full_circle(stack.shape[1], step)
+        kernel, args, step = self.scan_kernel, self.args, abs(step)
+        return [
+            from_arrays(
+                kernel(row, mask, cos, sin, step, full_circle, angle_min, *args),
+                self.name,
+                self.params,
+            )
+            for row, mask in zip(stack, valid, strict=True)
+        ]
+
+    def sequence(self, seq: Sequence, angle_min: float) -> Extraction:
+        """The extraction of the valid returns ``seq`` of one scan (its points as given)."""
+        arrays = self.returns_kernel(
+            np.ascontiguousarray(seq.index, dtype=np.int64),
+            *(np.ascontiguousarray(v, dtype=np.float64) for v in (seq.r, seq.x, seq.y)),
+            seq.n_beams,
+            seq.step,
+            is_full_circle(seq.n_beams, seq.step),
+            float(angle_min),
+            *self.args,
+        )
+        return from_arrays(arrays, self.name, self.params)
 
 
 @jit
