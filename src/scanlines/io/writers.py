@@ -81,7 +81,7 @@ from typing import IO, Any, ClassVar, Literal, Self
 import numpy as np
 
 from scanlines.errors import ParameterError
-from scanlines.extraction import END_X, END_Y, START_X, START_Y, Extraction
+from scanlines.extraction import ALPHA, END_X, END_Y, RHO, RMS, START_X, START_Y, Extraction
 from scanlines.io.transform import points_to_world, to_world
 from scanlines.scan import Scan
 
@@ -147,9 +147,14 @@ class ScanFeatures:
 
 
 def _beam_points(scan: Scan, indices: np.ndarray) -> np.ndarray:
+    """Points of the beams ``indices`` that have a return (rows of ``scan.points``)."""
     indices = np.asarray(indices, dtype=np.intp)
     inside = indices[(indices >= 0) & (indices < len(scan))]
-    points = scan.points[inside]
+    beams = inside[scan.valid[inside]]
+    # the same arithmetic as Scan.points, for these beams only
+    r = scan.ranges[beams]
+    angles = scan.angle_min + scan.angle_increment * beams.astype(np.float64)
+    points = np.column_stack((r * np.cos(angles), r * np.sin(angles)))
     return points[np.isfinite(points).all(axis=1)]
 
 
@@ -165,6 +170,13 @@ def _features(index: int, scan: Scan, extraction: Extraction, frame: Frame) -> S
         breakpoints = points_to_world(breakpoints, scan.pose)
         corners = points_to_world(corners, scan.pose)
     return ScanFeatures(index, scan, extraction, breakpoints, corners)
+
+
+def _finite_rows(table: np.ndarray) -> list[list[float | None]]:
+    """Rows of a float table as lists, NaN and infinities as None."""
+    if np.isfinite(table).all():
+        return table.tolist()
+    return [[_number(v) for v in row] for row in table.tolist()]
 
 
 def _number(value: float) -> float | None:
@@ -407,19 +419,25 @@ class JsonlWriter(_TextFileWriter):
             "pose": None if scan.pose is None else [_number(v) for v in scan.pose],
             "segments": [
                 {
-                    "first": int(extraction.first[k]),
-                    "last": int(extraction.last[k]),
-                    "start": [_number(row[START_X]), _number(row[START_Y])],
-                    "end": [_number(row[END_X]), _number(row[END_Y])],
-                    "rho": _number(row[0]),
-                    "alpha": _number(row[1]),
-                    "n_points": int(extraction.n_points[k]),
-                    "rms": _number(row[6]),
+                    "first": first,
+                    "last": last,
+                    "start": [row[START_X], row[START_Y]],
+                    "end": [row[END_X], row[END_Y]],
+                    "rho": row[RHO],
+                    "alpha": row[ALPHA],
+                    "n_points": n_points,
+                    "rms": row[RMS],
                 }
-                for k, row in enumerate(extraction.lines)
+                for first, last, n_points, row in zip(
+                    extraction.first.tolist(),
+                    extraction.last.tolist(),
+                    extraction.n_points.tolist(),
+                    _finite_rows(extraction.lines),
+                    strict=True,
+                )
             ],
-            "breakpoints": [int(i) for i in extraction.breakpoints],
-            "corners": [int(i) for i in extraction.corners],
+            "breakpoints": extraction.breakpoints.tolist(),
+            "corners": extraction.corners.tolist(),
         }
         self._handle.write(json.dumps(record, allow_nan=False, separators=(",", ":")))
         self._handle.write("\n")
