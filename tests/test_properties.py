@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
@@ -68,31 +69,21 @@ def assigned_beams(result: Extraction, k: int, n: int) -> np.ndarray:
 
 
 default = Extractor()
-paper = Extractor(preset="paper")
-range_noise = Extractor(noise_model="range")
+CONFIGURATIONS = {
+    "default": default,
+    "paper preset": Extractor(preset="paper"),
+    "noise_model=range": Extractor(noise_model="range"),
+}
 settings_fast = settings(
     max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow]
 )
 
 
+@pytest.mark.parametrize("configuration", CONFIGURATIONS)
 @settings_fast
-@given(scans())
-def test_default_never_fails_and_orders_segments(scan):
-    result = default(scan)
-    check_order(result, len(scan), scan.full_circle)
-
-
-@settings_fast
-@given(scans())
-def test_paper_preset_never_fails_and_orders_segments(scan):
-    result = paper(scan)
-    check_order(result, len(scan), scan.full_circle)
-
-
-@settings_fast
-@given(scans())
-def test_range_noise_model_never_fails_and_orders_segments(scan):
-    result = range_noise(scan)
+@given(scan=scans())
+def test_never_fails_and_orders_segments(configuration, scan):
+    result = CONFIGURATIONS[configuration](scan)
     check_order(result, len(scan), scan.full_circle)
 
 
