@@ -239,6 +239,9 @@ def main() -> None:
         (HERE / f"{name}.md").write_text("\n".join(page))
         index.append(f"- [{title}]({name}.md)")
     index.append("- [The ceiling: what exact boundaries achieve (the truth row)](ceiling.md)")
+    index.append(
+        "- [Breakpoints and corners: what a scan can decide, and where the errors are](events.md)"
+    )
     (HERE / "README.md").write_text("\n".join(index) + "\n")
 
 
