@@ -201,11 +201,32 @@ def test_covariance_matches_monte_carlo():
 def test_grazing_wall_stays_one_cluster():
     """A corridor wall 1 m to the side, seen out to 75 deg incidence and beyond."""
     scan = scan_of([((0.3, 1.0), (8.0, 1.0))], fov_deg=180, step_deg=1.0, sigma=SIGMA, seed=1)
+    returns = int(np.count_nonzero(scan.valid))
     default = extract(scan)
     assert len(default.breakpoints) == 0
     assert len(default.segments) == 1
-    literal = extract(scan, breakpoints="adaptive")  # k = 3: cut beyond 70.5 deg incidence
-    assert len(literal.breakpoints) > 0
+    assert default.n_points[0] == returns
+    # k = 3 alone cuts (or drops) the returns beyond 70.5 deg incidence; with the line
+    # continuation the wall stays whole, its last returns included
+    cut = extract(scan, breakpoints="adaptive", line_k=0)
+    assert cut.breakpoints.size + cut.outliers.size > 0
+    continued = extract(scan, breakpoints="adaptive")
+    assert continued.breakpoints.size == 0
+    assert continued.n_points.sum() == returns
+
+
+def test_auto_lambda_cuts_a_depth_step_that_10_deg_bridges_at_1_deg():
+    """Two parallel walls 30 cm apart in depth, 3 m away, at 1 deg. ABD with lambda = 10 deg
+    bridges steps up to 10 % of the range; the auto lambda (15 deg at 1 deg) up to 7.2 %."""
+    walls = [((3.0, -3.0), (3.0, 0.0)), ((3.3, 0.0), (3.3, 3.0))]
+    scan = scan_of(walls, fov_deg=80, step_deg=1.0, sigma=SIGMA, seed=0)
+    last_near = int(np.flatnonzero(scan.angles < 0.01)[-1])  # the near wall ends at 0 deg
+    bridged = extract(scan, abd_lambda=10, corner_check=False)
+    assert bridged.breakpoints.size == 0
+    assert bridged.corners.size == 1
+    cut = extract(scan, corner_check=False)
+    assert cut.breakpoints.tolist() == [last_near]
+    assert cut.corners.size == 0
 
 
 def test_corner_check_turns_a_bridged_depth_step_into_a_breakpoint():

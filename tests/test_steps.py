@@ -9,8 +9,10 @@ import pytest
 
 from scanlines import Scan, extract
 from scanlines.steps.breakpoints import (
+    MAX_BRIDGED_SHARE,
     BreakpointRule,
     Clusters,
+    auto_abd_lambda,
     cluster,
     is_break,
     thresholds,
@@ -63,6 +65,25 @@ def test_abd_threshold_matches_borges_aldon():
     assert thresholds(rule, np.array([2.0]), np.array([5.0]), np.array([1]), dphi)[
         0
     ] == pytest.approx(expected)
+
+
+@pytest.mark.parametrize(
+    ("step_deg", "lambda_deg"), [(0.25, 10.0), (0.33, 10.0), (0.5, 10.0), (1.0, 15.0), (-1.0, 15.0)]
+)
+def test_auto_abd_lambda_is_10_deg_unless_the_scan_is_coarse(step_deg, lambda_deg):
+    assert math.degrees(auto_abd_lambda(math.radians(step_deg))) == pytest.approx(lambda_deg)
+
+
+@pytest.mark.parametrize("step_deg", [0.7, 1.0, 2.0, 4.0])
+def test_auto_abd_lambda_bridges_at_most_its_share_of_the_range(step_deg):
+    dphi = math.radians(step_deg)
+    lam = auto_abd_lambda(dphi)
+    assert lam > math.radians(10.0)
+    assert math.sin(dphi) / math.sin(lam - dphi) == pytest.approx(MAX_BRIDGED_SHARE)
+
+
+def test_auto_abd_lambda_stops_at_90_deg():
+    assert auto_abd_lambda(math.radians(10.0)) == pytest.approx(math.pi / 2)
 
 
 def test_pdbs_threshold_uses_the_nearer_range():

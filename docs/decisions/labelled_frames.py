@@ -17,6 +17,7 @@ VARIANTS = {
     "default": {},
     "min_cluster_points=1": {"min_cluster_points": 1},
     "min_cluster_points=3": {"min_cluster_points": 3},
+    "abd_lambda=10": {"abd_lambda": 10},
     "abd_lambda=15": {"abd_lambda": 15},
     "abd_lambda=20": {"abd_lambda": 20},
     "abd_lambda=20, mcp=1": {"abd_lambda": 20, "min_cluster_points": 1},

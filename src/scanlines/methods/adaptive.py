@@ -22,17 +22,22 @@ Steps (the paper's numbering, sec. 3):
 Deviations of the default, each a parameter. The evidence: the tests named in
 brackets, and ``docs/decisions/`` (300 simulated scenes per sensor preset).
 
-``breakpoints="abd"``, ``noise_k=3``, ``line_k=3``
+``breakpoints="abd"``, ``abd_lambda="auto"``, ``noise_k=3``, ``line_k=3``
     ``D = k rho dtheta`` is ``k`` times the spacing of returns on a surface
     facing the sensor; on a wall seen at incidence ``beta`` the spacing is
     ``rho dtheta / cos(beta)``, so ``k = 3`` cuts every wall beyond 70.5 deg.
     The default bounds the incidence instead (80 deg: Borges and Aldon's
     detector [2]_, the same range-proportional threshold made exact for slanted
-    surfaces), adds ``noise_k`` standard deviations of a range difference (noise
-    estimated from the scan; at 0.33 deg, 2 m and 1 cm noise ``3 rho dtheta`` is
-    3.5 cm and noise alone cuts about one pair in fifty), and does not cut a step
-    that continues the lines on both sides (walls at grazing incidence).
-    [test_adaptive.py::test_grazing_wall_stays_one_cluster, docs/decisions/breakpoints.md]
+    surfaces; on scans coarser than 0.67 deg the bound tightens so that it alone
+    never bridges a step of more than 7.2 % of the range: 75 deg at 1 deg), adds
+    ``noise_k`` standard deviations of a range difference (noise estimated from
+    the scan; at 0.33 deg, 2 m and 1 cm noise ``3 rho dtheta`` is 3.5 cm and noise
+    alone cuts about one pair in fifty), and does not cut a step that continues
+    the lines on both sides (walls at grazing incidence; at a wall's end in open
+    space, the one side there is).
+    [test_adaptive.py::test_grazing_wall_stays_one_cluster,
+    test_adaptive.py::test_auto_lambda_cuts_a_depth_step_that_10_deg_bridges_at_1_deg,
+    docs/decisions/breakpoints.md]
 ``denoise="isolated"``, ``min_cluster_points=2``
     Step 2 as printed (``d_{i-1} > d_{i-2}`` and ``d_i > d_{i+1}``) flags any local
     bump of the neighbour distance: about a quarter of the points of a straight
@@ -115,6 +120,7 @@ from scanlines.steps.assemble import CompiledMethod, assemble_runs, empty_result
 from scanlines.steps.breakpoints import (
     BREAKPOINT_PARAMS,
     RULE_CODES,
+    auto_abd_lambda,
     break_beams,
     break_flags,
     cluster_bounds,
@@ -190,6 +196,11 @@ PARAMS: dict[str, Param] = {
     "corner_check": Param(
         True, choice(True, False), "lines that do not meet near their ends are a jump, not a corner"
     ),
+    "abd_lambda": Param(
+        "auto",
+        auto_or(BREAKPOINT_PARAMS["abd_lambda"].check),
+        "ABD: worst incidence angle, degrees, or auto: 10, more on scans coarser than 0.67 deg",
+    ),
     "min_cluster_points": Param(
         2, int_at_least(1), "isolated denoising: smaller clusters are dropped as noise"
     ),
@@ -237,7 +248,7 @@ ISOLATED, LITERAL, NO_DENOISE = 0, 1, 2
 SCORE_CODES = {name: code for code, name in enumerate(SCORES)}
 TURN, DK, DK_SIGNED = 0, 1, 2
 AUTO = -1.0
-"""``slope_window``, ``noise_sigma`` and ``max_residual`` slots: estimate / none."""
+"""``slope_window``, ``noise_sigma``, ``abd_lambda`` and ``max_residual`` slots: estimate / none."""
 
 
 def settings(params: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
@@ -245,7 +256,8 @@ def settings(params: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
     s = np.zeros(N_SETTINGS)
     s[RULE_KIND] = RULE_CODES[params["breakpoints"]]
     s[K], s[NOISE_K], s[LINE_K] = params["k"], params["noise_k"], params["line_k"]
-    s[ABD_LAMBDA] = math.radians(params["abd_lambda"])
+    lam = params["abd_lambda"]
+    s[ABD_LAMBDA] = AUTO if lam == "auto" else math.radians(lam)
     s[PDBS_C0], s[JUMP_DISTANCE] = params["pdbs_c0"], params["jump_distance"]
     s[DENOISE] = DENOISE_CODES[params["denoise"]]
     s[WINDOW], s[MIN_CLUSTER_POINTS] = params["window"], params["min_cluster_points"]
@@ -329,7 +341,7 @@ def points_pipeline(index, r, x, y, n_beams, step, full_circle, angle_min, s, gr
     sigma = s[NOISE_SIGMA]
     if sigma == AUTO:
         sigma = noise_from_ranges(r, gap, np.zeros(1, np.int64), np.full(1, r.shape[0] - 1))
-    rule = _rule(s, sigma)
+    rule = _rule(s, sigma, step)
     if s[RANGE_NOISE]:
         far_sigma, growth, far_range = noise_growth(
             r, gap, np.zeros(1, np.int64), np.full(1, r.shape[0] - 1)
@@ -365,11 +377,11 @@ extract_points = jit(points_pipeline)
 
 
 @jit
-def _rule(s, sigma):
+def _rule(s, sigma, step):
+    lam = auto_abd_lambda(step) if s[ABD_LAMBDA] == AUTO else s[ABD_LAMBDA]
     return noise_rule(
-        int(s[RULE_KIND]), s[K], s[NOISE_K], s[LINE_K], s[ABD_LAMBDA], s[PDBS_C0],
-        s[JUMP_DISTANCE], sigma,
-    )  # fmt: skip
+        int(s[RULE_KIND]), s[K], s[NOISE_K], s[LINE_K], lam, s[PDBS_C0], s[JUMP_DISTANCE], sigma
+    )
 
 
 @jit

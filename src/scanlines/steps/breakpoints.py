@@ -89,6 +89,30 @@ BREAKPOINT_PARAMS: dict[str, Param] = {
 }
 
 
+ABD_LAMBDA_FLOOR = math.radians(10.0)
+"""Borges and Aldon's ``lambda``: walls up to 80 deg incidence stay one cluster."""
+
+MAX_BRIDGED_SHARE = math.sin(math.radians(1.0)) / math.sin(math.radians(14.0))
+"""Largest step, as a share of the range, that the incidence bound alone bridges in
+:func:`auto_abd_lambda` (7.2 %: ``lambda`` = 15 deg at 1 deg resolution)."""
+
+
+@jit(inline=True)
+def auto_abd_lambda(step: float) -> float:
+    """ABD's ``lambda`` (radians) for beams ``step`` apart.
+
+    10 deg, raised where it would bridge steps of more than :data:`MAX_BRIDGED_SHARE`
+    of the range: on scans coarser than 0.67 deg (15 deg at 1 deg). There, returns on
+    a wall near grazing incidence are many noise sigmas apart, so the line-continuation
+    test keeps such walls whole, while the 10 deg bound would also bridge depth steps
+    of 10 % of the range, which then pass for corners (``docs/decisions/breakpoints.md``).
+    At most 90 deg (scans coarser than 4 deg cannot keep to the share).
+    """
+    step = abs(step)
+    bridged = math.asin(min(math.sin(step) / MAX_BRIDGED_SHARE, 1.0))
+    return min(max(ABD_LAMBDA_FLOOR, step + bridged), 0.5 * math.pi)
+
+
 RULE_CODES = {name: code for code, name in enumerate(RULES)}
 ADAPTIVE, ABD, PDBS, FIXED = range(4)
 # Positions in the array form of a rule that the kernels take.
@@ -289,7 +313,7 @@ def _distance_to_line(ax, ay, bx, by, px, py) -> float:
 
 @jit(inline=True)
 def continues_line_at(x, y, gap, d, p: int, tolerance: float) -> bool:
-    """Pair ``(p, p+1)`` continues the line of the pair before *and* of the pair after.
+    """Pair ``(p, p+1)`` continues the line of the pair before and of the pair after.
 
     ``P_{p+1}`` lies within ``tolerance`` of the line through ``P_{p-1}, P_p``, ``P_p``
     within ``tolerance`` of the line through ``P_{p+1}, P_{p+2}``, both neighbouring
@@ -297,18 +321,31 @@ def continues_line_at(x, y, gap, d, p: int, tolerance: float) -> bool:
     mostly noise), and ``d_p`` is at most :data:`MAX_STEP_GROWTH` times the
     shorter neighbouring step. Returns on a wall seen at grazing incidence are far
     apart but collinear and evenly spaced, so a distance threshold alone cuts the
-    wall; a depth jump or a spike is neither.
+    wall; a depth jump or a spike is neither. At the scan's ends and next to two or
+    more missing beams, where one neighbouring pair does not exist, the other
+    decides alone (the last returns of a wall that ends in open space).
     """
-    if p < 1 or p > x.shape[0] - 3:
+    n = x.shape[0]
+    has_before = p >= 1 and gap[p - 1] <= MAX_BRIDGED_GAP
+    has_after = p + 2 < n and gap[p + 1] <= MAX_BRIDGED_GAP
+    if not (has_before or has_after):
         return False
-    if gap[p - 1] > MAX_BRIDGED_GAP or gap[p + 1] > MAX_BRIDGED_GAP:
-        return False
-    shorter = min(d[p - 1], d[p + 1])
+    shorter = math.inf
+    if has_before:
+        shorter = d[p - 1]
+    if has_after:
+        shorter = min(shorter, d[p + 1])
     if not (d[p] <= MAX_STEP_GROWTH * shorter and shorter > tolerance):
         return False
-    before = _distance_to_line(x[p - 1], y[p - 1], x[p], y[p], x[p + 1], y[p + 1])
-    after = _distance_to_line(x[p + 2], y[p + 2], x[p + 1], y[p + 1], x[p], y[p])
-    return before < tolerance and after < tolerance
+    if has_before:
+        before = _distance_to_line(x[p - 1], y[p - 1], x[p], y[p], x[p + 1], y[p + 1])
+        if not before < tolerance:
+            return False
+    if has_after:
+        after = _distance_to_line(x[p + 2], y[p + 2], x[p + 1], y[p + 1], x[p], y[p])
+        if not after < tolerance:
+            return False
+    return True
 
 
 MAX_STEP_GROWTH = 2.5
