@@ -120,6 +120,27 @@ def test_spike_outlier_in_wall_is_dropped():
     assert result.outliers.tolist() == [spike]
 
 
+@pytest.mark.parametrize(
+    ("pair", "breakpoints", "outliers"),
+    [
+        ((2.9, 3.0), [0], [1, 2]),  # two mixed pixels between the surfaces: dropped
+        ((1.2, 1.25), [0, 2], []),  # a small object in front of both: kept
+    ],
+)
+def test_two_returns_between_two_surfaces(pair, breakpoints, outliers):
+    """A near wall (2 m) ends at 0 deg, a far wall (4 m) follows; the two beams after
+    the jump return ``pair``. Beam numbers are relative to the near wall's last beam."""
+    walls = [((2.0, -3.0), (2.0, 0.0)), ((4.0, 0.0), (4.0, 6.0))]
+    scan = scan_of(walls, fov_deg=100, step_deg=1.0)
+    edge = int(np.flatnonzero(scan.angles < 0.01)[-1])
+    ranges = scan.ranges.copy()
+    ranges[edge + 1 : edge + 3] = pair
+    result = extract(Scan(ranges, scan.angle_min, scan.angle_increment))
+    assert (result.breakpoints - edge).tolist() == breakpoints
+    assert (result.outliers - edge).tolist() == outliers
+    assert result.corners.size == 0
+
+
 def test_single_dropout_is_bridged_and_two_are_a_gap():
     scan = vertical_wall_scan(SIGMA, 4)
     one = scan.ranges.copy()

@@ -20,6 +20,7 @@ from scanlines.steps.breakpoints import (
 from scanlines.steps.corners import corner_side, peak_candidates, slope_difference, turn_angle
 from scanlines.steps.denoise import (
     estimate_noise,
+    in_between_clusters,
     isolated_noise,
     literal_noise,
     replace_by_window_mean,
@@ -313,3 +314,20 @@ def test_corner_removal_rule_needs_two_points_on_each_side(shared, expected):
         shared=shared,
     )
     assert cuts.accepted.tolist() == expected
+
+
+def test_in_between_clusters_judges_only_pairs_between_near_neighbours():
+    r = np.array([2.0, 2.0, 2.9, 3.0, 4.0, 4.0, 3.5, 3.6, 1.0, 1.0])
+    breaks = np.array([0, 1, 0, 1, 0, 1, 0, 1, 0], dtype=bool)  # clusters of two
+    gap = np.ones(9, dtype=np.int64)
+    none = np.zeros(10, dtype=bool)
+    # (2.9, 3.0) lies between 2.0 and 4.0; (4.0, 4.0) does not lie between 3.0 and 3.5;
+    # (3.5, 3.6) lies between 4.0 and 1.0
+    expected = [False, False, True, True, False, False, True, True, False, False]
+    assert in_between_clusters(r, gap, breaks, none, 0.05).tolist() == expected
+    far = gap.copy()
+    far[1] = 3  # two missing beams before the first pair: not judged
+    assert not in_between_clusters(r, far, breaks, none, 0.05)[2]
+    noisy_neighbour = none.copy()
+    noisy_neighbour[5] = True
+    assert not in_between_clusters(r, gap, breaks, noisy_neighbour, 0.05)[6]

@@ -42,10 +42,13 @@ brackets, and ``docs/decisions/`` (300 simulated scenes per sensor preset).
     Step 2 as printed (``d_{i-1} > d_{i-2}`` and ``d_i > d_{i+1}``) flags any local
     bump of the neighbour distance: about a quarter of the points of a straight
     noisy wall. The default drops a point that the breakpoint test cuts from both
-    neighbours while the neighbours stay continuous (a spike), and single-return
-    clusters (stray echoes, mixed pixels between two surfaces);
+    neighbours while the neighbours stay continuous (a spike), single-return
+    clusters (stray echoes, mixed pixels between two surfaces), and two-return
+    clusters whose ranges lie between those of the clusters on either side (mixed
+    pixels at a depth jump; a small object in front of both stays);
     dropped points are reported in ``Extraction.outliers``. No point is moved.
     [test_adaptive.py::test_spike_outlier_in_wall_is_dropped,
+    test_adaptive.py::test_two_returns_between_two_surfaces,
     test_steps.py::test_literal_noise_rule_fires_on_ordinary_wall_points]
 ``corner_score="turn"``, ``slope_window="auto"``
     ``Dk`` from raw ranges is dominated by range noise at fine resolution (at
@@ -133,6 +136,7 @@ from scanlines.steps.breakpoints import (
 from scanlines.steps.corners import SCORES, peak_positions, ring_anchor, slope_scores, turn_scores
 from scanlines.steps.denoise import (
     MIN_NOISE_SIGMA,
+    in_between_clusters,
     isolated_noise_mask,
     literal_noise,
     noise_from_ranges,
@@ -348,7 +352,9 @@ def points_pipeline(index, r, x, y, n_beams, step, full_circle, angle_min, s, gr
         )
         margin = s[NOISE_K] * math.sqrt(2.0)
         rule = with_margin_growth(rule, margin * far_sigma, margin * growth, far_range)
-    index, r, x, y, outliers, breaks = _denoise(index, r, x, y, n_beams, step, full_circle, rule, s)
+    index, r, x, y, outliers, breaks = _denoise(
+        index, r, x, y, n_beams, step, full_circle, rule, sigma, s
+    )
     if index.shape[0] == 0:
         return empty_result(outliers, outliers)
     window = _slope_window(x, y, index, sigma, s[SLOPE_WINDOW])
@@ -385,7 +391,7 @@ def _rule(s, sigma, step):
 
 
 @jit
-def _denoise(index, r, x, y, n_beams, step, full_circle, rule, s):
+def _denoise(index, r, x, y, n_beams, step, full_circle, rule, sigma, s):
     """Steps 2-3; returns the cleaned returns, the beams dropped as noise and the
     break flags of the cleaned returns when known (empty otherwise)."""
     none = np.zeros(0, dtype=np.int64)
@@ -414,6 +420,9 @@ def _denoise(index, r, x, y, n_beams, step, full_circle, rule, s):
         if noise.any():  # else the kept returns are all returns: same breaks
             kept_breaks = break_flags(kx, ky, kr, _gaps(ki, n_beams), step, rule)
         small = small_clusters(kept_breaks, int(s[MIN_CLUSTER_POINTS]), joined)
+        if s[MIN_CLUSTER_POINTS] == 2:
+            margin = s[NOISE_K] * math.sqrt(2.0) * sigma
+            small |= in_between_clusters(kr, _gaps(ki, n_beams), kept_breaks, small, margin)
         noise[kept[small]] = True
     if not noise.any():
         return index, r, x, y, none, raw_breaks

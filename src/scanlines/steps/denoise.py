@@ -28,7 +28,7 @@ import math
 import numpy as np
 
 from scanlines._jit import jit
-from scanlines.steps.breakpoints import MAX_BRIDGED_GAP, BreakpointRule, threshold
+from scanlines.steps.breakpoints import MAX_BRIDGED_GAP, BreakpointRule, cluster_bounds, threshold
 from scanlines.steps.points import Sequence
 
 __all__ = [
@@ -240,4 +240,31 @@ def small_clusters(breaks: np.ndarray, min_points: int, seam_joined: bool = Fals
     out = np.empty(ids.shape[0], dtype=np.bool_)
     for p in range(ids.shape[0]):
         out[p] = sizes[ids[p]] < min_points
+    return out
+
+
+@jit
+def in_between_clusters(r, gap, breaks, small, margin: float) -> np.ndarray:
+    """Mask of the returns of two-return clusters that lie in depth between their neighbours.
+
+    A mixed pixel is a return between the two surfaces of a depth jump; two of them, or one
+    with the last return of the near surface cut off by the jump, make a cluster of two
+    whose ranges lie between the facing returns of the clusters on either side (within
+    ``margin``). A small object in front of a wall is nearer than both sides and stays.
+    Only clusters whose neighbours are at most one missing beam away, and are not ``small``
+    themselves, are judged.
+    """
+    n = r.shape[0]
+    out = np.zeros(n, dtype=np.bool_)
+    start, end = cluster_bounds(breaks)
+    for c in range(1, start.shape[0] - 1):
+        a, b = start[c], end[c]
+        if b - a != 1 or small[a] or small[a - 1] or small[b + 1]:
+            continue
+        if gap[a - 1] > MAX_BRIDGED_GAP or gap[b] > MAX_BRIDGED_GAP:
+            continue
+        low = min(r[a - 1], r[b + 1]) - margin
+        high = max(r[a - 1], r[b + 1]) + margin
+        if low < r[a] < high and low < r[b] < high:
+            out[a] = out[b] = True
     return out
