@@ -123,3 +123,13 @@ def test_paper_preset_exists():
 def test_modules_import_without_cycles():
     for name in ("scanlines.steps.select", "scanlines.methods.adaptive", "scanlines.extractor"):
         importlib.import_module(name)
+
+
+def test_plot_title_counts_features_in_words():
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    from scanlines.plot import plot_extraction
+
+    scan = scan_of([((2.0, -3.0), (2.0, 3.0))], fov_deg=90, step_deg=1.0)  # one wall
+    title = plot_extraction(scan, extract(scan), title="wall").get_title()
+    assert title == "wall\n1 segment, 0 breakpoints, 0 corners"

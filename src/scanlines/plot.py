@@ -65,14 +65,22 @@ def plot_extraction(
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.grid(True, lw=0.3)
-    counts = (
-        f"{len(extraction)} segments, {len(extraction.breakpoints)} breakpoints, "
-        f"{len(extraction.corners)} corners"
+    counts = ", ".join(
+        _counted(n, noun)
+        for n, noun in (
+            (len(extraction), "segment"),
+            (len(extraction.breakpoints), "breakpoint"),
+            (len(extraction.corners), "corner"),
+        )
     )
     ax.set_title(f"{title}\n{counts}" if title else f"{extraction.method}: {counts}", fontsize=10)
     if legend:
         ax.legend(loc="best", fontsize=8, markerscale=1.5)
     return ax
+
+
+def _counted(n: int, noun: str) -> str:
+    return f"{n} {noun}" + ("" if n == 1 else "s")
 
 
 def _events(ax: Axes, points: np.ndarray, beams: np.ndarray, marker: str, colour: str, label: str):
