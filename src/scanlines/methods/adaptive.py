@@ -412,17 +412,18 @@ def _denoise(index, r, x, y, n_beams, step, full_circle, rule, sigma, s):
     if s[MIN_CLUSTER_POINTS] > 1:
         kept = np.flatnonzero(~noise)
         kx, ky, kr, ki = x[kept], y[kept], r[kept], index[kept]
+        kept_gap = _gaps(ki, n_beams)
         joined = (
             full_circle
             and kept.shape[0] >= 3
             and not seam_break(kx, ky, kr, ki, n_beams, step, rule)
         )
         if noise.any():  # else the kept returns are all returns: same breaks
-            kept_breaks = break_flags(kx, ky, kr, _gaps(ki, n_beams), step, rule)
+            kept_breaks = break_flags(kx, ky, kr, kept_gap, step, rule)
         small = small_clusters(kept_breaks, int(s[MIN_CLUSTER_POINTS]), joined)
         if s[MIN_CLUSTER_POINTS] == 2:
             margin = s[NOISE_K] * math.sqrt(2.0) * sigma
-            small |= in_between_clusters(kr, _gaps(ki, n_beams), kept_breaks, small, margin)
+            small |= in_between_clusters(kr, kept_gap, kept_breaks, small, margin)
         noise[kept[small]] = True
     if not noise.any():
         return index, r, x, y, none, raw_breaks
