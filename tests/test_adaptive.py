@@ -236,6 +236,21 @@ def test_grazing_wall_stays_one_cluster():
     assert continued.n_points.sum() == returns
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_grazing_wall_right_after_a_jump_keeps_its_first_returns(seed):
+    """A near wall (x = 4.5 m) ends; the next beam already hits a far wall seen at about
+    80 deg incidence. The jump before the far wall's first pair must not veto its line
+    continuation: one breakpoint, both walls whole, nothing dropped."""
+    walls = [((4.5, -2.0), (4.5, 0.1)), ((9.0, 0.2), (2.0, 1.2))]
+    scan = scan_of(walls, fov_deg=100, step_deg=1.0, sigma=SIGMA, seed=seed)
+    near_last = int(np.flatnonzero(np.abs(scan.ranges * np.cos(scan.angles) - 4.5) < 0.05)[-1])
+    result = extract(scan)
+    assert result.breakpoints.tolist() == [near_last]
+    assert result.outliers.size == 0
+    assert result.first.tolist()[-1] == near_last + 1
+    assert result.n_points.sum() == np.count_nonzero(scan.valid)
+
+
 def test_auto_lambda_cuts_a_depth_step_that_10_deg_bridges_at_1_deg():
     """Two parallel walls 30 cm apart in depth, 3 m away, at 1 deg. ABD with lambda = 10 deg
     bridges steps up to 10 % of the range; the auto lambda (15 deg at 1 deg) up to 7.2 %."""

@@ -321,13 +321,15 @@ def continues_line_at(x, y, gap, d, p: int, tolerance: float) -> bool:
     mostly noise), and ``d_p`` is at most :data:`MAX_STEP_GROWTH` times the
     shorter neighbouring step. Returns on a wall seen at grazing incidence are far
     apart but collinear and evenly spaced, so a distance threshold alone cuts the
-    wall; a depth jump or a spike is neither. At the scan's ends and next to two or
-    more missing beams, where one neighbouring pair does not exist, the other
-    decides alone (the last returns of a wall that ends in open space).
+    wall; a depth jump or a spike is neither. Where one neighbouring pair does not
+    exist (the scan's ends, two or more missing beams) or is itself a jump (more than
+    :data:`MAX_STEP_GROWTH` times ``d_p``), the other decides alone: the first and
+    last returns of a wall that starts behind an edge or ends in open space.
     """
     n = x.shape[0]
-    has_before = p >= 1 and gap[p - 1] <= MAX_BRIDGED_GAP
-    has_after = p + 2 < n and gap[p + 1] <= MAX_BRIDGED_GAP
+    jump = MAX_STEP_GROWTH * d[p]
+    has_before = p >= 1 and gap[p - 1] <= MAX_BRIDGED_GAP and d[p - 1] <= jump
+    has_after = p + 2 < n and gap[p + 1] <= MAX_BRIDGED_GAP and d[p + 1] <= jump
     if not (has_before or has_after):
         return False
     shorter = math.inf
