@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from scanlines import Scan, extract
+from scanlines.evaluate import make_scene
 from scanlines.steps.breakpoints import (
     MAX_BRIDGED_SHARE,
     BreakpointRule,
@@ -23,6 +24,7 @@ from scanlines.steps.denoise import (
     in_between_clusters,
     isolated_noise,
     literal_noise,
+    noise_growth,
     replace_by_window_mean,
 )
 from scanlines.steps.fit import (
@@ -331,3 +333,29 @@ def test_in_between_clusters_judges_only_pairs_between_near_neighbours():
     noisy_neighbour = none.copy()
     noisy_neighbour[5] = True
     assert not in_between_clusters(r, gap, breaks, noisy_neighbour, 0.05)[6]
+
+
+def _growth_on_scenes(sensor: str, n: int = 20) -> np.ndarray:
+    """``(sigma_far, slope, far_range)`` of :func:`noise_growth` on ``n`` simulated scans."""
+    out = []
+    for index in range(n):
+        seq = sequence_of(make_scene(sensor, index, seed=3).scan)
+        ends = (np.zeros(1, np.int64), np.full(1, len(seq) - 1, np.int64))
+        out.append(noise_growth(seq.x, seq.y, seq.r, seq.gap, *ends))
+    return np.array(out)
+
+
+def test_noise_growth_sees_constant_noise_at_1_deg():
+    # lms_1deg: 1 cm noise and 1 cm quantisation at every range (sigma 1.04 cm). At 1 deg the
+    # range second differences of slanted walls far away hold their geometry; chords do not.
+    sigma_far, slope, _ = np.median(_growth_on_scenes("lms_1deg"), axis=0)
+    assert sigma_far == pytest.approx(math.hypot(0.01, 0.01 / math.sqrt(12)), rel=0.2)
+    assert slope < 0.001
+
+
+def test_noise_growth_follows_noise_proportional_to_range():
+    # urg04lx: 1 cm plus 1 % of the range
+    growth = _growth_on_scenes("urg04lx")
+    assert np.all(growth[:, 1] > 0.002)
+    sigma_far, _, far_range = np.median(growth, axis=0)
+    assert sigma_far == pytest.approx(math.hypot(0.01, 0.01 * far_range), rel=0.25)

@@ -128,25 +128,34 @@ misjudges steep walls; five means throw away the information of the points.""",
         ["adaptive", "noise_model=range"],
         """Options: `noise_model="constant"` (the margin of the breakpoint test is `noise_k` standard
 deviations of a range difference, one sigma per scan, estimated from the median second
-difference of the ranges) and `noise_model="range"` (the scan's second differences are split at
-their median range; the robust noise of the far half and its growth from the near half give a
-margin `max(constant margin, noise_k sqrt(2) (sigma_far + slope (r - r_far)))`, so it grows with
-range where the noise does and stays as it is where it does not).
+difference of the ranges) and `noise_model="range"` (each return's distance from the chord of
+its two neighbours, over `sqrt(1.5) cos(incidence)`, is a sample of its range noise; the samples
+are split at their median range, and the robust noise of the far half and its growth from the
+near half give a margin `max(constant margin, noise_k sqrt(2) (sigma_far + slope (r - r_far)))`,
+so it grows with range where the noise does and stays as it is where it does not).
 
 The URG-04LX's range error is a share of the range (1 % beyond 1 m), so one sigma per scan,
 dominated by the many near returns, is too small far away: the 120 false breakpoints on plain
 walls in 150 URG scenes (seed 0) lay at a median range of 3.9 m, against 1.6 m for all returns
 (measured at commit `00f24aa`, when the default's URG breakpoint F1 was 0.909; it is 0.919 now).
-With `range`, URG breakpoint F1 rises from 0.919 to 0.939, TiM571 from 0.955 to 0.958; corner F1
-falls on three presets (lms_1deg 0.870 -> 0.860, URG 0.749 -> 0.745) and rises on the TiM571
-(0.777 -> 0.783). A second scene set (seed 1, 150 per preset, `scanlines eval -n 150 --seed 1`)
-agrees: breakpoint F1 over all sensors 0.939 -> 0.948, corner F1 0.815 -> 0.810. On the 10
-hand-labelled Intel frames (SICK LMS, `python docs/decisions/labelled_frames.py`) breakpoint
-precision stays 0.97 and recall falls 0.56 -> 0.53.""",
-        "`constant` stays the default for now: `range` is better for breakpoints on every simulated "
-        "preset, most for the URG-04LX (choose it for sensors whose noise grows with range), but "
-        "costs corners on three presets and recall on the real Intel frames; deciding needs "
-        "real logs of such a sensor with labels.",
+
+The first version of `range` measured the growth from the ranges' second differences. At 1 deg
+those also hold the geometry of slanted walls far away, so it saw growth on sensors with a
+constant error (on 20 lms_1deg scans, seed 3, the far half's median noise came out 1.8 cm from
+second differences and 1.15 cm from chords, for a true 1.04 cm) and cost corners there (lms_1deg
+0.870 -> 0.860). With the chord samples
+(`tests/test_steps.py::test_noise_growth_sees_constant_noise_at_1_deg`), `range`
+lifts URG breakpoint F1 from 0.919 to 0.937 and TiM571 from 0.955 to 0.956, leaves the two LMS
+presets' breakpoints as they are, and moves corner F1 by -0.003 (lms_1deg), 0 (lms_05deg),
++0.007 (TiM571) and -0.002 (URG). A second scene set (seed 1, 150 per preset, `scanlines eval -n
+150 --seed 1`) agrees: breakpoint F1 over all sensors 0.939 -> 0.946, corner F1 0.815 -> 0.814.
+On the 10 hand-labelled Intel frames (SICK LMS, `python docs/decisions/labelled_frames.py`)
+breakpoints do not change (precision 0.97, recall 0.56) but one corner of ten is lost
+(precision 0.45 -> 0.40, recall 0.90 -> 0.80).""",
+        "`constant` stays the default for now: `range` is better for breakpoints where the noise "
+        "grows with range (choose it for such sensors, as the URG-04LX) and nearly neutral "
+        "elsewhere in the simulator, but it loses a corner on the real Intel frames, and "
+        "deciding needs real logs of such a sensor with labels.",
     ),
     "corner-check": (
         "Corner or depth step: do the two lines meet?",

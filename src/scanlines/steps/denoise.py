@@ -167,39 +167,57 @@ def noise_from_ranges(r, gap, cluster_start, cluster_end) -> float:
 
 
 @jit
-def noise_growth(r, gap, cluster_start, cluster_end) -> tuple[float, float, float]:
+def noise_growth(x, y, r, gap, cluster_start, cluster_end) -> tuple[float, float, float]:
     """How the range noise grows with range: ``(sigma_far, slope, far_range)``.
 
-    The triples of :func:`estimate_noise` are split at their median range; the
-    robust noise of each half and the median range of each half give a line
-    ``sigma(r) = sigma_far + slope (r - far_range)`` (``slope >= 0``, 0 when the
-    noise does not grow, as on sensors with a constant range error).
+    Each interior return ``P_i`` with neighbours on both sides gives one sample: its
+    distance from the chord ``P_{i-1} P_{i+1}`` over ``sqrt(1.5) cos(beta)`` (``beta`` the
+    angle between its beam and the chord's normal; only ``beta`` < 60 deg). On a straight
+    surface that distance is noise alone, at any incidence and resolution, where the
+    second difference of the ranges also holds the surface's geometry (at 1 deg, on
+    slanted walls far away, as much as the noise). The samples are split at their median
+    range; the robust noise of each half and the median range of each half give a line
+    ``sigma(r) = sigma_far + slope (r - far_range)`` (``slope >= 0``, 0 when the noise does
+    not grow, as on sensors with a constant range error).
     """
     n = r.shape[0]
     interior = np.ones(n, dtype=np.bool_)
     interior[cluster_start] = False
     interior[cluster_end] = False
-    second = np.empty(n)
+    sample = np.empty(n)
     at = np.empty(n)
     count = 0
     for i in range(1, n - 1):
-        if interior[i] and gap[i - 1] == 1 and gap[i] == 1:
-            second[count] = abs(r[i + 1] - 2.0 * r[i] + r[i - 1])
-            at[count] = r[i]
-            count += 1
+        if not (interior[i] and gap[i - 1] == 1 and gap[i] == 1):
+            continue
+        cx, cy = x[i + 1] - x[i - 1], y[i + 1] - y[i - 1]
+        length = math.hypot(cx, cy)
+        if length == 0.0 or r[i] <= 0.0:
+            continue
+        nx, ny = -cy / length, cx / length
+        cos_beta = abs(nx * x[i] + ny * y[i]) / r[i]
+        if cos_beta < MIN_CHORD_COS:
+            continue
+        off = abs((x[i] - x[i - 1]) * nx + (y[i] - y[i - 1]) * ny)
+        sample[count] = off / (cos_beta * math.sqrt(1.5))
+        at[count] = r[i]
+        count += 1
     if count < 6:
         return 0.0, 0.0, 0.0
-    second, at = second[:count], at[:count]
+    sample, at = sample[:count], at[:count]
     middle = np.median(at)
     near, far = at <= middle, at > middle
     if not far.any():
         return 0.0, 0.0, 0.0
-    scale = 0.6745 * math.sqrt(6.0)
-    sigma_near, sigma_far = np.median(second[near]) / scale, np.median(second[far]) / scale
+    sigma_near, sigma_far = np.median(sample[near]) / 0.6745, np.median(sample[far]) / 0.6745
     near_range, far_range = np.median(at[near]), np.median(at[far])
     if far_range <= near_range:
         return 0.0, 0.0, 0.0
     return sigma_far, max((sigma_far - sigma_near) / (far_range - near_range), 0.0), far_range
+
+
+MIN_CHORD_COS = 0.5
+"""Chord samples of :func:`noise_growth` come from surfaces within 60 deg of facing the beam."""
 
 
 def estimate_noise(seq: Sequence, cluster_start: np.ndarray, cluster_end: np.ndarray) -> float:
