@@ -167,18 +167,15 @@ def noise_from_ranges(r, gap, cluster_start, cluster_end) -> float:
 
 
 @jit
-def noise_growth(x, y, r, gap, cluster_start, cluster_end) -> tuple[float, float, float]:
-    """How the range noise grows with range: ``(sigma_far, slope, far_range)``.
+def chord_samples(x, y, r, gap, cluster_start, cluster_end) -> tuple[np.ndarray, np.ndarray]:
+    """Range-noise samples from chords, and the range of each: ``(sample, at)``.
 
     Each interior return ``P_i`` with neighbours on both sides gives one sample: its
     distance from the chord ``P_{i-1} P_{i+1}`` over ``sqrt(1.5) cos(beta)`` (``beta`` the
     angle between its beam and the chord's normal; only ``beta`` < 60 deg). On a straight
     surface that distance is noise alone, at any incidence and resolution, where the
     second difference of the ranges also holds the surface's geometry (at 1 deg, on
-    slanted walls far away, as much as the noise). The samples are split at their median
-    range; the robust noise of each half and the median range of each half give a line
-    ``sigma(r) = sigma_far + slope (r - far_range)`` (``slope >= 0``, 0 when the noise does
-    not grow, as on sensors with a constant range error).
+    slanted walls far away, as much as the noise).
     """
     n = r.shape[0]
     interior = np.ones(n, dtype=np.bool_)
@@ -202,9 +199,21 @@ def noise_growth(x, y, r, gap, cluster_start, cluster_end) -> tuple[float, float
         sample[count] = off / (cos_beta * math.sqrt(1.5))
         at[count] = r[i]
         count += 1
-    if count < 6:
+    return sample[:count], at[:count]
+
+
+@jit
+def noise_growth(x, y, r, gap, cluster_start, cluster_end) -> tuple[float, float, float]:
+    """How the range noise grows with range: ``(sigma_far, slope, far_range)``.
+
+    The samples of :func:`chord_samples` are split at their median range; the robust
+    noise of each half and the median range of each half give a line
+    ``sigma(r) = sigma_far + slope (r - far_range)`` (``slope >= 0``, 0 when the noise does
+    not grow, as on sensors with a constant range error).
+    """
+    sample, at = chord_samples(x, y, r, gap, cluster_start, cluster_end)
+    if sample.shape[0] < 6:
         return 0.0, 0.0, 0.0
-    sample, at = sample[:count], at[:count]
     middle = np.median(at)
     near, far = at <= middle, at > middle
     if not far.any():
