@@ -40,7 +40,7 @@ timed passes follow, interleaved between methods (pass 1 of every method, then p
 ...); every call is one :func:`time.perf_counter_ns` sample. Reported: the median (and
 90th percentile) of the samples, microseconds per scan; per scan, the median of its
 samples. Section 4 uses :func:`~scanlines.evaluate.evaluate`'s own timing (one sample
-per scan and method, after one warm-up scene).
+per scan and method, each after an untimed extraction of the same scan by the same method).
 
 ``import scanlines.reproduce`` needs numpy only; the figures import matplotlib on use.
 """
@@ -1079,8 +1079,8 @@ def _machine_line(result: ReproduceResult) -> str:
         f"ones scored; it also warms caches), then {result.config.repeats} timed pass"
         f"{'es' if result.config.repeats != 1 else ''} interleaved between methods; "
         "us/scan is the median of all samples (`time.perf_counter_ns`). Section 4 uses "
-        "`scanlines.evaluate`'s timing: one sample per scan and method after one warm-up "
-        "scene."
+        "`scanlines.evaluate`'s timing: one sample per scan and method, each after an untimed "
+        "extraction of the same scan by the same method."
     )
 
 
