@@ -18,8 +18,8 @@ from scenes import scan_of, square_room
 def test_public_names():
     for name in ("Scan", "Extractor", "extract", "Extraction", "Segment", "ScanError", "methods"):
         assert hasattr(scanlines, name)
-    assert "adaptive" in scanlines.methods()
-    assert all(isinstance(name, str) for name in scanlines.methods())
+    assert "adaptive" in scanlines.method_names()
+    assert all(isinstance(name, str) for name in scanlines.method_names())
 
 
 def test_import_loads_no_cli_plot_or_bag_dependency():
@@ -108,7 +108,7 @@ def test_extraction_is_cheap_arrays_with_segment_views():
         result.first[0] = 3
 
 
-@pytest.mark.parametrize("method", scanlines.methods())
+@pytest.mark.parametrize("method", scanlines.method_names())
 def test_method_info_documents_every_parameter(method):
     info = scanlines.method_info(method)
     assert set(info["params"]) == set(Extractor(method).params)

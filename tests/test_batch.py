@@ -34,7 +34,7 @@ def real_stacks():
     return stacks
 
 
-@pytest.mark.parametrize("method", scanlines.methods())
+@pytest.mark.parametrize("method", scanlines.method_names())
 def test_batch_equals_single_calls_on_real_excerpts(real_stacks, method):
     extractor = Extractor(method)
     for scans in real_stacks.values():

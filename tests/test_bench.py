@@ -43,7 +43,7 @@ def test_quick_json_has_every_method_and_positive_timings(quick_run):
     assert out.returncode == 0, out.stderr
     data = json.loads((folder / "out.json").read_text())
     assert data["schema"] == bench.SCHEMA
-    selected = list(scanlines.methods())
+    selected = list(scanlines.method_names())
     assert data["methods"] == selected
     assert data["settings"]["quick"] is True
     assert data["reference"]["method"] == "iepf"
@@ -70,11 +70,11 @@ def test_quick_scaling_entries(quick_run):
     scaling = json.loads((folder / "out.json").read_text())["scaling"]
     assert [e["n_beams"] for e in scaling["entries"]] == [100, 1000]
     for entry in scaling["entries"]:
-        assert set(entry["results"]) == set(scanlines.methods())
+        assert set(entry["results"]) == set(scanlines.method_names())
         for timing in entry["results"].values():
             assert timing["median_us"] > 0
             assert timing["us_per_beam"] == pytest.approx(timing["median_us"] / entry["n_beams"])
-    assert set(scaling["exponent"]) == set(scanlines.methods())
+    assert set(scaling["exponent"]) == set(scanlines.method_names())
 
 
 def test_quick_batch_and_profile(quick_run):

@@ -98,7 +98,7 @@ def test_truth_row_across_the_seam_of_a_full_circle():
 
 
 def test_truth_is_a_spec_but_not_a_method():
-    assert TRUTH not in scanlines.methods()
+    assert TRUTH not in scanlines.method_names()
     with pytest.raises(ParameterError, match="unknown method 'truth'"):
         scanlines.Extractor(TRUTH)
     spec = parse_spec("truth@ceiling")

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from scanlines.errors import LogFormatError, ParameterError, ScanError, ScanlinesError
 from scanlines.extraction import Extraction, Segment
-from scanlines.extractor import Extractor, extract, method_info, methods
+from scanlines.extractor import Extractor, extract, method_info, method_names, methods
 from scanlines.scan import Scan
 
 __version__ = "0.1.0"
@@ -33,5 +33,6 @@ __all__ = [
     "__version__",
     "extract",
     "method_info",
+    "method_names",
     "methods",
 ]

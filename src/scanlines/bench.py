@@ -56,7 +56,7 @@ import numpy as np
 
 from scanlines.errors import ParameterError
 from scanlines.extractor import Extractor
-from scanlines.extractor import methods as registered_methods
+from scanlines.extractor import method_names as registered_methods
 from scanlines.io.writers import write_text_atomically
 from scanlines.scan import Scan
 

@@ -16,19 +16,22 @@ from scanlines.params import resolve
 from scanlines.scan import Scan, valid_returns
 from scanlines.steps.points import make_sequence
 
-__all__ = ["Extractor", "extract", "method_info", "methods"]
+__all__ = ["Extractor", "extract", "method_info", "method_names", "methods"]
 
 
-def methods() -> tuple[str, ...]:
+def method_names() -> tuple[str, ...]:
     """Names of the registered methods."""
     return tuple(REGISTRY)
+
+
+methods = method_names
 
 
 def _module(method: str):
     try:
         return REGISTRY[method]
     except (KeyError, TypeError):
-        raise ParameterError(f"unknown method {method!r}; valid: {', '.join(methods())}") from None
+        raise ParameterError(f"unknown method {method!r}; valid: {', '.join(method_names())}") from None
 
 
 def method_info(method: str) -> dict[str, Any]:
@@ -48,7 +51,7 @@ class Extractor:
     Parameters
     ----------
     method:
-        A name from :func:`methods`; ``"adaptive"`` is the paper's method.
+        A name from :func:`method_names`; ``"adaptive"`` is the paper's method.
     preset:
         A named parameter set of the method (``"paper"``: the paper, literally).
     **params:

@@ -63,7 +63,7 @@ from scanlines.errors import ParameterError
 from scanlines.evaluate import EvalResult, MethodSpec, evaluate, make_scene, parse_specs
 from scanlines.evaluate import tolerance_caption as sim_tolerance_caption
 from scanlines.extraction import ALPHA, RHO, Extraction
-from scanlines.extractor import methods as registered_methods
+from scanlines.extractor import method_names as registered_methods
 from scanlines.io.writers import write_text_atomically
 from scanlines.metrics import (
     EventScore,
