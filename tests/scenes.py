@@ -53,3 +53,12 @@ def scan_of(
 def beam_of(scan: Scan, bearing: float) -> int:
     """Index of the beam nearest ``bearing`` (radians)."""
     return int(np.argmin(np.abs(np.angle(np.exp(1j * (scan.angles - bearing))))))
+
+
+def returns_of(scan: Scan):
+    """The :class:`~scanlines.steps.returns.Returns` of ``scan`` (local frame), as the
+    methods build them."""
+    from scanlines.steps.returns import valid_returns
+
+    local = scan.angle_increment * np.arange(len(scan))
+    return valid_returns(scan.ranges, scan.valid, np.cos(local), np.sin(local))

@@ -5,13 +5,13 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
-import types
 
 import pytest
 
 import scanlines
 from scanlines import bench
 from scanlines.methods import REGISTRY
+from scanlines.methods.iepf import Iepf
 
 
 def run(*args: str) -> subprocess.CompletedProcess:
@@ -159,19 +159,21 @@ def test_bad_input_exits_2_with_one_line(args, message):
     assert out.stdout == ""
 
 
-def test_failing_method_is_reported_not_fatal(monkeypatch):
-    calls = {"n": 0}
+class Boom(Iepf):
+    """Fails from its second call on."""
 
-    def run_method(seq, angle_min, params):
-        calls["n"] += 1
-        if calls["n"] >= 2:
+    name = "boom"
+    calls = 0
+
+    def extract(self, *args):
+        type(self).calls += 1
+        if type(self).calls >= 2:
             raise RuntimeError("boom on purpose")
-        return REGISTRY["iepf"].run(seq, angle_min, params)
+        return super().extract(*args)
 
-    fake = types.SimpleNamespace(
-        NAME="boom", __doc__="Fails.", PARAMS=REGISTRY["iepf"].PARAMS, PRESETS={}, run=run_method
-    )
-    monkeypatch.setitem(REGISTRY, "boom", fake)
+
+def test_failing_method_is_reported_not_fatal(monkeypatch):
+    monkeypatch.setitem(REGISTRY, "boom", Boom)
     config = bench.BenchConfig.quick_config(
         methods=("iepf", "boom"), sensors=("lms_1deg",), beam_counts=(100,)
     )

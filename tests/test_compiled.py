@@ -17,12 +17,14 @@ import pytest
 from scanlines import Extractor, _jit
 from scanlines.data import sample
 from scanlines.io import open_log
+from scanlines.methods import CompiledMethod, method_class
 
 SCRIPT = """
 import json, sys
 from scanlines import Extractor
 from scanlines.data import sample
 from scanlines.io import open_log
+from scanlines.methods import CompiledMethod, method_class
 method = sys.argv[1]
 scans = list(open_log(sample("intel")))[:3]
 out = []
@@ -67,16 +69,8 @@ def test_cache_directory_is_keyed_by_the_sources(monkeypatch, tmp_path):
     assert directory.name == f"numba-{_jit._source_hash()}"
 
 
-def test_extractor_uses_the_compiled_path_for_adaptive():
+@pytest.mark.parametrize("method", COMPILED_METHODS)
+def test_the_compiled_methods_are_one_kernel(method):
+    assert issubclass(method_class(method), CompiledMethod)
     scan = next(iter(open_log(sample("intel"))))
-    extractor = Extractor()
-    assert extractor._compiled is not None
-    assert len(extractor(scan)) > 0
-
-
-@pytest.mark.parametrize("method", COMPILED_METHODS[1:])
-def test_extractor_uses_the_compiled_path_for_the_split_methods(method):
-    scan = next(iter(open_log(sample("intel"))))
-    extractor = Extractor(method)
-    assert extractor._compiled is not None
-    assert len(extractor(scan)) > 0
+    assert len(Extractor(method)(scan)) > 0

@@ -1,4 +1,4 @@
-"""Each step of the adaptive method on its own, against hand-computed values."""
+"""The building blocks of :mod:`scanlines.steps`, each against its definition."""
 
 from __future__ import annotations
 
@@ -11,63 +11,59 @@ from scanlines import Scan, extract
 from scanlines.evaluate import make_scene
 from scanlines.steps.breakpoints import (
     MAX_BRIDGED_SHARE,
+    RULE_CODES,
     BreakpointRule,
-    Clusters,
     auto_abd_lambda,
-    cluster,
-    is_break,
-    thresholds,
+    break_flags,
+    threshold,
 )
-from scanlines.steps.corners import corner_side, peak_candidates, slope_difference, turn_angle
-from scanlines.steps.denoise import (
-    estimate_noise,
-    in_between_clusters,
-    isolated_noise,
-    literal_noise,
-    noise_growth,
-    replace_by_window_mean,
-)
+from scanlines.steps.clusters import break_beams, cluster_bounds
+from scanlines.steps.corners import peak_positions, slope_scores, turn_scores
+from scanlines.steps.denoise import in_between_clusters, isolated_noise, literal_noise, window_means
 from scanlines.steps.fit import (
-    Moments,
+    PAPER,
+    TLS,
     RunCost,
-    line_covariances,
-    paper_lines,
-    run_labels,
-    tls_lines,
+    fit_run,
+    prefix_moments,
+    run_covariances,
 )
-from scanlines.steps.points import make_sequence
-from scanlines.steps.select import sweep, threshold_grid
-from scenes import cast, scan_of, square_room
+from scanlines.steps.noise import noise_growth, range_noise
+from scanlines.steps.returns import Returns, beam_gaps
+from scanlines.steps.select import BIC, SSE, best_level, level_corners, sweep_levels, threshold_grid
+from scenes import cast, returns_of, scan_of, square_room
 
 
-def sequence_of(scan: Scan):
-    local = scan.angle_increment * np.arange(len(scan))
-    return make_sequence(
-        scan.ranges, scan.valid, np.cos(local), np.sin(local), scan.angle_increment
-    )
+def rule_of(name="adaptive", *, k=3.0, noise_margin=0.0, abd_lambda=10.0, pdbs_c0=0.1):
+    """A breakpoint rule with its margin in metres and ``abd_lambda`` in degrees."""
+    lam = math.radians(abd_lambda)
+    return BreakpointRule(RULE_CODES[name], k, noise_margin, 0.0, lam, pdbs_c0, 0.3, 0.0, 0.0, 0.0)
 
 
-def one_cluster(n: int) -> Clusters:
-    return Clusters(np.array([0]), np.array([n - 1]), np.zeros(0, dtype=np.intp))
+def whole(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """``start, end`` of one cluster over ``n`` positions."""
+    return np.array([0]), np.array([n - 1])
+
+
+def gaps(returns) -> np.ndarray:
+    return beam_gaps(returns.index, int(returns.index[-1]) + 1)
 
 
 # --- breakpoints (eq. 6-7) ---------------------------------------------------------------
 
 
 def test_adaptive_threshold_is_k_rho_dtheta():
-    rule = BreakpointRule(k=3.0)
-    r = np.array([2.0, 4.0])
-    limit = thresholds(rule, r, r, np.array([1, 2]), math.radians(1.0))
-    np.testing.assert_allclose(limit, [3 * 2.0 * math.radians(1), 3 * 4.0 * 2 * math.radians(1)])
+    rule = rule_of(k=3.0)
+    dphi = math.radians(1.0)
+    limit = [threshold(rule, 2.0, 2.0, 1, dphi), threshold(rule, 4.0, 4.0, 2, dphi)]
+    np.testing.assert_allclose(limit, [3 * 2.0 * dphi, 3 * 4.0 * 2 * dphi])
 
 
 def test_abd_threshold_matches_borges_aldon():
-    rule = BreakpointRule(name="abd", abd_lambda=math.radians(10), noise_margin=0.03)
+    rule = rule_of("abd", abd_lambda=10.0, noise_margin=0.03)
     dphi = math.radians(1)
     expected = 2.0 * math.sin(dphi) / math.sin(math.radians(10) - dphi) + 0.03
-    assert thresholds(rule, np.array([2.0]), np.array([5.0]), np.array([1]), dphi)[
-        0
-    ] == pytest.approx(expected)
+    assert threshold(rule, 2.0, 5.0, 1, dphi) == pytest.approx(expected)
 
 
 @pytest.mark.parametrize(
@@ -90,23 +86,21 @@ def test_auto_abd_lambda_stops_at_90_deg():
 
 
 def test_pdbs_threshold_uses_the_nearer_range():
-    rule = BreakpointRule(name="pdbs", pdbs_c0=0.1)
+    rule = rule_of("pdbs", pdbs_c0=0.1)
     dphi = math.radians(1)
     expected = 0.1 + math.sqrt(2 * (1 - math.cos(dphi))) * 2.0
-    assert thresholds(rule, np.array([5.0]), np.array([2.0]), np.array([1]), dphi)[
-        0
-    ] == pytest.approx(expected)
+    assert threshold(rule, 5.0, 2.0, 1, dphi) == pytest.approx(expected)
 
 
 def test_breaks_at_jumps_and_long_gaps_only():
     ranges = np.array([2.0, 2.0, 2.0, 3.0, 3.0, np.nan, 3.0, 3.0, np.nan, np.nan, 3.0, 3.0])
     scan = Scan(ranges, 0.0, math.radians(1.0))
-    seq = sequence_of(scan)
-    breaks = is_break(seq, BreakpointRule(k=3.0))
+    returns = returns_of(scan)
+    breaks = break_flags(returns, gaps(returns), scan.angle_increment, rule_of(k=3.0))
     # pairs of valid beams: (0,1) (1,2) (2,3)* (3,4) (4,6) bridged (6,7) (7,10)* gap of two
     assert breaks.tolist() == [False, False, True, False, False, False, True, False]
-    clusters = cluster(seq, breaks)
-    assert clusters.breakpoints.tolist() == [2, 7]
+    _, end = cluster_bounds(breaks)
+    assert break_beams(returns.index, end, False).tolist() == [2, 7]
 
 
 # --- denoising (Step 2-3) -------------------------------------------------------------------
@@ -114,8 +108,8 @@ def test_breaks_at_jumps_and_long_gaps_only():
 
 def test_literal_noise_rule_fires_on_ordinary_wall_points():
     scan = scan_of([((3.0, -4.0), (3.0, 4.0))], fov_deg=100, step_deg=1 / 3, sigma=0.01, seed=2)
-    seq = sequence_of(scan)
-    noise = literal_noise(np.hypot(np.diff(seq.x), np.diff(seq.y)))
+    returns = returns_of(scan)
+    noise = literal_noise(np.hypot(np.diff(returns.x), np.diff(returns.y)))
     share = noise.mean()
     assert 0.15 < share < 0.35  # a plain wall, yet about a quarter of its points are "noise"
 
@@ -130,31 +124,31 @@ def test_isolated_rule_finds_a_spike_and_nothing_else():
     scan = scan_of([((3.0, -4.0), (3.0, 4.0))], fov_deg=100, step_deg=1 / 3, sigma=0.01, seed=2)
     ranges = scan.ranges.copy()
     ranges[100] += 0.8
-    seq = sequence_of(Scan(ranges, scan.angle_min, scan.angle_increment))
-    rule = BreakpointRule(k=3.0, noise_margin=0.04)
-    noise = isolated_noise(seq, rule, is_break(seq, rule))
+    returns = returns_of(Scan(ranges, scan.angle_min, scan.angle_increment))
+    rule = rule_of(k=3.0, noise_margin=0.04)
+    step = scan.angle_increment
+    breaks = break_flags(returns, gaps(returns), step, rule)
+    noise = isolated_noise(returns, gaps(returns), step, rule, breaks)
     assert np.flatnonzero(noise).tolist() == [100]
 
 
 def test_window_mean_never_crosses_a_jump():
     ranges = np.r_[np.full(10, 2.0), np.full(10, 4.0)]
     scan = Scan(ranges, 0.0, math.radians(1.0))
-    seq = sequence_of(scan)
-    rule = BreakpointRule(k=3.0)
-    breaks = is_break(seq, rule)
-    noise = np.zeros(len(seq), dtype=bool)
+    returns = returns_of(scan)
+    breaks = break_flags(returns, gaps(returns), scan.angle_increment, rule_of(k=3.0))
+    noise = np.zeros(20, dtype=bool)
     noise[9] = True  # last point before the jump
-    smoothed = replace_by_window_mean(seq, noise, 10, breaks)
-    assert np.all(smoothed.r[10:] == seq.r[10:])  # the far side is untouched
-    assert np.all(np.abs(smoothed.r[:10] - 2.0) < 0.01)  # the mean stays on the near surface
+    x, y = window_means(returns.x, returns.y, noise, 10, breaks)
+    smoothed = np.hypot(x, y)
+    assert np.all(smoothed[10:] == returns.r[10:])  # the far side is untouched
+    assert np.all(np.abs(smoothed[:10] - 2.0) < 0.01)  # the mean stays on the near surface
 
 
 def test_noise_estimate_recovers_sigma():
     scan = scan_of([((3.0, -4.0), (3.0, 4.0))], fov_deg=60, step_deg=0.25, sigma=0.02, seed=5)
-    seq = sequence_of(scan)
-    assert estimate_noise(seq, np.array([0]), np.array([len(seq) - 1])) == pytest.approx(
-        0.02, rel=0.15
-    )
+    returns = returns_of(scan)
+    assert range_noise(returns.r, gaps(returns)) == pytest.approx(0.02, rel=0.15)
 
 
 # --- corners (eq. 12-13) -----------------------------------------------------------------------
@@ -163,8 +157,8 @@ def test_noise_estimate_recovers_sigma():
 def test_slope_difference_matches_eq_13():
     ranges = np.array([2.0, 2.1, 2.3, 2.2])
     step = math.radians(1.0)
-    seq = sequence_of(Scan(ranges, 0.0, step))
-    dk = slope_difference(seq, one_cluster(4))
+    returns = returns_of(Scan(ranges, 0.0, step))
+    dk = slope_scores(returns.r, gaps(returns), step, *whole(4), False)
     expected_1 = abs(2.1 - 2.0) / (2.0 * step) - abs(2.3 - 2.1) / (2.1 * step)
     expected_2 = abs(2.3 - 2.1) / (2.1 * step) - abs(2.2 - 2.3) / (2.3 * step)
     np.testing.assert_allclose(dk, [0.0, expected_1, expected_2, 0.0])
@@ -173,59 +167,56 @@ def test_slope_difference_matches_eq_13():
 def test_dk_as_printed_misses_a_symmetric_corner():
     """Seen from inside a room, range rises into a corner and falls after it: |Dk| ~ 0."""
     scan = scan_of(square_room(), fov_deg=60, step_deg=1 / 3, start_deg=15)
-    seq = sequence_of(scan)
-    corner = int(np.argmax(seq.r))  # the 45 deg corner
-    literal = slope_difference(seq, one_cluster(len(seq)))
-    signed = slope_difference(seq, one_cluster(len(seq)), signed=True)
-    turn = turn_angle(seq, one_cluster(len(seq)), 5, Moments(seq.x, seq.y))
+    returns = returns_of(scan)
+    n, step, gap = len(returns.r), scan.angle_increment, gaps(returns)
+    corner = int(np.argmax(returns.r))  # the 45 deg corner
+    literal = slope_scores(returns.r, gap, step, *whole(n), False)
+    signed = slope_scores(returns.r, gap, step, *whole(n), True)
+    moments = prefix_moments(returns.x, returns.y)
+    turn = turn_scores(returns.x, returns.y, moments, *whole(n), 5)
     assert abs(literal[corner]) < 0.01
     assert abs(signed[corner]) > 1.0
     assert turn[corner] == pytest.approx(math.pi / 2, abs=0.01)
 
 
-def test_peak_rule_and_position_rule():
+def test_peak_rule():
     score = np.array([0.0, 0.1, 0.5, 0.9, 0.7, 0.1, 0.0])
-    peaks = peak_candidates(score, one_cluster(7))
-    assert peaks.tolist() == [3]
-    # |0.9 - 0.5| = 0.4 > |0.9 - 0.7| = 0.2: the corner lies between 3 and 4.
-    assert corner_side(score, peaks).tolist() == [1]
-    assert corner_side(np.array([0.0, 0.8, 0.9, 0.2, 0.0]), np.array([2])).tolist() == [-1]
+    assert peak_positions(score, *whole(7)).tolist() == [3]
+    assert peak_positions(-score, *whole(7)).tolist() == [3]  # by magnitude
+    assert peak_positions(score, np.array([0, 4]), np.array([3, 6])).tolist() == []
 
 
 # --- threshold sweep (Step 5-7) ------------------------------------------------------------------
 
 
-def noisy_room_sweep(seed: int):
+def room_sweep_choice(seed: int, criterion: int) -> tuple[np.ndarray, float, np.ndarray]:
+    """The corners and threshold the sweep chooses on a noisy room, and every threshold."""
     scan = scan_of(
         square_room(), fov_deg=340, step_deg=1 / 3, sigma=0.01, seed=seed, start_deg=-170
     )
-    seq = sequence_of(scan)
-    moments = Moments(seq.x, seq.y)
-    clusters = one_cluster(len(seq))
-    score = turn_angle(seq, clusters, 5, moments)
-    candidates = peak_candidates(score, clusters)
-    return sweep(
-        RunCost(moments, "tls"),
-        clusters,
-        candidates,
-        score[candidates],
-        grid=None,
-        max_evaluations=100,
-        shared=False,
+    returns = returns_of(scan)
+    start, end = whole(len(returns.r))
+    moments = prefix_moments(returns.x, returns.y)
+    score = turn_scores(returns.x, returns.y, moments, start, end, 5)
+    candidates = peak_positions(score, start, end)
+    cost = RunCost(TLS, moments, np.zeros(0))
+    ranked, accepted, sse, segments, thresholds, levels = sweep_levels(
+        cost, start, end, candidates, score[candidates], np.zeros(0), False, 100, False
     )
+    best, _ = best_level(criterion, sse, segments, levels, len(returns.r), 0.01, 4.0)
+    return level_corners(ranked, accepted, levels[best]), thresholds[best], thresholds
 
 
 def test_min_sse_picks_the_lowest_threshold():
-    cuts = noisy_room_sweep(0)
-    chosen = cuts.choose("sse", 0.01, 4.0)
-    assert chosen.threshold == cuts.thresholds.min()
-    assert len(chosen.corners) > 20  # every noise peak becomes a corner
+    corners, chosen, thresholds = room_sweep_choice(0, SSE)
+    assert chosen == thresholds.min()
+    assert len(corners) > 20  # every noise peak becomes a corner
 
 
 def test_bic_picks_the_four_corners():
     for seed in range(3):
-        chosen = noisy_room_sweep(seed).choose("bic", 0.01, 4.0)
-        assert len(chosen.corners) == 4
+        corners, _, _ = room_sweep_choice(seed, BIC)
+        assert len(corners) == 4
 
 
 def test_paper_threshold_grid():
@@ -244,40 +235,37 @@ def test_tls_recovers_exact_lines(alpha):
     t = np.linspace(-2, 3, 40)
     x = rho * math.cos(alpha) - t * math.sin(alpha)
     y = rho * math.sin(alpha) + t * math.cos(alpha)
-    lines = tls_lines(Moments(x, y), np.array([0]), np.array([39]))
-    assert lines.rho[0] == pytest.approx(rho)
-    assert abs(math.remainder(lines.alpha[0] - alpha, 2 * math.pi)) < 1e-9
-    assert lines.sse[0] == pytest.approx(0.0, abs=1e-9)
+    fitted_rho, fitted_alpha, sse = fit_run(TLS, prefix_moments(x, y), 0, 39)
+    assert fitted_rho == pytest.approx(rho)
+    assert abs(math.remainder(fitted_alpha - alpha, 2 * math.pi)) < 1e-9
+    assert sse == pytest.approx(0.0, abs=1e-9)
 
 
 def test_paper_fit_on_five_means_is_ols():
     rng = np.random.default_rng(3)
     x = np.linspace(0.5, 4.0, 50)
     y = 0.4 * x + 1.0 + rng.normal(0, 0.01, 50)
-    lines = paper_lines(Moments(x, y), np.array([0]), np.array([49]))
+    rho, alpha, sse = fit_run(PAPER, prefix_moments(x, y), 0, 49)
     means_x = [x[i * 10 : (i + 1) * 10].mean() for i in range(5)]
     means_y = [y[i * 10 : (i + 1) * 10].mean() for i in range(5)]
     k, b = np.polyfit(means_x, means_y, 1)
     norm = math.hypot(k, 1)
-    assert lines.rho[0] == pytest.approx(abs(b) / norm)
-    assert math.tan(lines.alpha[0] + math.pi / 2) == pytest.approx(k)
-    assert lines.sse[0] == pytest.approx(np.sum((y - (k * x + b)) ** 2))
+    assert rho == pytest.approx(abs(b) / norm)
+    assert math.tan(alpha + math.pi / 2) == pytest.approx(k)
+    assert sse == pytest.approx(np.sum((y - (k * x + b)) ** 2))
 
 
 def test_covariance_of_a_wall_facing_the_sensor():
     # Wall x = 2 seen head-on: rho ~ mean of perpendicular offsets, alpha ~ slope.
-    step = math.radians(1.0)
     angles = np.radians(np.arange(-20, 21))
     r = 2.0 / np.cos(angles)
-    x, y = r * np.cos(angles), r * np.sin(angles)
+    returns = Returns(np.arange(41), r, r * np.cos(angles), r * np.sin(angles))
     rho, alpha = np.array([2.0]), np.array([0.0])
-    position, run = run_labels(np.array([0]), np.array([40]), 41)
-    cov = line_covariances(x, y, r, rho, alpha, position, run, 0.01)[0]
+    cov = run_covariances(returns, rho, alpha, np.array([0]), np.array([40]), 0.01)[0]
     weights = (2.0 / r) ** 2 * 0.01**2
-    s = y - y.mean()
+    s = returns.y - returns.y.mean()
     assert cov[1, 1] == pytest.approx(np.sum(s * s * weights) / np.sum(s * s) ** 2)
     assert cov[0, 0] == pytest.approx(np.sum(weights) / 41**2)
-    assert step > 0
 
 
 def test_paper_preset_runs_the_literal_method_on_a_room():
@@ -303,19 +291,12 @@ def test_cast_helper_hits_a_wall():
 )
 def test_corner_removal_rule_needs_two_points_on_each_side(shared, expected):
     """Step 5: a corner whose part before or after would have fewer than 2 points is dropped."""
-    x = np.arange(12, dtype=float)
-    moments = Moments(x, np.zeros(12))
-    clusters = Clusters(np.array([0]), np.array([11]), np.zeros(0, dtype=np.intp))
-    cuts = sweep(
-        RunCost(moments, "tls"),
-        clusters,
-        np.array([1, 5, 10]),
-        np.array([3.0, 2.0, 1.0]),
-        grid=None,
-        max_evaluations=10,
-        shared=shared,
+    cost = RunCost(TLS, prefix_moments(np.arange(12.0), np.zeros(12)), np.zeros(0))
+    candidates, scores = np.array([1, 5, 10]), np.array([3.0, 2.0, 1.0])
+    _, accepted, *_ = sweep_levels(
+        cost, *whole(12), candidates, scores, np.zeros(0), False, 10, shared
     )
-    assert cuts.accepted.tolist() == expected
+    assert accepted.tolist() == expected
 
 
 def test_in_between_clusters_judges_only_pairs_between_near_neighbours():
@@ -339,9 +320,9 @@ def _growth_on_scenes(sensor: str, n: int = 20) -> np.ndarray:
     """``(sigma_far, slope, far_range)`` of :func:`noise_growth` on ``n`` simulated scans."""
     out = []
     for index in range(n):
-        seq = sequence_of(make_scene(sensor, index, seed=3).scan)
-        ends = (np.zeros(1, np.int64), np.full(1, len(seq) - 1, np.int64))
-        out.append(noise_growth(seq.x, seq.y, seq.r, seq.gap, *ends))
+        scan = make_scene(sensor, index, seed=3).scan
+        returns = returns_of(scan)
+        out.append(noise_growth(returns, beam_gaps(returns.index, len(scan))))
     return np.array(out)
 
 

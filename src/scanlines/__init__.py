@@ -14,9 +14,10 @@ their own dependencies when used.
 
 from __future__ import annotations
 
+from scanlines import methods  # noqa: F401 (the package; calling it: deprecated alias)
 from scanlines.errors import LogFormatError, ParameterError, ScanError, ScanlinesError
 from scanlines.extraction import Extraction, Segment
-from scanlines.extractor import Extractor, extract, method_info, method_names, methods
+from scanlines.extractor import Extractor, extract, method_info, method_names
 from scanlines.scan import Scan
 
 __version__ = "0.1.0"
@@ -34,5 +35,4 @@ __all__ = [
     "extract",
     "method_info",
     "method_names",
-    "methods",
 ]

@@ -1,6 +1,7 @@
 """The compiler of the hot path: numba when installed, plain Python otherwise.
 
-Every kernel in :mod:`scanlines.steps` and :mod:`scanlines.methods` is written once,
+Every kernel (a function decorated :func:`kernel`) in :mod:`scanlines.steps` and
+:mod:`scanlines.methods` is written once,
 in the subset of Python and numpy that numba compiles. With numba (a dependency
 of the package) the kernels are compiled on first use and cached next to the
 sources' fingerprint; without it (or with ``NUMBA_DISABLE_JIT=1``) the same
@@ -28,9 +29,9 @@ try:
 except ImportError:  # pragma: no cover - exercised only without numba
     numba = None
 
-__all__ = ["COMPILED", "cache_is_cold", "jit"]
+__all__ = ["COMPILED", "cache_is_cold", "kernel"]
 
-COMPILED = numba is not None
+COMPILED = numba is not None and not numba.config.DISABLE_JIT
 
 
 KERNEL_SOURCES = ("_jit.py", "steps/*.py", "methods/*.py")
@@ -62,16 +63,20 @@ def cache_is_cold() -> bool:
     return COMPILED and not any(Path(numba.config.CACHE_DIR).rglob("*.nbi"))
 
 
-def jit(function: F | None = None, *, inline: bool = False) -> Any:
+def kernel(function: F | None = None, *, inline: bool = False) -> Any:
     """Compile ``function`` with numba (cached, no Python objects), if available.
 
-    ``inline=True`` (as ``@jit(inline=True)``) is for the small scalar helpers of
+    Every function so decorated is a *kernel*: it takes arrays, scalars and the
+    small bundles of :mod:`scanlines.steps` (named tuples, settings records), trusts
+    them and validates nothing; validation happens once, in the public entry points.
+
+    ``inline=True`` (as ``@kernel(inline=True)``) is for the small scalar helpers of
     the inner loops (a line fit from running sums, a threshold): numba calls
     between separately compiled functions are not inlined by LLVM, and such a
     call costs more than the helper's arithmetic.
     """
     if function is None:
-        return lambda f: jit(f, inline=inline)
+        return lambda f: kernel(f, inline=inline)
     if numba is None:  # pragma: no cover
         return function
     options = {"inline": "always"} if inline else {}

@@ -80,9 +80,9 @@ from scanlines.sim.noise import NoiseModel
 from scanlines.sim.scenes import random_scene
 from scanlines.sim.sensors import SENSORS, get_sensor
 from scanlines.sim.truth import TrueSegments, Truth
-from scanlines.steps.assemble import assemble
-from scanlines.steps.fit import Moments, run_labels
-from scanlines.steps.points import Sequence as Returns
+from scanlines.steps.assemble import assemble, to_extraction
+from scanlines.steps.fit import TLS, prefix_moments, run_labels
+from scanlines.steps.returns import Returns
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -916,29 +916,14 @@ def truth_extraction(scan: Scan, truth: Truth, *, range_sigma: float = 0.0) -> E
     b = np.cumsum(np.bincount(owner, minlength=len(seg))) - 1
     a = np.concatenate(([0], b[:-1] + 1)).astype(np.intp)
     r, bearing = scan.ranges[beams], scan.angle_increment * beams  # beam 0 at bearing 0
-    returns = Returns(
-        beams,
-        r,
-        r * np.cos(bearing),
-        r * np.sin(bearing),
-        np.diff(beams) % n,
-        abs(scan.angle_increment),
-        n,
-    )
-    return assemble(
-        returns,
-        a,
-        b,
-        fit="tls",
-        moments=Moments(returns.x, returns.y),
-        corners=truth.corners,
-        breakpoints=truth.breakpoints,
-        outliers=np.union1d(truth.outliers, truth.mixed_pixels),
-        angle_min=scan.angle_min,
-        range_sigma=range_sigma,
-        method=TRUTH,
-        params={"range_sigma": range_sigma},
-    )
+    returns = Returns(beams, r, r * np.cos(bearing), r * np.sin(bearing))
+    arrays = assemble(
+        returns, TLS, prefix_moments(returns.x, returns.y), a.astype(np.int64), b,
+        scan.angle_min, float(range_sigma), truth.breakpoints.astype(np.int64),
+        truth.corners.astype(np.int64),
+        np.union1d(truth.outliers, truth.mixed_pixels).astype(np.int64),
+    )  # fmt: skip
+    return to_extraction(arrays, TRUTH, {"range_sigma": range_sigma})
 
 
 def _truth_row(case: SceneCase) -> Extraction:

@@ -3,20 +3,20 @@
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Mapping
 from types import MappingProxyType
 from typing import Any
 
 import numpy as np
 
-from scanlines.errors import ParameterError, ScanError
+from scanlines.errors import ScanError
 from scanlines.extraction import Extraction
-from scanlines.methods import REGISTRY
+from scanlines.methods import REGISTRY, method_class
 from scanlines.params import resolve
 from scanlines.scan import Scan, valid_returns
-from scanlines.steps.points import make_sequence
 
-__all__ = ["Extractor", "extract", "method_info", "method_names", "methods"]
+__all__ = ["Extractor", "extract", "method_info", "method_names"]
 
 
 def method_names() -> tuple[str, ...]:
@@ -24,24 +24,15 @@ def method_names() -> tuple[str, ...]:
     return tuple(REGISTRY)
 
 
-methods = method_names
-
-
-def _module(method: str):
-    try:
-        return REGISTRY[method]
-    except (KeyError, TypeError):
-        raise ParameterError(f"unknown method {method!r}; valid: {', '.join(method_names())}") from None
-
-
 def method_info(method: str) -> dict[str, Any]:
     """Parameters (default and doc) and presets of ``method``."""
-    module = _module(method)
+    cls = method_class(method)
+    module = sys.modules[cls.__module__]
     return {
-        "name": module.NAME,
-        "doc": (module.__doc__ or "").strip().splitlines()[0],
-        "params": {name: (p.default, p.doc) for name, p in module.PARAMS.items()},
-        "presets": {name: dict(values) for name, values in module.PRESETS.items()},
+        "name": cls.name,
+        "doc": (module.__doc__ or cls.__doc__ or "").strip().splitlines()[0],
+        "params": {name: (p.default, p.doc) for name, p in cls.parameters.items()},
+        "presets": {name: dict(values) for name, values in cls.presets.items()},
     }
 
 
@@ -70,15 +61,17 @@ class Extractor:
     """
 
     def __init__(self, method: str = "adaptive", preset: str | None = None, **params: Any) -> None:
-        self._module = _module(method)
+        cls = method_class(method)
         self.method = method
         self.preset = preset
         self.params: Mapping[str, Any] = MappingProxyType(
-            resolve(method, self._module.PARAMS, self._module.PRESETS, preset, params)
+            resolve(method, cls.parameters, cls.presets, preset, params)
         )
         self._tables: dict[tuple[int, float], tuple[np.ndarray, np.ndarray]] = {}
-        compiled = getattr(self._module, "Compiled", None)
-        self._compiled = None if compiled is None else compiled(self.params)
+        self._method = cls(self.params)
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return _rebuild_extractor, (self.method, self.preset, dict(self.params))
 
     def __repr__(self) -> str:
         preset = f", preset={self.preset!r}" if self.preset else ""
@@ -89,12 +82,9 @@ class Extractor:
         if not isinstance(scan, Scan):
             raise ScanError(f"expected a scanlines.Scan, got {type(scan).__name__}")
         cos, sin = self._bearings(len(scan), scan.angle_increment)
-        if self._compiled is not None:
-            return self._compiled.one(
-                scan.ranges, scan.valid, cos, sin, scan.angle_increment, scan.angle_min
-            )
-        seq = make_sequence(scan.ranges, scan.valid, cos, sin, scan.angle_increment)
-        return self._module.run(seq, scan.angle_min, self.params)
+        return self._method.extract(
+            scan.ranges, scan.valid, cos, sin, scan.angle_increment, scan.angle_min
+        )
 
     def batch(
         self,
@@ -121,15 +111,8 @@ class Extractor:
         valid = valid_returns(stack, sensor.range_min, sensor.range_max)
         step = sensor.angle_increment
         cos, sin = self._bearings(stack.shape[1], step)
-        if self._compiled is not None and stack.shape[0]:
-            stack = np.ascontiguousarray(stack)
-            return self._compiled.many(stack, valid, cos, sin, step, sensor.angle_min)
-        return [
-            self._module.run(
-                make_sequence(row, mask, cos, sin, step), sensor.angle_min, self.params
-            )
-            for row, mask in zip(stack, valid, strict=True)
-        ]
+        stack = np.ascontiguousarray(stack)
+        return self._method.extract_many(stack, valid, cos, sin, step, sensor.angle_min)
 
     def _bearings(self, n_beams: int, increment: float) -> tuple[np.ndarray, np.ndarray]:
         key = (n_beams, increment)
@@ -141,6 +124,10 @@ class Extractor:
                 self._tables.clear()
             self._tables[key] = table
         return table
+
+
+def _rebuild_extractor(method: str, preset: str | None, params: dict[str, Any]) -> Extractor:
+    return Extractor(method, preset, **params)
 
 
 def extract(

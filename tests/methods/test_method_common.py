@@ -14,21 +14,15 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 
 from scanlines import Extraction, Extractor, Scan, extract, method_info
-from scanlines.methods import REGISTRY
+from scanlines.methods.consensus import inlier_runs
 from scanlines.metrics import Summary, aggregate, score
 from scanlines.sim import SimScan, random_scene
-from scanlines.steps.fit import Moments, tls_lines
-from scanlines.steps.points import Sequence, make_sequence
-from scanlines.steps.segments import (
-    chord_distances,
-    inlier_runs,
-    line_difference,
-    merge_chi_square,
-    pair_chi_square,
-    segment_events,
-    split_runs,
-)
-from scenes import beam_of, scan_of, square_room
+from scanlines.steps.events import segment_events
+from scanlines.steps.fit import TLS, fit_many, hesse_difference, prefix_moments
+from scanlines.steps.merge import merge_by_chi_square, pair_chi_squares
+from scanlines.steps.returns import Returns
+from scanlines.steps.split import CHORD, REFERENCE_CODES, chord_distance, split_at_farthest
+from scenes import beam_of, returns_of, scan_of, square_room
 from test_properties import check_order, scans
 
 METHODS = ("iepf", "pdbs", "split_merge", "line_tracking", "line_regression", "ransac", "hough")
@@ -101,25 +95,14 @@ def simulated_summary(method: str, preset: str) -> Summary:
     return aggregate(score(extract(s.scan, method), s.truth, s.scan) for s in sims)
 
 
-def sequence_of(scan: Scan) -> Sequence:
-    local = scan.angle_increment * np.arange(len(scan))
-    return make_sequence(
-        scan.ranges, scan.valid, np.cos(local), np.sin(local), scan.angle_increment
-    )
+def returns_from_points(x: np.ndarray, y: np.ndarray) -> Returns:
+    """Returns at given points on consecutive beams (no beam missing)."""
+    return Returns(np.arange(x.size), np.hypot(x, y), x, y)
 
 
-def sequence_from_points(x: np.ndarray, y: np.ndarray) -> Sequence:
-    """A sequence of given points on consecutive beams (no beam missing)."""
-    n = x.size
-    return Sequence(
-        index=np.arange(n),
-        r=np.hypot(x, y),
-        x=x,
-        y=y,
-        gap=np.ones(max(n - 1, 0), dtype=np.intp),
-        step=math.radians(1 / 3),
-        n_beams=n,
-    )
+def ones(n: int) -> np.ndarray:
+    """Beam gaps of ``n`` returns on consecutive beams."""
+    return np.ones(max(n - 1, 0), dtype=np.int64)
 
 
 # --------------------------------------------------------------------------- hand-built scenes
@@ -244,16 +227,18 @@ def test_negative_increment_mirrors_the_beams(method):
 @pytest.mark.parametrize("method", ["adaptive", "iepf", "pdbs", "split_merge"])
 @pytest.mark.parametrize("full_circle", [False, True])
 @pytest.mark.parametrize("clockwise", [False, True])
-def test_run_on_a_sequence_is_the_compiled_extractor(method, full_circle, clockwise):
+def test_batch_is_the_single_call_on_full_circles_and_clockwise_scans(
+    method, full_circle, clockwise
+):
     scan = room_scan(0, full_circle=full_circle)
     if clockwise:  # a negative increment: the points are mirrored, not the ranges
         scan = Scan(scan.ranges, -scan.angle_min, -scan.angle_increment)
     extractor = Extractor(method)
     direct = extractor(scan)
-    via_run = REGISTRY[method].run(sequence_of(scan), scan.angle_min, extractor.params)
+    (batched,) = extractor.batch(scan.ranges[None, :], scan.angle_min, scan.angle_increment)
     for name in ("first", "last", "breakpoints", "corners", "outliers"):
-        assert getattr(via_run, name).tolist() == getattr(direct, name).tolist()
-    np.testing.assert_array_equal(via_run.lines, direct.lines)
+        assert getattr(batched, name).tolist() == getattr(direct, name).tolist()
+    np.testing.assert_array_equal(batched.lines, direct.lines)
 
 
 # --------------------------------------------------------------------------- clustering rules
@@ -296,16 +281,10 @@ def l_shape(n_side: int = 40) -> tuple[np.ndarray, np.ndarray]:
 @pytest.mark.parametrize("reference", ["chord", "fit"])
 def test_split_cuts_an_l_at_its_corner_and_keeps_every_point(reference):
     x, y = l_shape()
-    seq = sequence_from_points(x, y)
-    a, b, group = split_runs(
-        seq,
-        Moments(x, y),
-        np.array([0]),
-        np.array([x.size - 1]),
-        np.array([7]),
-        threshold=0.05,
-        reference=reference,
-    )
+    a, b, group = split_at_farthest(
+        x, y, prefix_moments(x, y), np.array([0]), np.array([x.size - 1]), np.array([7]),
+        0.05, REFERENCE_CODES[reference],
+    )  # fmt: skip
     # the corner return (position 39) lies on both lines: either side may take it
     assert b[0] in (38, 39)
     assert a.tolist() == [0, b[0] + 1]
@@ -316,17 +295,15 @@ def test_split_cuts_an_l_at_its_corner_and_keeps_every_point(reference):
 def test_split_leaves_a_straight_run_whole():
     x = np.full(50, 3.0)
     y = np.linspace(-1, 1, 50) + 0.0
-    seq = sequence_from_points(x, y)
-    a, b, _ = split_runs(
-        seq, Moments(x, y), np.array([0]), np.array([49]), np.array([0]), threshold=0.01
-    )
+    one = np.array([0])
+    a, b, _ = split_at_farthest(x, y, prefix_moments(x, y), one, np.array([49]), one, 0.01, CHORD)
     assert (a.tolist(), b.tolist()) == ([0], [49])
 
 
 def test_chord_distance_beyond_the_ends_is_to_the_end_point():
     x = np.array([0.0, 1.0, 3.0])
     y = np.array([0.0, 0.0, 1.0])
-    d = chord_distances(x, y, np.array([0]), np.array([1]), np.arange(3), np.zeros(3, int))
+    d = [chord_distance(x, y, 0, 1, p) for p in range(3)]
     np.testing.assert_allclose(d, [0.0, 0.0, math.hypot(2.0, 1.0)])
 
 
@@ -334,35 +311,33 @@ def test_chord_distance_beyond_the_ends_is_to_the_end_point():
 
 
 def test_inlier_runs_bridge_one_return_and_no_more():
-    seq = sequence_from_points(np.full(20, 3.0), np.linspace(-1, 1, 20))
+    returns = returns_from_points(np.full(20, 3.0), np.linspace(-1, 1, 20))
     inlier = np.ones(20, dtype=bool)
     inlier[[5, 12, 13]] = False  # one return off the line, then two
     free = np.ones(20, dtype=bool)
-    a, b, bridged = inlier_runs(seq, inlier, free, max_bridge=1, max_gap=1.0)
+    a, b, bridged = inlier_runs(returns, ones(20), inlier, free, max_gap=1.0)
     assert list(zip(a.tolist(), b.tolist(), strict=True)) == [(0, 11), (14, 19)]
     assert bridged.tolist() == [5]
 
 
 def test_inlier_runs_do_not_bridge_taken_returns_or_missing_beams():
-    seq = sequence_from_points(np.full(20, 3.0), np.linspace(-1, 1, 20))
+    returns = returns_from_points(np.full(20, 3.0), np.linspace(-1, 1, 20))
     inlier = np.ones(20, dtype=bool)
     inlier[5] = False
     free = np.ones(20, dtype=bool)
     free[5] = False  # already a point of another segment
-    a, _, _ = inlier_runs(seq, inlier, free, max_bridge=1, max_gap=1.0)
+    a, _, _ = inlier_runs(returns, ones(20), inlier, free, max_gap=1.0)
     assert a.tolist() == [0, 6]
-    gapped = Sequence(seq.index, seq.r, seq.x, seq.y, seq.gap.copy(), seq.step, seq.n_beams)
-    gapped.gap[9] = 3  # two beams missing between positions 9 and 10
-    a, _, _ = inlier_runs(
-        gapped, np.ones(20, dtype=bool), np.ones(20, bool), max_bridge=1, max_gap=1
-    )
+    gap = ones(20)
+    gap[9] = 3  # two beams missing between positions 9 and 10
+    a, _, _ = inlier_runs(returns, gap, np.ones(20, dtype=bool), np.ones(20, bool), max_gap=1)
     assert a.tolist() == [0, 10]
 
 
 def test_inlier_runs_end_at_a_spatial_gap():
     y = np.r_[np.linspace(-1, 0, 10), np.linspace(0.6, 1.6, 10)]
-    seq = sequence_from_points(np.full(20, 3.0), y)
-    a, b, _ = inlier_runs(seq, np.ones(20, bool), np.ones(20, bool), max_bridge=1, max_gap=0.4)
+    returns = returns_from_points(np.full(20, 3.0), y)
+    a, b, _ = inlier_runs(returns, ones(20), np.ones(20, bool), np.ones(20, bool), max_gap=0.4)
     assert list(zip(a.tolist(), b.tolist(), strict=True)) == [(0, 9), (10, 19)]
 
 
@@ -383,48 +358,38 @@ def bent_wall_at_pi(delta: float, n: int = 160) -> tuple[np.ndarray, np.ndarray]
 
 def test_chi_square_merge_joins_two_halves_across_the_pi_wrap():
     x, y = bent_wall_at_pi(0.002)
-    seq = sequence_from_points(x, y)
-    moments = Moments(x, y)
+    returns = returns_from_points(x, y)
+    moments = prefix_moments(x, y)
     a, b = np.array([0, 80]), np.array([79, 159])
-    lines = tls_lines(moments, a, b)
+    _, alpha, _ = fit_many(TLS, moments, a, b)
     # on both sides of the wrap: the raw difference is nearly 2 pi
-    assert lines.alpha[0] > 3.1
-    assert lines.alpha[1] < -3.1
-    merged = merge_chi_square(seq, moments, a, b, np.zeros(2, int), range_sigma=0.01, threshold=3.0)
+    assert alpha[0] > 3.1
+    assert alpha[1] < -3.1
+    merged = merge_by_chi_square(returns, moments, a, b, np.zeros(2, np.int64), 0.01, 3.0)
     assert (merged[0].tolist(), merged[1].tolist()) == ([0], [159])
 
 
 def test_chi_square_merge_keeps_a_real_corner():
     x, y = l_shape()
-    seq = sequence_from_points(x, y)
-    merged = merge_chi_square(
-        seq,
-        Moments(x, y),
-        np.array([0, 40]),
-        np.array([39, 79]),
-        np.zeros(2, int),
-        range_sigma=0.01,
-        threshold=3.0,
-    )
+    merged = merge_by_chi_square(
+        returns_from_points(x, y), prefix_moments(x, y), np.array([0, 40]), np.array([39, 79]),
+        np.zeros(2, np.int64), 0.01, 3.0,
+    )  # fmt: skip
     assert merged[0].tolist() == [0, 40]
 
 
-def test_line_difference_wraps_angles_and_resolves_the_hesse_flip():
-    d_rho, d_alpha = line_difference(
-        np.array([3.0, 0.01]), np.array([math.pi - 0.001, 0.0]),
-        np.array([3.0, 0.01]), np.array([-math.pi + 0.001, math.pi]),
-    )  # fmt: skip
-    np.testing.assert_allclose(d_alpha, [-0.002, 0.0], atol=1e-12)
+def test_hesse_difference_wraps_angles_and_resolves_the_hesse_flip():
+    d_rho, d_alpha = hesse_difference(3.0, math.pi - 0.001, 3.0, -math.pi + 0.001)
+    assert (d_rho, d_alpha) == pytest.approx((0.0, -0.002), abs=1e-12)
     # x = 0.01 and -x = 0.01 are parallel lines 2 cm apart
-    np.testing.assert_allclose(d_rho, [0.0, 0.02], atol=1e-12)
+    assert hesse_difference(0.01, 0.0, 0.01, math.pi) == pytest.approx((0.02, 0.0), abs=1e-12)
 
 
 def test_pair_chi_square_is_zero_for_equal_lines_and_nan_when_singular():
     x, y = bent_wall_at_pi(0.0)
-    moments = Moments(x, y)
-    lines = tls_lines(moments, np.array([0, 0]), np.array([159, 159]))
+    rho, alpha, _ = fit_many(TLS, prefix_moments(x, y), np.array([0, 0]), np.array([159, 159]))
     covariance = np.stack([np.eye(2) * 1e-4, np.zeros((2, 2))])
-    value = pair_chi_square(lines, covariance, np.array([0, 1]), np.array([0, 1]))
+    value = pair_chi_squares(rho, alpha, covariance, np.array([0, 1]), np.array([0, 1]))
     assert value[0] == pytest.approx(0.0)
     assert math.isnan(value[1])
 
@@ -432,55 +397,50 @@ def test_pair_chi_square_is_zero_for_equal_lines_and_nan_when_singular():
 # ----------------------------------------------------------------------- corners and breakpoints
 
 
-def events(seq: Sequence, a, b, *, group=None, wrap=False):
-    return segment_events(
-        seq,
-        Moments(seq.x, seq.y),
-        np.array(a),
-        np.array(b),
-        group=None if group is None else np.array(group),
-        wrap=wrap,
-        corner_beams=2,
-        corner_distance=0.2,
-        corner_angle=10.0,
-    )
+def events(returns: Returns, a, b, *, group=None, wrap=False, n_beams=None):
+    a, b = np.array(a), np.array(b)
+    clustered = group is not None
+    group = np.array(group) if clustered else a
+    n_beams = returns.index.shape[0] if n_beams is None else n_beams
+    moments = prefix_moments(returns.x, returns.y)
+    bounds = (2, 0.2, math.radians(10.0))
+    return segment_events(returns, n_beams, moments, a, b, group, clustered, wrap, bounds)
 
 
 def test_segments_meeting_at_an_l_make_a_corner_at_the_nearest_return():
     x, y = l_shape()
-    seq = sequence_from_points(x, y)
-    corners, breakpoints = events(seq, [0, 40], [39, 79])
+    returns = returns_from_points(x, y)
+    corners, breakpoints = events(returns, [0, 40], [39, 79])
     assert corners.tolist() == [39]
     assert breakpoints.size == 0
     # a split two returns off the corner reports the corner all the same
-    corners, _ = events(seq, [0, 42], [41, 79])
+    corners, _ = events(returns, [0, 42], [41, 79])
     assert corners.tolist() == [39]
 
 
 def test_collinear_neighbours_continue_without_an_event():
-    seq = sequence_from_points(np.full(60, 3.0), np.linspace(-1, 1, 60))
-    corners, breakpoints = events(seq, [0, 30], [29, 59])
+    returns = returns_from_points(np.full(60, 3.0), np.linspace(-1, 1, 60))
+    corners, breakpoints = events(returns, [0, 30], [29, 59])
     assert corners.size == 0
     assert breakpoints.size == 0
 
 
 def test_a_jump_is_a_breakpoint_without_clusters_and_nothing_with():
     scan = door_scan(0)
-    seq = sequence_of(scan)
+    returns = returns_of(scan)
     first, second = door_breakpoints(scan)
-    a, b = [0, first + 1, second + 1], [first, second, len(seq) - 1]
-    corners, breakpoints = events(seq, a, b)
+    a, b = [0, first + 1, second + 1], [first, second, len(returns.r) - 1]
+    corners, breakpoints = events(returns, a, b, n_beams=len(scan))
     assert corners.size == 0
     assert breakpoints.tolist() == [first, second]
-    corners, breakpoints = events(seq, a, b, group=[0, 1, 2])
+    corners, breakpoints = events(returns, a, b, group=[0, 1, 2], n_beams=len(scan))
     assert corners.size == 0
     assert breakpoints.size == 0
 
 
 def test_segments_of_different_clusters_never_make_a_corner():
     x, y = l_shape()
-    seq = sequence_from_points(x, y)
-    corners, _ = events(seq, [0, 40], [39, 79], group=[0, 1])
+    corners, _ = events(returns_from_points(x, y), [0, 40], [39, 79], group=[0, 1])
     assert corners.size == 0
 
 
@@ -488,8 +448,8 @@ def test_the_corner_across_the_seam_of_a_ring():
     x, y = l_shape()
     # rotate so that the corner pair is (last segment, first segment)
     order = np.r_[40:80, 0:40]
-    seq = sequence_from_points(x[order], y[order])
-    corners, _ = events(seq, [0, 40], [39, 79], group=[0, 0], wrap=True)
+    returns = returns_from_points(x[order], y[order])
+    corners, _ = events(returns, [0, 40], [39, 79], group=[0, 0], wrap=True)
     assert corners.tolist() == [79]
-    corners, _ = events(seq, [0, 40], [39, 79], group=[0, 0], wrap=False)
+    corners, _ = events(returns, [0, 40], [39, 79], group=[0, 0], wrap=False)
     assert corners.size == 0

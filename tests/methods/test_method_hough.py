@@ -10,12 +10,12 @@ from test_method_common import (
     assert_room_walls,
     room_corners,
     room_scan,
-    sequence_of,
     simulated_summary,
 )
 
 from scanlines import extract
 from scanlines.methods.hough import Accumulator
+from scenes import returns_of
 
 # Measured on the seeded set (defaults: whole scan, 20 scenes per sensor):
 #   tim571:   breakpoint F1 0.850, segment TruePos 0.689 (corner F1 0.455)
@@ -32,19 +32,20 @@ def test_seeded_simulated_set_floor(preset, bp_f1, true_pos):
 
 
 def test_every_point_votes_once_per_angle_and_leaves_its_votes():
-    seq = sequence_of(room_scan(0))
-    member = np.ones(len(seq), dtype=bool)
+    returns = returns_of(room_scan(0))
+    n = returns.index.shape[0]
+    member = np.ones(n, dtype=bool)
     acc = Accumulator(
-        seq, member, rho_resolution=0.02, angle_resolution=math.radians(1.0), min_votes=5
+        returns, member, rho_resolution=0.02, angle_resolution=math.radians(1.0), min_votes=5
     )
     assert acc.angles.size == 180
-    assert acc.votes.sum() == len(seq) * 180
+    assert acc.votes.sum() == n * 180
     acc.remove(np.arange(100))
     acc.remove(np.arange(50, 150))  # the first 100 only once
-    assert acc.votes.sum() == (len(seq) - 150) * 180
+    assert acc.votes.sum() == (n - 150) * 180
     rho, alpha = acc.best_line(member)
     # the strongest line is a wall: 2 m from the sensor, axis-aligned in the sensor frame
-    # (the sequence is in the scan's frame, turned by angle_min = -170 deg)
+    # (the returns are in the scan's frame, turned by angle_min = -170 deg)
     assert abs(rho) == pytest.approx(2.0, abs=0.02)
     turned = alpha + math.radians(-170.0)
     assert math.remainder(turned, math.pi / 2) == pytest.approx(0.0, abs=math.radians(1.0))

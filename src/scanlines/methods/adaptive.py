@@ -105,12 +105,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, ClassVar
 
 import numpy as np
 
-from scanlines._jit import jit
-from scanlines.extraction import Extraction
+from scanlines._jit import kernel
+from scanlines.methods.base import CompiledMethod, as_record
 from scanlines.params import (
     Param,
     auto_or,
@@ -121,43 +122,31 @@ from scanlines.params import (
     optional,
     segment_params,
 )
-from scanlines.steps.assemble import CompiledMethod, assemble_runs, empty_result
+from scanlines.steps.assemble import assemble, empty_result
 from scanlines.steps.breakpoints import (
     BREAKPOINT_PARAMS,
     RULE_CODES,
     auto_abd_lambda,
-    break_beams,
-    break_flags,
-    cluster_bounds,
-    neighbour_steps,
-    noise_rule,
-    seam_break,
-    seam_rotation,
+    make_rule,
     with_margin_growth,
 )
-from scanlines.steps.corners import SCORES, peak_positions, ring_anchor, slope_scores, turn_scores
-from scanlines.steps.denoise import (
-    MIN_NOISE_SIGMA,
-    in_between_clusters,
-    isolated_noise_mask,
-    literal_noise,
-    noise_from_ranges,
-    noise_growth,
-    small_clusters,
-    window_means,
+from scanlines.steps.clusters import cluster_returns
+from scanlines.steps.corners import (
+    DK_SIGNED,
+    SCORE_CODES,
+    SCORES,
+    TURN,
+    peak_positions,
+    slope_scores,
+    turn_scores,
+    turn_window,
 )
-from scanlines.steps.fit import (
-    FIT_CODES,
-    FITS,
-    PAPER,
-    fit_run,
-    inverse_square_sums,
-    line_intersection,
-    prefix_moments,
-    run_cost,
-)
-from scanlines.steps.merge import merge_runs, split_runs
-from scanlines.steps.points import Sequence
+from scanlines.steps.denoise import DENOISE_CODES, denoise
+from scanlines.steps.events import junction_events, sorted_distinct
+from scanlines.steps.fit import FIT_CODES, FITS, PAPER, RunCost, inverse_square_sums, prefix_moments
+from scanlines.steps.merge import merge_by_criterion
+from scanlines.steps.noise import noise_growth, range_noise, residual_noise
+from scanlines.steps.returns import Returns, beam_gaps, valid_returns
 from scanlines.steps.select import (
     BIC,
     CRITERIA,
@@ -167,10 +156,9 @@ from scanlines.steps.select import (
     sweep_levels,
     threshold_grid,
 )
+from scanlines.steps.split import cut_at, refine_cuts, split_by_residual
 
-NAME = "adaptive"
-
-PARAMS: dict[str, Param] = {
+PARAMETERS: dict[str, Param] = {
     **segment_params(3),
     **BREAKPOINT_PARAMS,
     "denoise": Param(
@@ -241,430 +229,225 @@ PRESETS: dict[str, dict[str, Any]] = {
     },
 }
 
-# --------------------------------------------------------------------------- settings
-# The kernel takes the parameters as one float array; these name its slots.
-(
-    RULE_KIND, K, NOISE_K, LINE_K, ABD_LAMBDA, PDBS_C0, JUMP_DISTANCE,
-    DENOISE, WINDOW, MIN_CLUSTER_POINTS, CORNER_SCORE, SLOPE_WINDOW, USE_GRID,
-    MAX_EVALUATIONS, CRITERION, PENALTY, NOISE_SIGMA, FIT, SHARED, MERGE, MAX_RESIDUAL,
-    CORNER_CHECK, MIN_POINTS, MIN_LENGTH, RANGE_SIGMA, RANGE_NOISE, N_SETTINGS,
-) = range(27)  # fmt: skip
-DENOISE_CODES = {"isolated": 0, "paper": 1, "none": 2}
-ISOLATED, LITERAL, NO_DENOISE = 0, 1, 2
-SCORE_CODES = {name: code for code, name in enumerate(SCORES)}
-TURN, DK, DK_SIGNED = 0, 1, 2
-AUTO = -1.0
-"""``slope_window``, ``noise_sigma``, ``abd_lambda`` and ``max_residual`` slots: estimate / none."""
+
+@dataclass(frozen=True)
+class AdaptiveSettings:
+    """The resolved parameters as the kernel reads them: codes for choices, radians.
+
+    Where a parameter can be ``"auto"`` or ``None``, a flag says so (``auto_abd_lambda``,
+    ``auto_slope_window``, ``estimate_noise``) and ``max_residual`` is ``inf`` for no
+    bound; ``use_grid`` says whether a fixed ``dkth_range`` (the kernel's ``grid``)
+    replaces the candidates' own scores.
+    """
+
+    breakpoints: int
+    k: float
+    noise_k: float
+    line_k: float
+    abd_lambda: float
+    auto_abd_lambda: bool
+    pdbs_c0: float
+    jump_distance: float
+    range_noise: bool
+    denoise: int
+    window: int
+    min_cluster_points: int
+    corner_score: int
+    slope_window: int
+    auto_slope_window: bool
+    use_grid: bool
+    max_evaluations: int
+    criterion: int
+    penalty: float
+    noise_sigma: float
+    estimate_noise: bool
+    fit: int
+    shared_corner: bool
+    merge: bool
+    max_residual: float
+    corner_check: bool
+    min_points: int
+    min_length: float
+    range_sigma: float
+
+    @classmethod
+    def of(cls, params: Mapping[str, Any]) -> AdaptiveSettings:
+        """The settings of resolved ``params``."""
+        lam, window, sigma = params["abd_lambda"], params["slope_window"], params["noise_sigma"]
+        return cls(
+            breakpoints=RULE_CODES[params["breakpoints"]],
+            k=params["k"],
+            noise_k=params["noise_k"],
+            line_k=params["line_k"],
+            abd_lambda=math.nan if lam == "auto" else math.radians(lam),
+            auto_abd_lambda=lam == "auto",
+            pdbs_c0=params["pdbs_c0"],
+            jump_distance=params["jump_distance"],
+            range_noise=params["noise_model"] == "range",
+            denoise=DENOISE_CODES[params["denoise"]],
+            window=params["window"],
+            min_cluster_points=params["min_cluster_points"],
+            corner_score=SCORE_CODES[params["corner_score"]],
+            slope_window=0 if window == "auto" else window,
+            auto_slope_window=window == "auto",
+            use_grid=params["dkth_range"] != "auto",
+            max_evaluations=params["max_evaluations"],
+            criterion=CRITERION_CODES[params["criterion"]],
+            penalty=params["penalty"],
+            noise_sigma=math.nan if sigma == "auto" else sigma,
+            estimate_noise=sigma == "auto",
+            fit=FIT_CODES[params["fit"]],
+            shared_corner=params["corner_split"] == "shared",
+            merge=params["merge"],
+            max_residual=math.inf if params["max_residual"] is None else params["max_residual"],
+            corner_check=params["corner_check"],
+            min_points=params["min_points"],
+            min_length=params["min_length"],
+            range_sigma=params["range_sigma"],
+        )
 
 
-def settings(params: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
-    """The kernel's form of resolved ``params``: the settings array and the threshold grid."""
-    s = np.zeros(N_SETTINGS)
-    s[RULE_KIND] = RULE_CODES[params["breakpoints"]]
-    s[K], s[NOISE_K], s[LINE_K] = params["k"], params["noise_k"], params["line_k"]
-    lam = params["abd_lambda"]
-    s[ABD_LAMBDA] = AUTO if lam == "auto" else math.radians(lam)
-    s[PDBS_C0], s[JUMP_DISTANCE] = params["pdbs_c0"], params["jump_distance"]
-    s[DENOISE] = DENOISE_CODES[params["denoise"]]
-    s[WINDOW], s[MIN_CLUSTER_POINTS] = params["window"], params["min_cluster_points"]
-    s[CORNER_SCORE] = SCORE_CODES[params["corner_score"]]
-    s[SLOPE_WINDOW] = AUTO if params["slope_window"] == "auto" else params["slope_window"]
-    s[MAX_EVALUATIONS] = params["max_evaluations"]
-    s[CRITERION], s[PENALTY] = CRITERION_CODES[params["criterion"]], params["penalty"]
-    s[NOISE_SIGMA] = AUTO if params["noise_sigma"] == "auto" else params["noise_sigma"]
-    s[FIT] = FIT_CODES[params["fit"]]
-    s[SHARED] = params["corner_split"] == "shared"
-    s[MERGE], s[CORNER_CHECK] = params["merge"], params["corner_check"]
-    s[MAX_RESIDUAL] = AUTO if params["max_residual"] is None else params["max_residual"]
-    s[MIN_POINTS], s[MIN_LENGTH] = params["min_points"], params["min_length"]
-    s[RANGE_SIGMA] = params["range_sigma"]
-    s[RANGE_NOISE] = params["noise_model"] == "range"
-    grid = np.zeros(0)
-    if params["dkth_range"] != "auto":
-        low, high = params["dkth_range"]
-        grid = threshold_grid(low, high, params["dkth_step"], params["max_evaluations"])
-        s[USE_GRID] = 1.0
-    return s, grid
+class Adaptive(CompiledMethod):
+    """The adaptive-threshold extractor (module docstring)."""
 
+    name = "adaptive"
+    parameters: ClassVar[dict[str, Param]] = PARAMETERS
+    presets: ClassVar[dict[str, dict[str, Any]]] = PRESETS
+    Settings = AdaptiveSettings
 
-# --------------------------------------------------------------------------- entry points
+    @classmethod
+    def settings_of(cls, params: Mapping[str, Any]) -> AdaptiveSettings:
+        return AdaptiveSettings.of(params)
 
-
-def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extraction:
-    """Extract features from the valid returns ``seq`` of one scan (its own points)."""
-    return Compiled(params).sequence(seq, angle_min)
-
-
-class Compiled(CompiledMethod):
-    """The method in kernel form (see :class:`~scanlines.steps.assemble.CompiledMethod`)."""
-
-    __slots__ = ()
-    name = NAME
-
-    def arguments(self, params: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
-        return settings(params)
+    def kernel_arguments(self) -> tuple[np.ndarray, np.ndarray]:
+        """The settings record and the thresholds of a fixed ``dkth_range`` (else empty)."""
+        grid = np.zeros(0)
+        if self.params["dkth_range"] != "auto":
+            low, high = self.params["dkth_range"]
+            step, most = self.params["dkth_step"], self.params["max_evaluations"]
+            grid = threshold_grid(low, high, step, most)
+        return as_record(self.settings), grid
 
     @staticmethod
-    def scan_kernel(*args):
-        return extract_scan(*args)
-
-    @staticmethod
-    def returns_kernel(*args):
-        return extract_points(*args)
+    def kernel(ranges, valid, cos, sin, step, full_circle, angle_min, settings, grid):
+        return adaptive_scan(ranges, valid, cos, sin, step, full_circle, angle_min, settings, grid)
 
 
 # --------------------------------------------------------------------------- the kernel
 
 
-@jit
-def extract_scan(ranges, valid, cos, sin, step, full_circle, angle_min, s, grid):
-    """The whole method on one scan; arrays of the result.
-
-    ``valid`` marks the beams with a return, ``cos, sin`` are the bearing tables
-    relative to beam 0. Returns ``first, last, n_points, lines, covariances,
-    breakpoints, corners, outliers`` as :func:`~scanlines.steps.assemble.from_arrays`
-    takes them.
-    """
-    index = np.flatnonzero(valid)
-    r = ranges[index]
-    x, y = r * cos[index], r * sin[index]
+@kernel
+def adaptive_scan(ranges, valid, cos, sin, step, full_circle, angle_min, settings, grid):
+    """The whole method on one scan: the result arrays (see :class:`CompiledMethod`)."""
+    s = settings[0]
     n_beams = ranges.shape[0]
-    return _points_pipeline(index, r, x, y, n_beams, step, full_circle, angle_min, s, grid)
-
-
-def points_pipeline(index, r, x, y, n_beams, step, full_circle, angle_min, s, grid):
-    """The whole method on the valid returns (beam ``index``, range, point) of one scan."""
-    outliers = np.zeros(0, dtype=np.int64)
-    if index.shape[0] == 0:
-        return empty_result(outliers, outliers)
-    fit = int(s[FIT])
-    if fit == PAPER:
-        # y = kx + b depends on the frame: fit in the sensor frame, as the paper does.
-        c, si = math.cos(angle_min), math.sin(angle_min)
-        x, y = c * x - si * y, si * x + c * y
-        angle_min = 0.0
-    gap = _gaps(index, n_beams)
-    sigma = s[NOISE_SIGMA]
-    if sigma == AUTO:
-        sigma = noise_from_ranges(r, gap, np.zeros(1, np.int64), np.full(1, r.shape[0] - 1))
-    rule = _rule(s, sigma, step)
-    if s[RANGE_NOISE]:
-        far_sigma, growth, far_range = noise_growth(
-            x, y, r, gap, np.zeros(1, np.int64), np.full(1, r.shape[0] - 1)
-        )
-        margin = s[NOISE_K] * math.sqrt(2.0)
-        rule = with_margin_growth(rule, margin * far_sigma, margin * growth, far_range)
-    index, r, x, y, outliers, breaks = _denoise(
-        index, r, x, y, n_beams, step, full_circle, rule, sigma, s
-    )
-    if index.shape[0] == 0:
-        return empty_result(outliers, outliers)
-    window = _slope_window(x, y, index, sigma, s[SLOPE_WINDOW])
-    index, r, x, y, start, end, breakpoints, ring = _cluster_scan(
-        index, r, x, y, n_beams, step, full_circle, rule, window, breaks
-    )
-    table, ox, oy = prefix_moments(x, y)
-    inv_r2 = inverse_square_sums(r) if s[CRITERION] == BIC else np.zeros(0)
-    scores = _scores(x, y, r, index, n_beams, step, table, start, end, window, s)
-    corners, sigma = _choose_corners(table, ox, oy, inv_r2, start, end, scores, sigma, s, grid)
-    a, b, owner = _segments(x, y, table, ox, oy, inv_r2, start, end, corners, sigma, s)
-    check_sigma = sigma if s[CORNER_CHECK] else -1.0
-    corner_beams, jumps = _corner_beams(
-        x, y, index, table, ox, oy, fit, a, b, owner, s[SHARED] != 0.0, ring, check_sigma
-    )
-    return assemble_runs(
-        index, x, y, r, a, b, fit, table, ox, oy, angle_min, s[RANGE_SIGMA],
-        sorted_union(breakpoints, jumps), corner_beams, outliers,
-    )  # fmt: skip
-
-
-# One implementation, two entries: inlined into extract_scan (one compiled layer
-# less), and on its own for run(), which starts from a sequence's points.
-_points_pipeline = jit(inline=True)(points_pipeline)
-extract_points = jit(points_pipeline)
-
-
-@jit
-def _rule(s, sigma, step):
-    lam = auto_abd_lambda(step) if s[ABD_LAMBDA] == AUTO else s[ABD_LAMBDA]
-    return noise_rule(
-        int(s[RULE_KIND]), s[K], s[NOISE_K], s[LINE_K], lam, s[PDBS_C0], s[JUMP_DISTANCE], sigma
-    )
-
-
-@jit
-def _denoise(index, r, x, y, n_beams, step, full_circle, rule, sigma, s):
-    """Steps 2-3; returns the cleaned returns, the beams dropped as noise and the
-    break flags of the cleaned returns when known (empty otherwise)."""
+    returns = valid_returns(ranges, valid, cos, sin)
     none = np.zeros(0, dtype=np.int64)
-    unknown = np.zeros(0, dtype=np.bool_)
-    kind = s[DENOISE]
-    if kind == NO_DENOISE or index.shape[0] < 3:
-        return index, r, x, y, none, unknown
-    gap = _gaps(index, n_beams)
-    raw_breaks = break_flags(x, y, r, gap, step, rule)
-    if kind == LITERAL:
-        noise = literal_noise(np.hypot(x[1:] - x[:-1], y[1:] - y[:-1]))
-        if not noise.any():
-            return index, r, x, y, none, raw_breaks
-        x, y = window_means(x, y, noise, int(s[WINDOW]), raw_breaks)
-        return index, np.hypot(x, y), x, y, none, unknown
-    noise = isolated_noise_mask(x, y, r, gap, step, rule, raw_breaks)
-    kept_breaks = raw_breaks
-    if s[MIN_CLUSTER_POINTS] > 1:
-        kept = np.flatnonzero(~noise)
-        kx, ky, kr, ki = x[kept], y[kept], r[kept], index[kept]
-        kept_gap = _gaps(ki, n_beams)
-        joined = (
-            full_circle
-            and kept.shape[0] >= 3
-            and not seam_break(kx, ky, kr, ki, n_beams, step, rule)
-        )
-        if noise.any():  # else the kept returns are all returns: same breaks
-            kept_breaks = break_flags(kx, ky, kr, kept_gap, step, rule)
-        small = small_clusters(kept_breaks, int(s[MIN_CLUSTER_POINTS]), joined)
-        if s[MIN_CLUSTER_POINTS] == 2:
-            margin = s[NOISE_K] * math.sqrt(2.0) * sigma
-            small |= in_between_clusters(kr, kept_gap, kept_breaks, small, margin)
-        noise[kept[small]] = True
-    if not noise.any():
-        return index, r, x, y, none, raw_breaks
-    keep = ~noise
-    return index[keep], r[keep], x[keep], y[keep], index[noise], unknown
+    if returns.index.shape[0] == 0:
+        return empty_result(none, none)
+    if s.fit == PAPER:
+        # y = kx + b depends on the frame: fit in the sensor frame, as the paper does.
+        returns = turned(returns, angle_min)
+        angle_min = 0.0
+    gap = beam_gaps(returns.index, n_beams)
+    sigma = range_noise(returns.r, gap) if s.estimate_noise else s.noise_sigma
+    rule = breakpoint_rule(s, returns, gap, step, sigma)
+    margin = s.noise_k * math.sqrt(2.0) * sigma
+    returns, outliers, breaks = denoise(
+        returns, n_beams, step, full_circle, rule, s.denoise, s.window, s.min_cluster_points, margin
+    )
+    if returns.index.shape[0] == 0:
+        return empty_result(outliers, outliers)
+    window = s.slope_window
+    if s.auto_slope_window:
+        window = turn_window(returns.x, returns.y, returns.index, sigma)
+    returns, start, end, breakpoints, ring = cluster_returns(
+        returns, n_beams, step, full_circle, rule, window, breaks, False
+    )
+    moments = prefix_moments(returns.x, returns.y)
+    inv_r2 = inverse_square_sums(returns.r) if s.criterion == BIC else np.zeros(0)
+    cost = RunCost(s.fit, moments, inv_r2)
+    scores = corner_scores(returns, n_beams, step, moments, start, end, window, s.corner_score)
+    corners, sigma = choose_corners(cost, start, end, scores, sigma, s, grid)
+    a, b, owner = segments(returns, cost, start, end, corners, sigma, s)
+    check_sigma = sigma if s.corner_check else -1.0
+    corner_beams, jumps = junction_events(
+        returns, s.fit, moments, a, b, owner, s.shared_corner, ring, check_sigma
+    )
+    breakpoints = sorted_distinct(np.concatenate((breakpoints, jumps)))
+    return assemble(
+        returns, s.fit, moments, a, b, angle_min, s.range_sigma, breakpoints, corner_beams, outliers
+    )
 
 
-@jit
-def _gaps(index, n_beams):
-    """Beams between consecutive positions (a rotated full circle wraps once)."""
-    gap = np.empty(max(index.shape[0] - 1, 0), dtype=np.int64)
-    for p in range(gap.shape[0]):
-        gap[p] = (index[p + 1] - index[p]) % n_beams
-    return gap
+@kernel
+def turned(returns, angle):
+    """The returns with their points rotated by ``angle`` (ranges unchanged)."""
+    index, r, x, y = returns
+    c, si = math.cos(angle), math.sin(angle)
+    return Returns(index, r, c * x - si * y, si * x + c * y)
 
 
-@jit
-def sorted_union(first, second):
-    """Sorted distinct values of two integer arrays."""
-    both = np.sort(np.concatenate((first, second)))
-    keep = np.ones(both.shape[0], dtype=np.bool_)
-    for i in range(1, both.shape[0]):
-        keep[i] = both[i] != both[i - 1]
-    return both[keep]
+@kernel
+def breakpoint_rule(s, returns, gap, step, sigma):
+    """The clustering rule of settings ``s`` with the scan's noise ``sigma`` (and, with
+    ``range_noise``, a margin that grows with range as the scan's noise does)."""
+    lam = auto_abd_lambda(step) if s.auto_abd_lambda else s.abd_lambda
+    rule = make_rule(
+        s.breakpoints, s.k, s.noise_k, s.line_k, lam, s.pdbs_c0, s.jump_distance, sigma
+    )
+    if s.range_noise:
+        far_sigma, growth, far_range = noise_growth(returns, gap)
+        margin = s.noise_k * math.sqrt(2.0)
+        rule = with_margin_growth(rule, margin * far_sigma, margin * growth, far_range)
+    return rule
 
 
-@jit
-def _slope_window(x, y, index, sigma, setting):
-    """Points fitted on each side for the turn score: given, or grown with the noise.
-
-    A line through ``w`` points ``h`` apart with noise ``sigma`` has a direction
-    error near ``sigma / (h w^1.5 / sqrt(12))``; ``auto`` takes
-    ``w = 3 + 6 sigma / h`` (``h`` the median spacing, ``w`` in 3..15), so that at
-    1 deg and 1 cm noise a short wall still has a corner score, and at 0.33 deg
-    and 2 cm the score is not noise.
-    """
-    if setting != AUTO:
-        return int(setting)
-    steps = neighbour_steps(x, y)
-    adjacent = np.empty(steps.shape[0], dtype=np.bool_)
-    for p in range(steps.shape[0]):
-        adjacent[p] = index[p + 1] - index[p] == 1
-    if not adjacent.any():
-        return 3
-    spacing = np.median(steps[adjacent])
-    wanted = 3 + 6 * sigma / spacing if spacing > 0.0 else math.inf
-    return int(round(min(max(wanted, 3.0), SLOPE_WINDOW_MAX)))  # noqa: RUF046 (int for numba)
-
-
-SLOPE_WINDOW_MAX = 15
-
-
-@jit
-def _cluster_scan(index, r, x, y, n_beams, step, full_circle, rule, window, breaks):
-    """Clusters, with the seam of a full circle joined (see ``steps.breakpoints.cluster_scan``).
-
-    ``breaks`` are the break flags of the returns if already known (else empty).
-    Returns the (possibly rotated) returns, cluster bounds, breakpoint beams and
-    whether the scan is one closed ring.
-    """
-    n = index.shape[0]
-    if not full_circle or n < 3:
-        if breaks.shape[0] != n - 1:
-            breaks = break_flags(x, y, r, _gaps(index, n_beams), step, rule)
-        start, end = cluster_bounds(breaks)
-        return index, r, x, y, start, end, break_beams(index, end, False), False
-    gap = _gaps(index, n_beams)
-    rotate_to, seam, ring = seam_rotation(x, y, r, index, gap, n_beams, step, rule)
-    if ring:
-        rotate_to = ring_anchor(x, y, window)
-    if rotate_to:
-        order = np.concatenate((np.arange(rotate_to, n), np.arange(0, rotate_to)))
-        index, r, x, y = index[order], r[order], x[order], y[order]
-    if ring:
-        start, end = np.zeros(1, np.int64), np.full(1, n - 1, np.int64)
-        return index, r, x, y, start, end, np.zeros(0, np.int64), True
-    start, end = cluster_bounds(break_flags(x, y, r, _gaps(index, n_beams), step, rule))
-    return index, r, x, y, start, end, break_beams(index, end, seam), False
-
-
-@jit
-def _scores(x, y, r, index, n_beams, step, table, start, end, window, s):
-    kind = s[CORNER_SCORE]
+@kernel
+def corner_scores(returns, n_beams, step, moments, start, end, window, kind):
+    """Step 5's score at every position: the turn angle, or eq. 13 (``kind`` a score code)."""
     if kind == TURN:
-        return turn_scores(x, y, table, start, end, window)
-    return slope_scores(r, _gaps(index, n_beams), step, start, end, kind == DK_SIGNED)
+        return turn_scores(returns.x, returns.y, moments, start, end, window)
+    gap = beam_gaps(returns.index, n_beams)
+    return slope_scores(returns.r, gap, step, start, end, kind == DK_SIGNED)
 
 
-@jit
-def _choose_corners(table, ox, oy, inv_r2, start, end, scores, sigma, s, grid):
+@kernel
+def choose_corners(cost, start, end, scores, sigma, s, grid):
     """Steps 5-7: corner candidates and the threshold sweep; returns corners and the noise."""
-    fit, shared = int(s[FIT]), s[SHARED] != 0.0
-    n = table.shape[1] - 1
     candidates = peak_positions(scores, start, end)
-    ranked, accepted, sse, segments, _, levels = sweep_levels(
-        fit, table, ox, oy, inv_r2, start, end, n, candidates, scores[candidates], grid,
-        s[USE_GRID] != 0.0, int(s[MAX_EVALUATIONS]), shared,
+    ranked, accepted, sse, segment_count, _, levels = sweep_levels(
+        cost, start, end, candidates, scores[candidates], grid, s.use_grid,
+        s.max_evaluations, s.shared_corner,
     )  # fmt: skip
     n_points = int(np.sum(end - start + 1))
-    criterion, penalty = int(s[CRITERION]), s[PENALTY]
-    best, _ = best_level(criterion, sse, segments, levels, n_points, sigma, penalty)
+    best, _ = best_level(s.criterion, sse, segment_count, levels, n_points, sigma, s.penalty)
     corners = level_corners(ranked, accepted, levels[best])
-    if s[NOISE_SIGMA] == AUTO and criterion == BIC:
+    if s.estimate_noise and s.criterion == BIC:
         # Second pass with the noise measured on the lines of the first choice.
-        a, b, _ = _cut(start, end, corners, shared)
-        sigma = _residual_sigma(fit, table, ox, oy, inv_r2, a, b, sigma)
-        best, _ = best_level(criterion, sse, segments, levels, n_points, sigma, penalty)
+        a, b, _ = cut_at(start, end, corners, s.shared_corner)
+        sigma = residual_noise(cost, a, b, sigma)
+        best, _ = best_level(s.criterion, sse, segment_count, levels, n_points, sigma, s.penalty)
         corners = level_corners(ranked, accepted, levels[best])
     return corners, sigma
 
 
-@jit
-def _segments(x, y, table, ox, oy, inv_r2, start, end, corners, sigma, s):
+@kernel
+def segments(returns, cost, start, end, corners, sigma, s):
     """Runs ``[a, b]`` (and cluster of each) after cutting, refining, merging and bounding."""
-    fit, shared = int(s[FIT]), s[SHARED] != 0.0
-    a, b, owner = _cut(start, end, corners, shared)
-    if not shared:
-        a, b = _refine_splits(fit, table, ox, oy, inv_r2, a, b, owner)
-    if s[MERGE]:
-        segment_cost = s[PENALTY] * math.log(max(x.shape[0], 2)) * sigma * sigma
-        a, b, owner = merge_runs(fit, table, ox, oy, inv_r2, a, b, owner, segment_cost)
-    if s[MAX_RESIDUAL] != AUTO:
-        a, b, owner = split_runs(
-            x, y, fit, table, ox, oy, a, b, owner, s[MAX_RESIDUAL], int(s[MIN_POINTS])
+    x, y = returns.x, returns.y
+    a, b, owner = cut_at(start, end, corners, s.shared_corner)
+    if not s.shared_corner:
+        a, b = refine_cuts(cost, a, b, owner)
+    if s.merge:
+        segment_cost = s.penalty * math.log(max(x.shape[0], 2)) * sigma * sigma
+        a, b, owner = merge_by_criterion(cost, a, b, owner, segment_cost)
+    if s.max_residual < math.inf:
+        a, b, owner = split_by_residual(
+            x, y, s.fit, cost.moments, a, b, owner, s.max_residual, s.min_points
         )
     keep = np.empty(a.shape[0], dtype=np.bool_)
     for k in range(a.shape[0]):
         length = math.sqrt((x[b[k]] - x[a[k]]) ** 2 + (y[b[k]] - y[a[k]]) ** 2)
-        keep[k] = b[k] - a[k] + 1 >= s[MIN_POINTS] and length >= s[MIN_LENGTH]
+        keep[k] = b[k] - a[k] + 1 >= s.min_points and length >= s.min_length
     return a[keep], b[keep], owner[keep]
-
-
-@jit
-def _residual_sigma(fit, table, ox, oy, inv_r2, a, b, fallback):
-    """Range noise from the fits of the runs ``[a, b]``: the median of ``sqrt(cost / (n - 2))``.
-
-    Only runs of :data:`MIN_RUN_FOR_NOISE` points or more count (short runs fit
-    their own noise); the median ignores the few runs that still hide a corner.
-    """
-    per_run = np.empty(a.shape[0])
-    count = 0
-    for k in range(a.shape[0]):
-        if b[k] - a[k] + 1 >= MIN_RUN_FOR_NOISE:
-            value = math.sqrt(run_cost(fit, table, ox, oy, inv_r2, a[k], b[k]) / (b[k] - a[k] - 1))
-            if math.isfinite(value):
-                per_run[count] = value
-                count += 1
-    if count == 0:
-        return fallback
-    return max(np.median(per_run[:count]), MIN_NOISE_SIGMA)
-
-
-MIN_RUN_FOR_NOISE = 8
-
-
-@jit
-def _cut(start, end, corners, shared):
-    """Runs ``[a, b]`` and their cluster number after cutting the clusters at ``corners``."""
-    a = np.sort(np.concatenate((start, corners + (0 if shared else 1))))
-    b = np.sort(np.concatenate((corners, end)))
-    owner = np.searchsorted(start, a, side="right") - 1
-    return a, b, owner
-
-
-@jit
-def _refine_splits(fit, table, ox, oy, inv_r2, a, b, owner):
-    """Move each cut (end ``b[k]`` / start ``a[k+1]``) by one position where that fits better.
-
-    Every cut is judged against the original neighbours; two cuts moving
-    towards each other that would leave a run of one point both stay put.
-    """
-    m = a.shape[0]
-    new_a, new_b = a.copy(), b.copy()
-    for k in range(m - 1):
-        if owner[k] != owner[k + 1]:
-            continue
-        best_cost, best_shift = math.inf, 0
-        for shift in (0, -1, 1):
-            cut = b[k] + shift
-            if cut - a[k] < 1 or b[k + 1] - cut - 1 < 1:
-                continue
-            total = run_cost(fit, table, ox, oy, inv_r2, a[k], cut) + run_cost(
-                fit, table, ox, oy, inv_r2, cut + 1, b[k + 1]
-            )
-            if total < best_cost - 1e-15:  # NaN never wins
-                best_cost, best_shift = total, shift
-        new_b[k] = b[k] + best_shift
-        new_a[k + 1] = new_b[k] + 1
-    too_short = new_b - new_a < 1
-    for k in range(m - 1):
-        if owner[k] == owner[k + 1] and (too_short[k] or too_short[k + 1]):
-            new_b[k], new_a[k + 1] = b[k], a[k + 1]
-    return new_a, new_b
-
-
-@jit
-def _corner_beams(x, y, index, table, ox, oy, fit, a, b, owner, shared, ring, sigma):
-    """Beams of the corners where two kept segments of one cluster meet, and of jumps.
-
-    A shared corner is its shared point; otherwise the point nearer the two
-    lines' intersection among those between the segments. With ``sigma >= 0``,
-    two segments whose lines do not meet near their facing ends (farther than
-    :data:`CORNER_REACH` times the local spacing plus three ``sigma``) are two
-    surfaces at different depths joined by a mixed pixel or a small step: the
-    junction is reported as a breakpoint (the last beam of the first segment).
-    """
-    m = a.shape[0]
-    corners = np.zeros(m, dtype=np.int64)
-    jumps = np.zeros(m, dtype=np.int64)
-    n_corners = n_jumps = 0
-    for k in range(m):
-        right = k + 1
-        if right == m:
-            if not (ring and m >= 2 and a[0] == 0 and b[-1] == x.shape[0] - 1):
-                break
-            right = 0
-        elif owner[k] != owner[right] or a[right] - b[k] > 2:
-            continue
-        end, start = b[k], a[right]
-        if shared:
-            corners[n_corners] = index[start]
-            n_corners += 1
-            continue
-        rho_i, alpha_i, _ = fit_run(fit, table, ox, oy, a[k], b[k])
-        rho_j, alpha_j, _ = fit_run(fit, table, ox, oy, a[right], b[right])
-        cx, cy = line_intersection(rho_i, alpha_i, rho_j, alpha_j)
-        before = math.hypot(x[end] - cx, y[end] - cy)
-        after = math.hypot(x[start] - cx, y[start] - cy)
-        pick = start if after < before else end
-        if sigma >= 0.0:
-            reach = CORNER_REACH * math.hypot(x[start] - x[end], y[start] - y[end]) + 3.0 * sigma
-            if not max(before, after) <= reach:  # NaN (parallel lines) is not a corner
-                jumps[n_jumps] = index[end]
-                n_jumps += 1
-                continue
-        corners[n_corners] = index[pick]
-        n_corners += 1
-    return corners[:n_corners], jumps[:n_jumps]
-
-
-CORNER_REACH = 2.0
-"""A corner's lines meet within this many spacings (plus noise) of the facing ends."""

@@ -19,10 +19,10 @@ Algorithm (Hough [1]_ in the normal parametrisation of Duda and Hart [2]_; the
    missing beams, or inliers more than ``max_gap`` apart, end a run); runs with at
    least ``min_points`` inliers become segments and their points' votes are
    removed (a set without such a run is removed as a whole) --
-   :func:`scanlines.steps.segments.consensus_segments`;
+   :mod:`scanlines.methods.consensus`;
 5. segments shorter than ``min_length`` are dropped; corners and (on the whole
    scan) breakpoints between consecutive segments by the shared rule of
-   :func:`scanlines.steps.segments.segment_events`.
+   :func:`scanlines.steps.events.segment_events`.
 
 Defaults: ``angle_resolution = 1`` deg and ``rho_resolution = 0.02`` m (the cell
 is about the width of the 1-2 cm range noise; a 1 deg error tilts a 2 m wall by
@@ -45,73 +45,53 @@ References
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
-from scanlines.extraction import Extraction
-from scanlines.params import Param, choice, int_at_least, number, segment_params
-from scanlines.steps.assemble import empty_extraction
-from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, RULES
-from scanlines.steps.points import Sequence
-from scanlines.steps.segments import (
-    EVENT_PARAMS,
-    LITERAL_CLUSTERING,
-    NO_CLUSTERING,
-    consensus_extraction,
-)
-
-NAME = "hough"
+from scanlines.methods.consensus import WHOLE_SCAN, ConsensusMethod
+from scanlines.params import Param, int_at_least, number, segment_params
+from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, LITERAL_CLUSTERING
+from scanlines.steps.events import EVENT_PARAMS
+from scanlines.steps.returns import Returns
 
 MAX_RHO_BINS = 4096
 """Most rho cells of an accumulator (the cells widen beyond)."""
 
-PARAMS: dict[str, Param] = {
-    **segment_params(5),
-    **BREAKPOINT_PARAMS,
-    **LITERAL_CLUSTERING,
-    "breakpoints": Param(
-        NO_CLUSTERING,
-        choice(NO_CLUSTERING, *RULES),
-        "clustering rule: none (whole scan) | " + " | ".join(RULES),
-    ),
-    "rho_resolution": Param(
-        0.02, number(low=0.0, low_open=True), "accumulator cell size in rho (m)"
-    ),
-    "angle_resolution": Param(
-        1.0, number(low=0.0, high=90.0, low_open=True), "accumulator cell size in alpha (deg)"
-    ),
-    "min_votes": Param(5, int_at_least(1), "fewest votes of an accumulator peak"),
-    "inlier_distance": Param(
-        0.05, number(low=0.0, low_open=True), "largest distance of an inlier from its line (m)"
-    ),
-    "max_gap": Param(
-        0.4, number(low=0.0, low_open=True), "largest distance between consecutive inliers (m)"
-    ),
-    **EVENT_PARAMS,
-}
 
-PRESETS: dict[str, dict[str, Any]] = {}
+class Hough(ConsensusMethod):
+    """Hough transform (module docstring)."""
 
-
-def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extraction:
-    """Extract features from the valid returns ``seq`` of one scan."""
-    if len(seq) == 0:
-        return empty_extraction(NAME, params)
-    return consensus_extraction(
-        seq,
-        angle_min,
-        params,
-        method=NAME,
-        finder=lambda s, member: Accumulator(
-            s,
-            member,
-            rho_resolution=params["rho_resolution"],
-            angle_resolution=math.radians(params["angle_resolution"]),
-            min_votes=params["min_votes"],
+    name = "hough"
+    parameters: ClassVar[dict[str, Param]] = {
+        **segment_params(5),
+        **BREAKPOINT_PARAMS,
+        **LITERAL_CLUSTERING,
+        "breakpoints": WHOLE_SCAN,
+        "rho_resolution": Param(
+            0.02, number(low=0.0, low_open=True), "accumulator cell size in rho (m)"
         ),
-    )
+        "angle_resolution": Param(
+            1.0, number(low=0.0, high=90.0, low_open=True), "accumulator cell size in alpha (deg)"
+        ),
+        "min_votes": Param(5, int_at_least(1), "fewest votes of an accumulator peak"),
+        "inlier_distance": Param(
+            0.05, number(low=0.0, low_open=True), "largest distance of an inlier from its line (m)"
+        ),
+        "max_gap": Param(
+            0.4, number(low=0.0, low_open=True), "largest distance between consecutive inliers (m)"
+        ),
+        **EVENT_PARAMS,
+    }
+
+    def line_finder(self, returns: Returns, member: np.ndarray, search: Any) -> Accumulator:
+        return Accumulator(
+            returns,
+            member,
+            rho_resolution=self.params["rho_resolution"],
+            angle_resolution=math.radians(self.params["angle_resolution"]),
+            min_votes=self.params["min_votes"],
+        )
 
 
 class Accumulator:
@@ -119,7 +99,7 @@ class Accumulator:
 
     def __init__(
         self,
-        seq: Sequence,
+        returns: Returns,
         member: np.ndarray,
         *,
         rho_resolution: float,
@@ -127,8 +107,8 @@ class Accumulator:
         min_votes: int,
     ) -> None:
         points = np.flatnonzero(member)
-        self.centre = (float(seq.x[points].mean()), float(seq.y[points].mean()))
-        u, v = seq.x[points] - self.centre[0], seq.y[points] - self.centre[1]
+        self.centre = (float(returns.x[points].mean()), float(returns.y[points].mean()))
+        u, v = returns.x[points] - self.centre[0], returns.y[points] - self.centre[1]
         self.angles = np.arange(0.0, math.pi, angle_resolution)
         reach = float(np.max(np.hypot(u, v)))
         half = math.ceil(reach / rho_resolution)
@@ -142,12 +122,12 @@ class Accumulator:
         cell = np.clip(np.rint(rho / rho_resolution).astype(np.intp) + half, 0, self.n_rho - 1)
         self.cells = cell + np.arange(self.angles.size) * self.n_rho
         self.votes = np.bincount(self.cells.ravel(), minlength=self.angles.size * self.n_rho)
-        self.row = np.full(len(seq), -1, dtype=np.intp)
+        self.row = np.full(returns.index.shape[0], -1, dtype=np.intp)
         self.row[points] = np.arange(points.size)
         self.min_votes = min_votes
 
     def best_line(self, free: np.ndarray) -> tuple[float, float] | None:
-        """``(rho, alpha)`` of the most-voted cell in the sequence's frame, or ``None``."""
+        """``(rho, alpha)`` of the most-voted cell in the scan's local frame, or ``None``."""
         peak = int(np.argmax(self.votes))
         if self.votes[peak] < self.min_votes:
             return None

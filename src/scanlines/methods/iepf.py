@@ -10,12 +10,12 @@ Horowitz [2]_; as compared by the paper [3]_, sec. 4.3-4.5):
    a cluster closing on itself is first cut at its far corner); if that distance
    exceeds ``split_distance``,
    split there and repeat on both parts
-   (:func:`scanlines.steps.segments.split_runs`); the split point joins the part
+   (:func:`scanlines.steps.split.split_at_farthest`); the split point joins the part
    whose line it is nearer;
 3. fit each part by total least squares (:mod:`scanlines.steps.fit`), drop parts
    with fewer than ``min_points`` points or shorter than ``min_length``;
 4. corners where consecutive parts of one cluster meet (the shared rule of
-   :func:`scanlines.steps.segments.segment_events`); breakpoints from step 1.
+   :func:`scanlines.steps.events.segment_events`); breakpoints from step 1.
 
 Defaults: ``split_distance = 0.1`` m: with the 1-2 cm range noise of indoor
 laser scanners it is 5 to 10 standard deviations, so noise alone rarely splits
@@ -41,104 +41,137 @@ References
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, ClassVar
 
 import numpy as np
 
-from scanlines._jit import jit
-from scanlines.extraction import Extraction
+from scanlines._jit import kernel
+from scanlines.methods.base import CompiledMethod, cluster_scan
 from scanlines.params import Param, number, segment_params, with_default
-from scanlines.steps.assemble import CompiledMethod, empty_result
-from scanlines.steps.breakpoints import BREAKPOINT_PARAMS
+from scanlines.steps.assemble import Output, empty_result, finish
+from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, LITERAL_CLUSTERING, RULE_CODES, RuleSpec
+from scanlines.steps.events import EVENT_PARAMS
 from scanlines.steps.fit import prefix_moments
-from scanlines.steps.points import Sequence
-from scanlines.steps.segments import (
-    EVENT_PARAMS,
-    LITERAL_CLUSTERING,
-    SPLIT_DISTANCE,
-    SPLIT_REFERENCE,
-    cluster_returns,
-    finish_runs,
-    settings,
-    split_runs_at_farthest,
-    valid_returns,
-)
-
-NAME = "iepf"
-
-PARAMS: dict[str, Param] = {
-    **segment_params(5),
-    **BREAKPOINT_PARAMS,
-    **LITERAL_CLUSTERING,
-    "breakpoints": with_default(
-        BREAKPOINT_PARAMS["breakpoints"], "fixed", "IEPF: fixed jump distance"
-    ),
-    "split_distance": Param(
-        0.1, number(low=0.0, low_open=True), "split where a point is this far from the chord (m)"
-    ),
-    **EVENT_PARAMS,
-}
-
-PRESETS: dict[str, dict[str, Any]] = {}
+from scanlines.steps.returns import valid_returns
+from scanlines.steps.split import REFERENCE_CODES, split_at_farthest
 
 
-def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extraction:
-    """Extract features from the valid returns ``seq`` of one scan."""
-    return Compiled(params).sequence(seq, angle_min)
+@dataclass(frozen=True)
+class SplitSettings:
+    """The settings of the split methods (iepf, pdbs, split_merge), angles in radians.
 
-
-class Compiled(CompiledMethod):
-    """The method in kernel form (see :class:`~scanlines.steps.assemble.CompiledMethod`)."""
-
-    __slots__ = ()
-    name = NAME
-
-    def arguments(self, params: Mapping[str, Any]) -> tuple[np.ndarray]:
-        return (settings(params, reference="chord"),)
-
-    @staticmethod
-    def scan_kernel(*args):
-        return extract_scan(*args)
-
-    @staticmethod
-    def returns_kernel(*args):
-        return extract_returns(*args)
-
-
-# --------------------------------------------------------------------------- the kernel
-
-
-@jit
-def extract_scan(ranges, valid, cos, sin, step, full_circle, angle_min, s):
-    """The whole method on one scan; arrays of the result.
-
-    ``valid`` marks the beams with a return, ``cos, sin`` are the bearing tables
-    relative to beam 0. Returns ``first, last, n_points, lines, covariances,
-    breakpoints, corners, outliers`` as :func:`~scanlines.steps.assemble.from_arrays`
-    takes them.
+    ``split_reference`` is :data:`~scanlines.steps.split.CHORD` or
+    :data:`~scanlines.steps.split.LINE`; parameters a method does not have are NaN.
     """
-    index, r, x, y = valid_returns(ranges, valid, cos, sin)
-    return extract_returns(index, r, x, y, ranges.shape[0], step, full_circle, angle_min, s)
+
+    breakpoints: int
+    k: float
+    noise_k: float
+    line_k: float
+    abd_lambda: float
+    pdbs_c0: float
+    jump_distance: float
+    min_points: int
+    min_length: float
+    range_sigma: float
+    corner_beams: int
+    corner_distance: float
+    corner_angle: float
+    split_distance: float
+    split_reference: int
+    outlier_distance: float
+    merge_chi2: float
+
+    @classmethod
+    def of(cls, params: Mapping[str, Any], reference: str) -> SplitSettings:
+        """The settings of resolved ``params``; ``reference`` ``"chord"`` or ``"fit"``."""
+        return cls(
+            breakpoints=RULE_CODES[params["breakpoints"]],
+            k=params["k"],
+            noise_k=params["noise_k"],
+            line_k=params["line_k"],
+            abd_lambda=math.radians(params["abd_lambda"]),
+            pdbs_c0=params["pdbs_c0"],
+            jump_distance=params["jump_distance"],
+            min_points=params["min_points"],
+            min_length=params["min_length"],
+            range_sigma=params["range_sigma"],
+            corner_beams=params["corner_beams"],
+            corner_distance=params["corner_distance"],
+            corner_angle=math.radians(params["corner_angle"]),
+            split_distance=params["split_distance"],
+            split_reference=REFERENCE_CODES[reference],
+            outlier_distance=params.get("outlier_distance", math.nan),
+            merge_chi2=params.get("merge_chi2", math.nan),
+        )
 
 
-# Inlined: extract_scan is its only compiled caller, and compiling it on its own would
-# optimise the whole method a second time (seconds of the cold start).
-@jit(inline=True)
-def extract_returns(index, r, x, y, n_beams, step, full_circle, angle_min, s):
-    """The whole method on the valid returns (beam ``index``, range, local ``x, y``) of a scan."""
+@kernel(inline=True)
+def rule_spec(s):
+    """The clustering rule of a :class:`SplitSettings` record."""
+    return RuleSpec(
+        s.breakpoints, s.k, s.noise_k, s.line_k, s.abd_lambda, s.pdbs_c0, s.jump_distance
+    )
+
+
+@kernel(inline=True)
+def output(s):
+    """The :class:`~scanlines.steps.assemble.Output` of a :class:`SplitSettings` record."""
+    return Output(
+        s.min_points, s.min_length, s.range_sigma, s.corner_beams, s.corner_distance, s.corner_angle
+    )
+
+
+class Iepf(CompiledMethod):
+    """Iterative end-point fit (module docstring)."""
+
+    name = "iepf"
+    parameters: ClassVar[dict[str, Param]] = {
+        **segment_params(5),
+        **BREAKPOINT_PARAMS,
+        **LITERAL_CLUSTERING,
+        "breakpoints": with_default(
+            BREAKPOINT_PARAMS["breakpoints"], "fixed", "IEPF: fixed jump distance"
+        ),
+        "split_distance": Param(
+            0.1,
+            number(low=0.0, low_open=True),
+            "split where a point is this far from the chord (m)",
+        ),
+        **EVENT_PARAMS,
+    }
+    Settings = SplitSettings
+
+    @classmethod
+    def settings_of(cls, params: Mapping[str, Any]) -> SplitSettings:
+        return SplitSettings.of(params, reference="chord")
+
+    @staticmethod
+    def kernel(ranges, valid, cos, sin, step, full_circle, angle_min, settings):
+        return iepf_scan(ranges, valid, cos, sin, step, full_circle, angle_min, settings)
+
+
+@kernel
+def iepf_scan(ranges, valid, cos, sin, step, full_circle, angle_min, settings):
+    """The whole method on one scan: the result arrays (see :class:`CompiledMethod`)."""
+    s = settings[0]
+    n_beams = ranges.shape[0]
     none = np.zeros(0, dtype=np.int64)
-    if index.shape[0] == 0:
+    returns = valid_returns(ranges, valid, cos, sin)
+    if returns.index.shape[0] == 0:
         return empty_result(none, none)
-    index, r, x, y, _, start, end, breakpoints, ring = cluster_returns(
-        index, r, x, y, n_beams, step, full_circle, s
+    returns, start, end, breakpoints, ring = cluster_scan(
+        returns, n_beams, step, full_circle, rule_spec(s)
     )
-    table, ox, oy = prefix_moments(x, y)
+    moments = prefix_moments(returns.x, returns.y)
     clusters = np.arange(start.shape[0])
-    a, b, group = split_runs_at_farthest(
-        x, y, table, ox, oy, start, end, clusters, s[SPLIT_DISTANCE], int(s[SPLIT_REFERENCE])
+    a, b, group = split_at_farthest(
+        returns.x, returns.y, moments, start, end, clusters, s.split_distance, s.split_reference
     )
-    return finish_runs(
-        index, r, x, y, n_beams, full_circle, table, ox, oy, a, b, group, True, ring,
-        breakpoints, none, angle_min, s,
+    return finish(
+        returns, n_beams, full_circle, moments, (a, b, group), (True, ring, breakpoints), none,
+        angle_min, output(s),
     )  # fmt: skip

@@ -7,7 +7,7 @@ described by Nguyen et al. [2]_):
    ``jump_distance = 0.3`` m) -- :mod:`scanlines.steps.breakpoints`;
 2. fit a total-least-squares line to every ``window`` (``N_f``) consecutive
    points of a cluster, with its ``(rho, alpha)`` covariance propagated from
-   ``range_sigma`` (:func:`scanlines.steps.fit.line_covariances`);
+   ``range_sigma`` (:func:`scanlines.steps.fit.run_covariances`);
 3. line fidelity of each window: the sum of the Mahalanobis distances
    ``dL^T (P_i + P_j)^-1 dL`` (angle difference wrapped) between its line and
    the lines of the windows before and after it (at a cluster end, twice the one
@@ -22,7 +22,7 @@ described by Nguyen et al. [2]_):
    every segment is refitted;
 6. segments with fewer than ``min_points`` (5) points or shorter than
    ``min_length`` (0 m) are dropped; corners by the shared rule of
-   :func:`scanlines.steps.segments.segment_events`; breakpoints from step 1.
+   :func:`scanlines.steps.events.segment_events`; breakpoints from step 1.
 
 Defaults: ``window = 9``, ``fidelity = 4``, ``range_sigma = 0.02`` m,
 ``merge_chi2 = 6`` (the 95 % point of chi-square with 2 degrees of freedom).
@@ -52,94 +52,77 @@ References
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from typing import Any
+from typing import ClassVar
 
 import numpy as np
 
-from scanlines.extraction import Extraction
+from scanlines.methods.base import ClusteredMethod
 from scanlines.params import Param, int_at_least, number, segment_params, with_default
-from scanlines.steps.assemble import empty_extraction
-from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, Clusters
-from scanlines.steps.fit import Lines, Moments, line_covariances, run_labels, tls_lines
-from scanlines.steps.points import Sequence
-from scanlines.steps.segments import (
-    EVENT_PARAMS,
-    LITERAL_CLUSTERING,
-    cluster_sequence,
-    finish,
-    pair_chi_square,
-)
+from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, LITERAL_CLUSTERING
+from scanlines.steps.events import EVENT_PARAMS
+from scanlines.steps.fit import TLS, Moments, fit_many, prefix_moments, run_covariances
+from scanlines.steps.merge import pair_chi_squares
+from scanlines.steps.returns import Returns
 
-NAME = "line_regression"
-
-PARAMS: dict[str, Param] = {
-    **segment_params(5, range_sigma=0.02),
-    **BREAKPOINT_PARAMS,
-    **LITERAL_CLUSTERING,
-    "breakpoints": with_default(
-        BREAKPOINT_PARAMS["breakpoints"], "fixed", "line regression: fixed jump distance"
-    ),
-    "window": Param(9, int_at_least(2), "sliding window N_f: points per window fit"),
-    "fidelity": Param(
-        4.0, number(low=0.0, low_open=True), "largest fidelity (summed chi-square) of a window"
-    ),
-    "merge_chi2": Param(
-        6.0, number(low=0.0), "overlapping segments merge below this chi-square of (rho, alpha)"
-    ),
-    **EVENT_PARAMS,
-}
-
-PRESETS: dict[str, dict[str, Any]] = {}
-
-_EMPTY = np.zeros(0, dtype=np.intp)
+_EMPTY = np.zeros(0, dtype=np.int64)
 
 
-def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extraction:
-    """Extract features from the valid returns ``seq`` of one scan."""
-    if len(seq) == 0:
-        return empty_extraction(NAME, params)
-    seq, clusters, ring = cluster_sequence(seq, params)
-    moments = Moments(seq.x, seq.y)
-    window = params["window"]
-    sigma = params["range_sigma"]
-    start, group = _window_starts(clusters, window)
-    good = _similar_windows(seq, moments, start, group, window, sigma, params["fidelity"])
-    a, b, group = _window_runs(start[good], group[good], window)
-    a, b, group = _resolve_overlaps(seq, moments, a, b, group, sigma, params["merge_chi2"])
-    return finish(
-        seq,
-        a,
-        b,
-        group,
-        clusters=clusters,
-        ring=ring,
-        outliers=_EMPTY,
-        angle_min=angle_min,
-        method=NAME,
-        params=params,
-    )
+class LineRegression(ClusteredMethod):
+    """Line regression (module docstring)."""
+
+    name = "line_regression"
+    parameters: ClassVar[dict[str, Param]] = {
+        **segment_params(5, range_sigma=0.02),
+        **BREAKPOINT_PARAMS,
+        **LITERAL_CLUSTERING,
+        "breakpoints": with_default(
+            BREAKPOINT_PARAMS["breakpoints"], "fixed", "line regression: fixed jump distance"
+        ),
+        "window": Param(9, int_at_least(2), "sliding window N_f: points per window fit"),
+        "fidelity": Param(
+            4.0, number(low=0.0, low_open=True), "largest fidelity (summed chi-square) of a window"
+        ),
+        "merge_chi2": Param(
+            6.0, number(low=0.0), "overlapping segments merge below this chi-square of (rho, alpha)"
+        ),
+        **EVENT_PARAMS,
+    }
+
+    def find_runs(self, returns, gap, start, end):
+        moments = prefix_moments(returns.x, returns.y)
+        window, sigma = self.params["window"], self.params["range_sigma"]
+        first, group = _window_starts(start, end, window)
+        good = _similar_windows(
+            returns, moments, first, group, window, sigma, self.params["fidelity"]
+        )
+        a, b, group = _window_runs(first[good], group[good], window)
+        a, b, group = _resolve_overlaps(
+            returns, moments, a, b, group, sigma, self.params["merge_chi2"]
+        )
+        return a, b, group, _EMPTY
 
 
-def _window_starts(clusters: Clusters, window: int) -> tuple[np.ndarray, np.ndarray]:
+def _window_starts(
+    start: np.ndarray, end: np.ndarray, window: int
+) -> tuple[np.ndarray, np.ndarray]:
     """First position and cluster of every window that fits inside a cluster."""
-    count = np.maximum(clusters.end - clusters.start + 2 - window, 0)
-    group = np.repeat(np.arange(len(clusters)), count)
+    count = np.maximum(end - start + 2 - window, 0)
+    group = np.repeat(np.arange(start.shape[0]), count)
     offset = np.arange(group.size) - np.repeat(np.cumsum(count) - count, count)
-    return (clusters.start[group] + offset).astype(np.intp), group.astype(np.intp)
+    return (start[group] + offset).astype(np.int64), group.astype(np.int64)
 
 
 def _lines_and_covariances(
-    seq: Sequence, moments: Moments, a: np.ndarray, b: np.ndarray, sigma: float
-) -> tuple[Lines, np.ndarray]:
-    lines = tls_lines(moments, a, b)
-    position, run = run_labels(a, b, len(seq))
-    covariance = line_covariances(seq.x, seq.y, seq.r, lines.rho, lines.alpha, position, run, sigma)
-    return lines, covariance
+    returns: Returns, moments: Moments, a: np.ndarray, b: np.ndarray, sigma: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    a = np.ascontiguousarray(a, dtype=np.int64)
+    b = np.ascontiguousarray(b, dtype=np.int64)
+    rho, alpha, _ = fit_many(TLS, moments, a, b)
+    return rho, alpha, run_covariances(returns, rho, alpha, a, b, sigma)
 
 
 def _similar_windows(
-    seq: Sequence,
+    returns: Returns,
     moments: Moments,
     start: np.ndarray,
     group: np.ndarray,
@@ -150,10 +133,12 @@ def _similar_windows(
     """Steps 2-3: mask of windows whose fidelity is below ``threshold``."""
     if start.size == 0:
         return np.zeros(0, dtype=bool)
-    lines, covariance = _lines_and_covariances(seq, moments, start, start + window - 1, sigma)
-    k = np.arange(start.size - 1)
+    rho, alpha, covariance = _lines_and_covariances(
+        returns, moments, start, start + window - 1, sigma
+    )
+    k = np.arange(start.size - 1, dtype=np.int64)
     same = group[k] == group[k + 1]
-    distance = np.where(same, pair_chi_square(lines, covariance, k, k + 1), np.nan)
+    distance = np.where(same, pair_chi_squares(rho, alpha, covariance, k, k + 1), np.nan)
     distance = np.where(np.isnan(distance) & same, np.inf, distance)
     before = np.r_[np.nan, distance]
     after = np.r_[distance, np.nan]
@@ -176,7 +161,7 @@ def _window_runs(
 
 
 def _resolve_overlaps(
-    seq: Sequence,
+    returns: Returns,
     moments: Moments,
     a: np.ndarray,
     b: np.ndarray,
@@ -191,8 +176,10 @@ def _resolve_overlaps(
         if group[k] != group[k + 1] or b[k] < a[k + 1]:
             k += 1
             continue
-        lines, covariance = _lines_and_covariances(seq, moments, a[k : k + 2], b[k : k + 2], sigma)
-        value = pair_chi_square(lines, covariance, np.array([0]), np.array([1]))[0]
+        rho, alpha, covariance = _lines_and_covariances(
+            returns, moments, a[k : k + 2], b[k : k + 2], sigma
+        )
+        value = pair_chi_squares(rho, alpha, covariance, _FIRST, _SECOND)[0]
         if value < merge_chi2:
             b[k] = max(b[k], b[k + 1])
             a, b, group = np.delete(a, k + 1), np.delete(b, k + 1), np.delete(group, k + 1)
@@ -204,10 +191,13 @@ def _resolve_overlaps(
 
 def _best_cut(moments: Moments, a1: int, b1: int, a2: int, b2: int) -> tuple[int, int]:
     """End of the first and start of the second run, cut where the summed SSE is least."""
-    end = np.arange(max(a2 - 1, a1 + 1), min(b1, b2 - 2) + 1, dtype=np.intp)
+    end = np.arange(max(a2 - 1, a1 + 1), min(b1, b2 - 2) + 1, dtype=np.int64)
     if end.size == 0:
         return b1, b1 + 1
-    sse = tls_lines(moments, np.full(end.size, a1), end).sse
-    sse = sse + tls_lines(moments, end + 1, np.full(end.size, b2)).sse
+    sse = fit_many(TLS, moments, np.full(end.size, a1, dtype=np.int64), end)[2]
+    sse = sse + fit_many(TLS, moments, end + 1, np.full(end.size, b2, dtype=np.int64))[2]
     best = int(end[np.argmin(sse)])
     return best, best + 1
+
+
+_FIRST, _SECOND = np.array([0]), np.array([1])

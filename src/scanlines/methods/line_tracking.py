@@ -12,7 +12,7 @@ Nguyen et al. [2]_):
    and the point after it;
 4. segments with fewer than ``min_points`` (5) points or shorter than
    ``min_length`` (0 m) are dropped; corners between consecutive segments of one
-   cluster by the shared rule of :func:`scanlines.steps.segments.segment_events`;
+   cluster by the shared rule of :func:`scanlines.steps.events.segment_events`;
    breakpoints from step 1.
 
 Default ``track_distance = 0.1`` m: with 1-2 cm range noise a point of a
@@ -47,85 +47,65 @@ References
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from typing import Any
+from typing import ClassVar
 
 import numpy as np
 
-from scanlines.extraction import Extraction
+from scanlines.methods.base import ClusteredMethod
 from scanlines.params import Param, number, segment_params, with_default
-from scanlines.steps.assemble import empty_extraction
-from scanlines.steps.breakpoints import BREAKPOINT_PARAMS
-from scanlines.steps.fit import Moments, tls_lines
-from scanlines.steps.points import Sequence
-from scanlines.steps.segments import EVENT_PARAMS, LITERAL_CLUSTERING, cluster_sequence, finish
-
-NAME = "line_tracking"
-
-PARAMS: dict[str, Param] = {
-    **segment_params(5),
-    **BREAKPOINT_PARAMS,
-    **LITERAL_CLUSTERING,
-    "breakpoints": with_default(
-        BREAKPOINT_PARAMS["breakpoints"], "fixed", "line tracking: fixed jump distance"
-    ),
-    "track_distance": Param(
-        0.1,
-        number(low=0.0, low_open=True),
-        "a point farther than this from the current line starts a new one (m)",
-    ),
-    **EVENT_PARAMS,
-}
-
-PRESETS: dict[str, dict[str, Any]] = {}
+from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, LITERAL_CLUSTERING
+from scanlines.steps.events import EVENT_PARAMS
+from scanlines.steps.fit import TLS, Moments, fit_many, prefix_moments
+from scanlines.steps.returns import Returns
 
 _FIRST_CHUNK = 32
 
 
-def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extraction:
-    """Extract features from the valid returns ``seq`` of one scan."""
-    if len(seq) == 0:
-        return empty_extraction(NAME, params)
-    seq, clusters, ring = cluster_sequence(seq, params)
-    moments = Moments(seq.x, seq.y)
-    starts: list[int] = []
-    ends: list[int] = []
-    groups: list[int] = []
-    for c, (first, last) in enumerate(
-        zip(clusters.start.tolist(), clusters.end.tolist(), strict=True)
-    ):
-        for a, b in _track(seq, moments, first, last, params["track_distance"]):
-            starts.append(a)
-            ends.append(b)
-            groups.append(c)
-    return finish(
-        seq,
-        np.array(starts, dtype=np.intp),
-        np.array(ends, dtype=np.intp),
-        np.array(groups, dtype=np.intp),
-        clusters=clusters,
-        ring=ring,
-        outliers=np.zeros(0, dtype=np.intp),
-        angle_min=angle_min,
-        method=NAME,
-        params=params,
-    )
+class LineTracking(ClusteredMethod):
+    """Line tracking (module docstring)."""
+
+    name = "line_tracking"
+    parameters: ClassVar[dict[str, Param]] = {
+        **segment_params(5),
+        **BREAKPOINT_PARAMS,
+        **LITERAL_CLUSTERING,
+        "breakpoints": with_default(
+            BREAKPOINT_PARAMS["breakpoints"], "fixed", "line tracking: fixed jump distance"
+        ),
+        "track_distance": Param(
+            0.1,
+            number(low=0.0, low_open=True),
+            "a point farther than this from the current line starts a new one (m)",
+        ),
+        **EVENT_PARAMS,
+    }
+
+    def find_runs(self, returns, gap, start, end):
+        moments = prefix_moments(returns.x, returns.y)
+        threshold = self.params["track_distance"]
+        runs = [
+            (a, b, c)
+            for c, (first, last) in enumerate(zip(start.tolist(), end.tolist(), strict=True))
+            for a, b in _track(returns, moments, first, last, threshold)
+        ]
+        a, b, group = np.array(runs, dtype=np.int64).reshape(-1, 3).T
+        return a, b, group, np.zeros(0, dtype=np.int64)
 
 
-def _track(
-    seq: Sequence, moments: Moments, first: int, last: int, threshold: float
-) -> list[tuple[int, int]]:
+def _track(returns: Returns, moments: Moments, first: int, last: int, threshold: float):
     """Segments ``(a, b)`` of the cluster ``[first, last]``, in order."""
     runs = []
     start = first
     while start <= last:
-        end = _segment_end(seq, moments, start, last, threshold)
+        end = _segment_end(returns, moments, start, last, threshold)
         runs.append((start, end))
         start = end + 1
     return runs
 
 
-def _segment_end(seq: Sequence, moments: Moments, start: int, last: int, threshold: float) -> int:
+def _segment_end(
+    returns: Returns, moments: Moments, start: int, last: int, threshold: float
+) -> int:
     """Last point of the segment that starts at ``start``.
 
     The line of ``[start, e]`` (``e >= start + 1``) is tested against point
@@ -133,13 +113,11 @@ def _segment_end(seq: Sequence, moments: Moments, start: int, last: int, thresho
     """
     low, chunk = start + 1, _FIRST_CHUNK
     while low < last:
-        end = np.arange(low, min(low + chunk, last), dtype=np.intp)
-        lines = tls_lines(moments, np.full(end.size, start, dtype=np.intp), end)
+        end = np.arange(low, min(low + chunk, last), dtype=np.int64)
+        rho, alpha, _ = fit_many(TLS, moments, np.full(end.size, start, dtype=np.int64), end)
         following = end + 1
         off = np.abs(
-            seq.x[following] * np.cos(lines.alpha)
-            + seq.y[following] * np.sin(lines.alpha)
-            - lines.rho
+            returns.x[following] * np.cos(alpha) + returns.y[following] * np.sin(alpha) - rho
         )
         fails = np.flatnonzero(~(off <= threshold))
         if fails.size:

@@ -12,11 +12,11 @@ The "PDBS algorithm" the paper compares against [1]_ (sec. 4.3, Fig. 12a and 13a
 2. split every cluster at a fixed threshold, IEPF-style (Duda and Hart [3]_):
    at the point farthest from the chord between the cluster's end points, while
    that distance exceeds ``split_distance`` (0.1 m, as :mod:`~scanlines.methods.iepf`)
-   -- :func:`scanlines.steps.segments.split_runs`;
+   -- :func:`scanlines.steps.split.split_at_farthest`;
 3. total-least-squares line per part, parts with fewer than ``min_points`` (5)
    points or shorter than ``min_length`` (0 m) dropped;
 4. corners between consecutive parts of one cluster by the shared rule of
-   :func:`scanlines.steps.segments.segment_events`; breakpoints from step 1.
+   :func:`scanlines.steps.events.segment_events`; breakpoints from step 1.
 
 It is :mod:`~scanlines.methods.iepf` with the PDBS clustering rule: the
 threshold grows with range like the beam spacing on a surface facing the sensor
@@ -37,34 +37,20 @@ References
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from typing import Any
+from typing import ClassVar
 
-from scanlines.extraction import Extraction
-from scanlines.methods import iepf
+from scanlines.methods.iepf import Iepf
 from scanlines.params import Param, with_default
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS
-from scanlines.steps.points import Sequence
-
-NAME = "pdbs"
-
-PARAMS: dict[str, Param] = {
-    **iepf.PARAMS,
-    "breakpoints": with_default(
-        BREAKPOINT_PARAMS["breakpoints"], "pdbs", "PDBS: Premebida and Nunes"
-    ),
-}
-
-PRESETS: dict[str, dict[str, Any]] = {}
 
 
-def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extraction:
-    """Extract features from the valid returns ``seq`` of one scan."""
-    return Compiled(params).sequence(seq, angle_min)
+class Pdbs(Iepf):
+    """IEPF with the PDBS clustering rule (module docstring)."""
 
-
-class Compiled(iepf.Compiled):
-    """The method in kernel form: :class:`scanlines.methods.iepf.Compiled` under this name."""
-
-    __slots__ = ()
-    name = NAME
+    name = "pdbs"
+    parameters: ClassVar[dict[str, Param]] = {
+        **Iepf.parameters,
+        "breakpoints": with_default(
+            BREAKPOINT_PARAMS["breakpoints"], "pdbs", "PDBS: Premebida and Nunes"
+        ),
+    }

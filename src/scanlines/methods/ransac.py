@@ -11,16 +11,16 @@ described by Nguyen et al. [2]_):
 3. refit the winner's inliers by total least squares and collect the inliers of
    the refitted line;
 4. cut the consensus set into runs contiguous in beam order
-   (:func:`scanlines.steps.segments.inlier_runs`: one return off the line is
+   (:func:`scanlines.methods.consensus.inlier_runs`: one return off the line is
    bridged and dropped as an outlier; a gap of two or more missing beams, or
    consecutive inliers more than ``max_gap`` apart, end a run); runs with at
    least ``min_points`` inliers become segments and leave the set (a set without
-   such a run leaves as a whole) -- :func:`scanlines.steps.segments.consensus_segments`;
+   such a run leaves as a whole) -- :mod:`scanlines.methods.consensus`;
 5. repeat from 2 until fewer than ``min_points`` points remain or the best line
    has fewer inliers;
 6. segments shorter than ``min_length`` are dropped; corners and (on the whole
    scan) breakpoints between consecutive segments by the shared rule of
-   :func:`scanlines.steps.segments.segment_events`.
+   :func:`scanlines.steps.events.segment_events`.
 
 The draws come from ``numpy.random.default_rng(seed)``, created anew for every
 scan: one seed gives the same result for the same scan.
@@ -50,69 +50,51 @@ References
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
-from scanlines.extraction import Extraction
-from scanlines.params import Param, choice, int_at_least, number, segment_params
-from scanlines.steps.assemble import empty_extraction
-from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, RULES
-from scanlines.steps.points import Sequence
-from scanlines.steps.segments import (
-    EVENT_PARAMS,
-    LITERAL_CLUSTERING,
-    NO_CLUSTERING,
-    consensus_extraction,
-)
-
-NAME = "ransac"
-
-PARAMS: dict[str, Param] = {
-    **segment_params(5),
-    **BREAKPOINT_PARAMS,
-    **LITERAL_CLUSTERING,
-    "breakpoints": Param(
-        NO_CLUSTERING,
-        choice(NO_CLUSTERING, *RULES),
-        "clustering rule: none (whole scan) | " + " | ".join(RULES),
-    ),
-    "inlier_distance": Param(
-        0.05, number(low=0.0, low_open=True), "largest distance of an inlier from its line (m)"
-    ),
-    "trials": Param(200, int_at_least(1), "random point pairs drawn per line"),
-    "max_gap": Param(
-        0.4, number(low=0.0, low_open=True), "largest distance between consecutive inliers (m)"
-    ),
-    "seed": Param(0, int_at_least(0), "seed of the random draws (per scan)"),
-    **EVENT_PARAMS,
-}
-
-PRESETS: dict[str, dict[str, Any]] = {}
+from scanlines.methods.consensus import WHOLE_SCAN, ConsensusMethod
+from scanlines.params import Param, int_at_least, number, segment_params
+from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, LITERAL_CLUSTERING
+from scanlines.steps.events import EVENT_PARAMS
+from scanlines.steps.returns import Returns
 
 
-def run(seq: Sequence, angle_min: float, params: Mapping[str, Any]) -> Extraction:
-    """Extract features from the valid returns ``seq`` of one scan."""
-    if len(seq) == 0:
-        return empty_extraction(NAME, params)
-    rng = np.random.default_rng(params["seed"])
-    return consensus_extraction(
-        seq,
-        angle_min,
-        params,
-        method=NAME,
-        finder=lambda s, _: RandomSampler(s, rng, params["trials"], params["inlier_distance"]),
-    )
+class Ransac(ConsensusMethod):
+    """Sequential RANSAC (module docstring)."""
+
+    name = "ransac"
+    parameters: ClassVar[dict[str, Param]] = {
+        **segment_params(5),
+        **BREAKPOINT_PARAMS,
+        **LITERAL_CLUSTERING,
+        "breakpoints": WHOLE_SCAN,
+        "inlier_distance": Param(
+            0.05, number(low=0.0, low_open=True), "largest distance of an inlier from its line (m)"
+        ),
+        "trials": Param(200, int_at_least(1), "random point pairs drawn per line"),
+        "max_gap": Param(
+            0.4, number(low=0.0, low_open=True), "largest distance between consecutive inliers (m)"
+        ),
+        "seed": Param(0, int_at_least(0), "seed of the random draws (per scan)"),
+        **EVENT_PARAMS,
+    }
+
+    def new_search(self) -> np.random.Generator:
+        return np.random.default_rng(self.params["seed"])
+
+    def line_finder(self, returns: Returns, member: np.ndarray, search: Any) -> RandomSampler:
+        return RandomSampler(returns, search, self.params["trials"], self.params["inlier_distance"])
 
 
 class RandomSampler:
     """Line proposals from random pairs of free points (step 2)."""
 
     def __init__(
-        self, seq: Sequence, rng: np.random.Generator, trials: int, inlier_distance: float
+        self, returns: Returns, rng: np.random.Generator, trials: int, inlier_distance: float
     ) -> None:
-        self.seq = seq
+        self.returns = returns
         self.rng = rng
         self.trials = trials
         self.inlier_distance = inlier_distance
@@ -126,7 +108,7 @@ class RandomSampler:
         first = self.rng.integers(0, m, self.trials)
         second = self.rng.integers(0, m - 1, self.trials)
         second = second + (second >= first)
-        x, y = self.seq.x[points], self.seq.y[points]
+        x, y = self.returns.x[points], self.returns.y[points]
         dx, dy = x[second] - x[first], y[second] - y[first]
         length = np.hypot(dx, dy)
         usable = length > 0.0

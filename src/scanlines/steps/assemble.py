@@ -1,90 +1,51 @@
-"""From sequence positions to an :class:`~scanlines.Extraction` in the sensor frame."""
+"""From runs of positions to the result arrays of an :class:`~scanlines.Extraction`.
+
+:func:`assemble` fits the final runs and expresses lines, end points and events in
+the sensor frame; :func:`finish` is the last stage of every comparison method: drop
+small runs, find the events between the rest (:func:`~scanlines.steps.events.segment_events`)
+and assemble. Both return the tuple :func:`to_extraction` turns into an
+:class:`~scanlines.Extraction`: ``first, last, n_points, lines, covariances,
+breakpoints, corners, outliers``.
+"""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
-from scanlines._jit import jit
+from scanlines._jit import kernel
 from scanlines.extraction import N_LINE_COLUMNS, Extraction
-from scanlines.scan import is_full_circle
-from scanlines.steps.fit import FIT_CODES, Moments, covariances, fit_many, run_labels
-from scanlines.steps.points import Sequence
+from scanlines.steps.events import segment_events, sorted_distinct
+from scanlines.steps.fit import TLS, fit_many, run_covariances, wrap_angle
 
 __all__ = [
-    "CompiledMethod",
+    "Output",
     "assemble",
-    "assemble_runs",
-    "empty_extraction",
+    "drop_small",
     "empty_result",
-    "from_arrays",
+    "finish",
+    "to_extraction",
 ]
 
 
-def empty_extraction(method: str, params: Mapping[str, Any], *, breakpoints=None, outliers=None):
-    """An extraction with no segments."""
-    none = np.zeros(0, dtype=np.intp)
-    return Extraction(
-        first=none,
-        last=none,
-        n_points=none,
-        lines=np.zeros((0, N_LINE_COLUMNS)),
-        covariances=np.zeros((0, 2, 2)),
-        breakpoints=none if breakpoints is None else breakpoints,
-        corners=none,
-        outliers=none if outliers is None else outliers,
-        method=method,
-        params=params,
-    )
+class Output(NamedTuple):
+    """What a comparison method keeps and reports: the smallest segment (points,
+    metres), the range noise of the covariances (m) and the bounds of the corner rule
+    (:func:`~scanlines.steps.events.segment_events`; beams, metres, radians)."""
+
+    min_points: int
+    min_length: float
+    range_sigma: float
+    corner_beams: int
+    corner_distance: float
+    corner_angle: float
 
 
-def assemble(
-    seq: Sequence,
-    a: np.ndarray,
-    b: np.ndarray,
-    *,
-    fit: str,
-    moments: Moments,
-    corners: np.ndarray,
-    breakpoints: np.ndarray,
-    outliers: np.ndarray,
-    angle_min: float,
-    range_sigma: float,
-    method: str,
-    params: Mapping[str, Any],
-) -> Extraction:
-    """Fit the final runs ``[a, b]`` and express everything in the sensor frame.
-
-    Lines are computed in the scan's local frame (beam 0 at bearing 0), which
-    makes every decision independent of ``angle_min``; here they are rotated by
-    ``angle_min``.
-    """
-    ox, oy = moments.origin
-    arrays = assemble_runs(
-        seq.index,
-        seq.x,
-        seq.y,
-        seq.r,
-        np.asarray(a, dtype=np.int64),
-        np.asarray(b, dtype=np.int64),
-        FIT_CODES[fit],
-        moments.table,
-        ox,
-        oy,
-        float(angle_min),
-        float(range_sigma),
-        np.asarray(breakpoints, dtype=np.int64),
-        np.asarray(corners, dtype=np.int64),
-        np.asarray(outliers, dtype=np.int64),
-    )
-    return from_arrays(arrays, method, params)
-
-
-def from_arrays(arrays: tuple[np.ndarray, ...], method: str, params: Mapping[str, Any]):
-    """The :class:`Extraction` of :func:`assemble_runs`' output."""
+def to_extraction(arrays: tuple[np.ndarray, ...], method: str, params: Mapping[str, Any]):
+    """The :class:`~scanlines.Extraction` of :func:`assemble`'s (or :func:`finish`'s) output."""
     first, last, n_points, lines, covariance, breakpoints, corners, outliers = arrays
     return Extraction(
         first=first,
@@ -100,74 +61,19 @@ def from_arrays(arrays: tuple[np.ndarray, ...], method: str, params: Mapping[str
     )
 
 
-class CompiledMethod:
-    """A method whose kernels go from a scan to :func:`assemble_runs`' arrays.
+@kernel
+def assemble(returns, fit, moments, a, b, angle_min, range_sigma, breakpoints, corners, outliers):
+    """The result arrays: runs ``[a, b]`` fitted, in beam order, events sorted.
 
-    What :class:`~scanlines.Extractor` calls when a method module defines a
-    ``Compiled`` subclass. A subclass sets ``name``, ``scan_kernel(ranges, valid,
-    cos, sin, step, full_circle, angle_min, *args)``, ``returns_kernel(index, r, x,
-    y, n_beams, step, full_circle, angle_min, *args)`` (both as ``staticmethod``)
-    and :meth:`arguments`, the kernels' last arguments built once from the
-    parameters. ``cos`` and ``sin`` are the bearing tables of the beams relative
-    to beam 0; ``valid`` the mask of beams with a return.
+    Lines are computed in the scan's local frame (beam 0 at bearing 0), which
+    makes every decision independent of ``angle_min``; here they are rotated by
+    ``angle_min``.
     """
-
-    __slots__ = ("args", "params")
-    name = ""
-
-    def __init__(self, params: Mapping[str, Any]) -> None:
-        self.params = params
-        self.args = self.arguments(params)
-
-    def arguments(self, params: Mapping[str, Any]) -> tuple[Any, ...]:
-        raise NotImplementedError
-
-    def one(self, ranges, valid, cos, sin, step: float, angle_min: float) -> Extraction:
-        """The extraction of one scan."""
-        full_circle = is_full_circle(ranges.shape[0], step)
-        arrays = self.scan_kernel(
-            ranges, valid, cos, sin, abs(step), full_circle, angle_min, *self.args
-        )
-        return from_arrays(arrays, self.name, self.params)
-
-    def many(self, stack, valid, cos, sin, step: float, angle_min: float) -> list[Extraction]:
-        """The extractions of a stack of scans of one sensor (C-contiguous float64 rows)."""
-        full_circle = is_full_circle(stack.shape[1], step)
-        kernel, args, step = self.scan_kernel, self.args, abs(step)
-        return [
-            from_arrays(
-                kernel(row, mask, cos, sin, step, full_circle, angle_min, *args),
-                self.name,
-                self.params,
-            )
-            for row, mask in zip(stack, valid, strict=True)
-        ]
-
-    def sequence(self, seq: Sequence, angle_min: float) -> Extraction:
-        """The extraction of the valid returns ``seq`` of one scan (its points as given)."""
-        arrays = self.returns_kernel(
-            np.ascontiguousarray(seq.index, dtype=np.int64),
-            *(np.ascontiguousarray(v, dtype=np.float64) for v in (seq.r, seq.x, seq.y)),
-            seq.n_beams,
-            seq.step,
-            is_full_circle(seq.n_beams, seq.step),
-            float(angle_min),
-            *self.args,
-        )
-        return from_arrays(arrays, self.name, self.params)
-
-
-@jit
-def assemble_runs(
-    index, x, y, r, a, b, fit, table, ox, oy, angle_min, range_sigma, breakpoints, corners, outliers
-):
-    """Kernel of :func:`assemble`: ``first, last, n_points, lines, covariances, breakpoints,
-    corners, outliers``, segments in beam order, events sorted."""
-    rho, alpha, _ = fit_many(fit, table, ox, oy, a, b)
-    position, run = run_labels(a, b, x.shape[0])
-    covariance = covariances(x, y, r, rho, alpha, position, run, range_sigma)
+    index, _, x, y = returns
+    rho, alpha, _ = fit_many(fit, moments, a, b)
+    covariance = run_covariances(returns, rho, alpha, a, b, range_sigma)
     m = a.shape[0]
-    lines = np.empty((m, 7))
+    lines = np.empty((m, N_LINE_COLUMNS))
     cos_t, sin_t = math.cos(angle_min), math.sin(angle_min)
     for k in range(m):
         c, s = math.cos(alpha[k]), math.sin(alpha[k])
@@ -176,7 +82,7 @@ def assemble_runs(
             off = x[p] * c + y[p] * s - rho[k]
             squares += off * off
         lines[k, 0] = rho[k]
-        lines[k, 1] = math.pi - (math.pi - (alpha[k] + angle_min)) % (2.0 * math.pi)
+        lines[k, 1] = wrap_angle(alpha[k] + angle_min)
         for column, p in ((2, a[k]), (4, b[k])):
             off = x[p] * c + y[p] * s - rho[k]  # foot of the perpendicular onto the line
             px, py = x[p] - off * c, y[p] - off * s
@@ -197,17 +103,56 @@ def assemble_runs(
     )
 
 
-@jit
-def empty_result(breakpoints: np.ndarray, outliers: np.ndarray):
-    """:func:`assemble_runs`' output without segments."""
+@kernel
+def empty_result(breakpoints, outliers):
+    """:func:`assemble`'s output without segments."""
     none = np.zeros(0, dtype=np.int64)
     return (
         none,
         none.copy(),
         none.copy(),
-        np.zeros((0, 7)),
+        np.zeros((0, N_LINE_COLUMNS)),
         np.zeros((0, 2, 2)),
         np.sort(breakpoints),
         none.copy(),
         np.sort(outliers),
     )
+
+
+@kernel
+def drop_small(x, y, a, b, group, min_points, min_length):
+    """Runs with at least ``min_points`` points (two at least) and an end-to-end length
+    of ``min_length``."""
+    kept_a, kept_b, kept_group = a.copy(), b.copy(), group.copy()
+    count = 0
+    for k in range(a.shape[0]):
+        length = math.hypot(x[b[k]] - x[a[k]], y[b[k]] - y[a[k]])
+        if b[k] - a[k] + 1 >= max(min_points, 2.0) and length >= min_length:
+            kept_a[count], kept_b[count], kept_group[count] = a[k], b[k], group[k]
+            count += 1
+    return kept_a[:count], kept_b[:count], kept_group[:count]
+
+
+@kernel
+def finish(returns, n_beams, full_circle, moments, runs, clusters, outliers, angle_min, output):
+    """Drop small runs, find corners (and breakpoints) and assemble the result arrays.
+
+    ``runs`` is ``(a, b, group)``; ``clusters`` is ``(clustered, ring,
+    breakpoints)``: whether the breakpoints come from the method's clustering (else
+    they are derived from the jumps between segments), whether the scan is one closed
+    ring, and the clustering's breakpoint beams. ``output`` is an :class:`Output`.
+    """
+    a, b, group = runs
+    clustered, ring, breakpoints = clusters
+    a, b, group = drop_small(
+        returns.x, returns.y, a, b, group, output.min_points, output.min_length
+    )
+    bounds = (output.corner_beams, output.corner_distance, output.corner_angle)
+    wrap = ring if clustered else full_circle
+    corners, jumps = segment_events(returns, n_beams, moments, a, b, group, clustered, wrap, bounds)
+    if not clustered:
+        breakpoints = jumps
+    return assemble(
+        returns, TLS, moments, a, b, angle_min, output.range_sigma,
+        sorted_distinct(breakpoints), corners, sorted_distinct(outliers),
+    )  # fmt: skip

@@ -40,33 +40,40 @@ References
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
-from dataclasses import dataclass
-from typing import Any
+from typing import NamedTuple
 
 import numpy as np
 
-from scanlines._jit import jit
+from scanlines._jit import kernel
 from scanlines.params import Param, choice, number
-from scanlines.scan import is_full_circle
-from scanlines.steps.points import Sequence, rotate
+from scanlines.steps.noise import range_noise
+from scanlines.steps.returns import MAX_BRIDGED_GAP
 
 __all__ = [
+    "ABD",
+    "ADAPTIVE",
     "BREAKPOINT_PARAMS",
-    "MAX_BRIDGED_GAP",
+    "FIXED",
+    "LITERAL_CLUSTERING",
+    "NO_RULE",
+    "PDBS",
+    "RULES",
+    "RULE_CODES",
     "BreakpointRule",
-    "Clusters",
-    "cluster",
-    "cluster_scan",
-    "neighbour_distances",
-    "thresholds",
+    "RuleSpec",
+    "auto_abd_lambda",
+    "break_flags",
+    "make_rule",
+    "neighbour_steps",
+    "scan_rule",
+    "seam_break",
+    "threshold",
+    "with_margin_growth",
 ]
 
-MAX_BRIDGED_GAP = 2
-"""Largest beam gap between consecutive returns that may still be one cluster
-(one missing beam in between)."""
-
 RULES = ("adaptive", "abd", "pdbs", "fixed")
+RULE_CODES = {name: code for code, name in enumerate(RULES)}
+ADAPTIVE, ABD, PDBS, FIXED = range(4)
 
 BREAKPOINT_PARAMS: dict[str, Param] = {
     "breakpoints": Param("abd", choice(*RULES), "clustering rule: " + ", ".join(RULES)),
@@ -87,7 +94,54 @@ BREAKPOINT_PARAMS: dict[str, Param] = {
         0.3, number(low=0.0, low_open=True), "fixed rule: largest neighbour distance, metres"
     ),
 }
+"""The parameters of a clustering rule, shared by every method that clusters."""
 
+LITERAL_CLUSTERING: dict[str, Param] = {
+    "line_k": Param(
+        0.0, BREAKPOINT_PARAMS["line_k"].check, BREAKPOINT_PARAMS["line_k"].doc + "; off here"
+    )
+}
+"""Overrides of :data:`BREAKPOINT_PARAMS` for the comparison methods: the published
+clustering rules have no line-continuation bridge."""
+
+
+class BreakpointRule(NamedTuple):
+    """A clustering rule and its constants (see the module docstring).
+
+    ``kind`` is one of :data:`ADAPTIVE`, :data:`ABD`, :data:`PDBS`, :data:`FIXED`;
+    ``abd_lambda`` in radians; ``noise_margin`` and ``line_tolerance`` in metres. The
+    margin grows with range beyond ``far_range`` by ``growth`` per metre from
+    ``far_margin`` where :func:`with_margin_growth` set them (zero otherwise).
+    """
+
+    kind: int
+    k: float
+    noise_margin: float
+    line_tolerance: float
+    abd_lambda: float
+    pdbs_c0: float
+    jump_distance: float
+    far_margin: float
+    growth: float
+    far_range: float
+
+
+class RuleSpec(NamedTuple):
+    """A clustering rule as a method's parameters give it: the noise terms in sigmas
+    (``noise_k``, ``line_k``), ``abd_lambda`` in radians, ``kind`` a rule code or
+    :data:`NO_RULE`."""
+
+    kind: int
+    k: float
+    noise_k: float
+    line_k: float
+    abd_lambda: float
+    pdbs_c0: float
+    jump_distance: float
+
+
+NO_RULE = -1
+"""The ``kind`` of a method that works on the whole scan: cuts at missing beams only."""
 
 ABD_LAMBDA_FLOOR = math.radians(10.0)
 """Borges and Aldon's ``lambda``: walls up to 80 deg incidence stay one cluster."""
@@ -96,9 +150,13 @@ MAX_BRIDGED_SHARE = math.sin(math.radians(1.0)) / math.sin(math.radians(14.0))
 """Largest step, as a share of the range, that the incidence bound alone bridges in
 :func:`auto_abd_lambda` (7.2 %: ``lambda`` = 15 deg at 1 deg resolution)."""
 
+MAX_STEP_GROWTH = 2.5
+"""Largest ratio of a step to its neighbours' on a continued line (grazing walls
+grow their spacing smoothly; a jump does not)."""
 
-@jit(inline=True)
-def auto_abd_lambda(step: float) -> float:
+
+@kernel(inline=True)
+def auto_abd_lambda(step):
     """ABD's ``lambda`` (radians) for beams ``step`` apart.
 
     10 deg, raised where it would bridge steps of more than :data:`MAX_BRIDGED_SHARE`
@@ -113,123 +171,71 @@ def auto_abd_lambda(step: float) -> float:
     return min(max(ABD_LAMBDA_FLOOR, step + bridged), 0.5 * math.pi)
 
 
-RULE_CODES = {name: code for code, name in enumerate(RULES)}
-ADAPTIVE, ABD, PDBS, FIXED = range(4)
-# Positions in the array form of a rule that the kernels take.
-_KIND, _K, _MARGIN, _LINE_TOL, _LAMBDA, _C0, _JUMP, _FAR_MARGIN, _GROWTH, _FAR_RANGE = range(10)
-
-
-@dataclass(frozen=True, slots=True)
-class BreakpointRule:
-    """A clustering rule and its constants (see the module docstring)."""
-
-    name: str = "adaptive"
-    k: float = 3.0
-    noise_margin: float = 0.0
-    line_tolerance: float = 0.0
-    abd_lambda: float = math.radians(10.0)
-    pdbs_c0: float = 0.1
-    jump_distance: float = 0.3
-
-    @classmethod
-    def from_params(cls, params: dict[str, Any], sigma: float = 0.0) -> BreakpointRule:
-        """Build the rule from a method's resolved parameters and the range noise ``sigma``."""
-        return cls(
-            name=params["breakpoints"],
-            k=params["k"],
-            noise_margin=params.get("noise_k", 0.0) * math.sqrt(2.0) * sigma,
-            line_tolerance=params.get("line_k", 0.0) * math.sqrt(5.0) * sigma,
-            abd_lambda=math.radians(params["abd_lambda"]),
-            pdbs_c0=params["pdbs_c0"],
-            jump_distance=params["jump_distance"],
-        )
-
-    def as_array(self) -> np.ndarray:
-        """The rule as the kernels take it (kind code first)."""
-        return rule_array(
-            RULE_CODES[self.name],
-            self.k,
-            self.noise_margin,
-            self.line_tolerance,
-            self.abd_lambda,
-            self.pdbs_c0,
-            self.jump_distance,
-        )
-
-
-@jit
-def rule_array(
-    kind: int,
-    k: float,
-    noise_margin: float,
-    line_tolerance: float,
-    abd_lambda: float,
-    pdbs_c0: float,
-    jump_distance: float,
-) -> np.ndarray:
-    """Array form of a :class:`BreakpointRule` (``kind`` one of ``ADAPTIVE ... FIXED``)."""
-    rule = np.zeros(10)
-    rule[_KIND] = kind
-    rule[_K] = k
-    rule[_MARGIN] = noise_margin
-    rule[_LINE_TOL] = line_tolerance
-    rule[_LAMBDA] = abd_lambda
-    rule[_C0] = pdbs_c0
-    rule[_JUMP] = jump_distance
-    return rule
-
-
-@jit
-def noise_rule(kind, k, noise_k, line_k, abd_lambda_rad, pdbs_c0, jump_distance, sigma):
-    """:func:`rule_array` with the noise terms in units of the range noise ``sigma``.
+@kernel
+def make_rule(kind, k, noise_k, line_k, abd_lambda, pdbs_c0, jump_distance, sigma):
+    """The :class:`BreakpointRule` with its noise terms in units of the range noise ``sigma``.
 
     The margin is ``noise_k`` standard deviations of a difference of two ranges
     (``sqrt(2) sigma``), the line tolerance ``line_k`` standard deviations of an
-    extrapolation from two points (``sqrt(5) sigma``), as in
-    :meth:`BreakpointRule.from_params`.
+    extrapolation from two points (``sqrt(5) sigma``).
     """
-    return rule_array(
+    return BreakpointRule(
         kind,
         k,
         noise_k * math.sqrt(2.0) * sigma,
         line_k * math.sqrt(5.0) * sigma,
-        abd_lambda_rad,
+        abd_lambda,
         pdbs_c0,
         jump_distance,
+        0.0,
+        0.0,
+        0.0,
     )
 
 
-@jit
-def with_margin_growth(rule: np.ndarray, far_margin: float, growth: float, far_range: float):
+@kernel
+def scan_rule(spec, r, gap):
+    """The rule of the :class:`RuleSpec` ``spec``, its noise terms from the scan's ranges.
+
+    The range noise (:func:`~scanlines.steps.noise.range_noise`) is estimated only when
+    the rule uses it. :data:`NO_RULE` gives a rule that cuts at missing beams only.
+    """
+    if spec.kind == NO_RULE:
+        return make_rule(FIXED, spec.k, 0.0, 0.0, spec.abd_lambda, spec.pdbs_c0, math.inf, 0.0)
+    sigma = 0.0
+    noisy_rule = spec.kind in (ADAPTIVE, ABD) and spec.noise_k > 0.0
+    if noisy_rule or spec.line_k > 0.0:
+        sigma = range_noise(r, gap)
+    return make_rule(
+        spec.kind, spec.k, spec.noise_k, spec.line_k, spec.abd_lambda, spec.pdbs_c0,
+        spec.jump_distance, sigma,
+    )  # fmt: skip
+
+
+@kernel
+def with_margin_growth(rule, far_margin, growth, far_range):
     """The rule with a noise margin that grows with range where the noise does.
 
     The margin at range ``r`` becomes ``max(noise_margin, far_margin + growth (r -
     far_range))``: sensors whose range noise is a share of the range (the
     URG-04LX: 1 % beyond 1 m) need a wider margin far away than near.
     """
-    out = rule.copy()
-    out[_FAR_MARGIN], out[_GROWTH], out[_FAR_RANGE] = far_margin, growth, far_range
-    return out
+    return BreakpointRule(
+        rule.kind,
+        rule.k,
+        rule.noise_margin,
+        rule.line_tolerance,
+        rule.abd_lambda,
+        rule.pdbs_c0,
+        rule.jump_distance,
+        far_margin,
+        growth,
+        far_range,
+    )
 
 
-@dataclass(frozen=True, slots=True)
-class Clusters:
-    """Runs of sequence positions that belong to one surface.
-
-    ``start[c]`` and ``end[c]`` are inclusive positions; ``breakpoints`` are beam
-    indices (the last valid beam before each gap), sorted.
-    """
-
-    start: np.ndarray
-    end: np.ndarray
-    breakpoints: np.ndarray
-
-    def __len__(self) -> int:
-        return int(self.start.shape[0])
-
-
-@jit
-def neighbour_steps(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+@kernel
+def neighbour_steps(x, y):
     """``d_i = |P_{i+1} - P_i|`` for consecutive points (eq. 4 / 19)."""
     d = np.empty(max(x.shape[0] - 1, 0))
     for p in range(d.shape[0]):
@@ -238,71 +244,41 @@ def neighbour_steps(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     return d
 
 
-def neighbour_distances(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """``d_i = |P_{i+1} - P_i|`` for consecutive points (eq. 4 / 19)."""
-    return neighbour_steps(np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64))
-
-
-@jit(inline=True)
-def gap_factor(rule: np.ndarray, gap: int, step: float) -> float:
+@kernel(inline=True)
+def gap_factor(rule, gap, step):
     """The part of the threshold that depends on the beam gap only (see :func:`threshold`)."""
-    kind = rule[_KIND]
+    kind = rule.kind
     dphi = gap * step
     if kind == ADAPTIVE:
-        return rule[_K] * dphi
+        return rule.k * dphi
     if kind == ABD:
-        margin = rule[_LAMBDA] - dphi
+        margin = rule.abd_lambda - dphi
         return math.sin(dphi) / math.sin(margin) if margin > 0.0 else math.inf
     if kind == PDBS:
         return math.sqrt(2.0 * (1.0 - math.cos(dphi)))
     return 0.0
 
 
-@jit(inline=True)
-def scaled_threshold(rule: np.ndarray, factor: float, r_from: float, r_to: float) -> float:
+@kernel(inline=True)
+def scaled_threshold(rule, factor, r_from, r_to):
     """The threshold from :func:`gap_factor` and the two ranges."""
-    kind = rule[_KIND]
+    kind = rule.kind
     if kind in (ADAPTIVE, ABD):
-        far = rule[_FAR_MARGIN] + rule[_GROWTH] * (r_from - rule[_FAR_RANGE])
-        return factor * r_from + max(rule[_MARGIN], far)
+        far = rule.far_margin + rule.growth * (r_from - rule.far_range)
+        return factor * r_from + max(rule.noise_margin, far)
     if kind == PDBS:
-        return rule[_C0] + factor * min(r_from, r_to)
-    return rule[_JUMP]
+        return rule.pdbs_c0 + factor * min(r_from, r_to)
+    return rule.jump_distance
 
 
-@jit(inline=True)
-def threshold(rule: np.ndarray, r_from: float, r_to: float, gap: int, step: float) -> float:
+@kernel(inline=True)
+def threshold(rule, r_from, r_to, gap, step):
     """Largest distance ``D`` between returns ``r_from`` and ``r_to``, ``gap`` beams apart."""
     return scaled_threshold(rule, gap_factor(rule, gap, step), r_from, r_to)
 
 
-@jit
-def _thresholds(rule, r_from, r_to, gap, step):
-    out = np.empty(r_from.shape[0])
-    for i in range(r_from.shape[0]):
-        out[i] = threshold(rule, r_from[i], r_to[i], gap[i], step)
-    return out
-
-
-def thresholds(
-    rule: BreakpointRule, r_from: np.ndarray, r_to: np.ndarray, gap: np.ndarray, step: float
-) -> np.ndarray:
-    """:func:`threshold` for arrays of pairs."""
-    r_from, r_to, gap = np.broadcast_arrays(
-        np.asarray(r_from, dtype=np.float64), np.asarray(r_to, dtype=np.float64), np.asarray(gap)
-    )
-    flat = _thresholds(
-        rule.as_array(),
-        np.ascontiguousarray(r_from.ravel()),
-        np.ascontiguousarray(r_to.ravel()),
-        np.ascontiguousarray(gap.ravel(), dtype=np.int64),
-        float(step),
-    )
-    return flat.reshape(r_from.shape)
-
-
-@jit(inline=True)
-def _distance_to_line(ax, ay, bx, by, px, py) -> float:
+@kernel(inline=True)
+def distance_to_line(ax, ay, bx, by, px, py):
     """Distance of ``P`` from the line through ``A`` and ``B`` (inf when ``A == B``)."""
     ux, uy = bx - ax, by - ay
     length = math.hypot(ux, uy)
@@ -311,8 +287,8 @@ def _distance_to_line(ax, ay, bx, by, px, py) -> float:
     return abs(ux * (py - ay) - uy * (px - ax)) / length
 
 
-@jit(inline=True)
-def continues_line_at(x, y, gap, d, p: int, tolerance: float) -> bool:
+@kernel(inline=True)
+def continues_line_at(x, y, gap, d, p, tolerance):
     """Pair ``(p, p+1)`` continues the line of the pair before and of the pair after.
 
     ``P_{p+1}`` lies within ``tolerance`` of the line through ``P_{p-1}, P_p``, ``P_p``
@@ -340,30 +316,26 @@ def continues_line_at(x, y, gap, d, p: int, tolerance: float) -> bool:
     if not (d[p] <= MAX_STEP_GROWTH * shorter and shorter > tolerance):
         return False
     if has_before:
-        before = _distance_to_line(x[p - 1], y[p - 1], x[p], y[p], x[p + 1], y[p + 1])
+        before = distance_to_line(x[p - 1], y[p - 1], x[p], y[p], x[p + 1], y[p + 1])
         if not before < tolerance:
             return False
     if has_after:
-        after = _distance_to_line(x[p + 2], y[p + 2], x[p + 1], y[p + 1], x[p], y[p])
+        after = distance_to_line(x[p + 2], y[p + 2], x[p + 1], y[p + 1], x[p], y[p])
         if not after < tolerance:
             return False
     return True
 
 
-MAX_STEP_GROWTH = 2.5
-"""Largest ratio of a step to its neighbours' on a continued line (grazing walls
-grow their spacing smoothly; a jump does not)."""
-
-
-@jit
-def break_flags(x, y, r, gap, step: float, rule: np.ndarray) -> np.ndarray:
+@kernel
+def break_flags(returns, gap, step, rule):
     """For each pair of consecutive positions, True where a cluster ends."""
+    _, r, x, y = returns
     n = x.shape[0]
     out = np.zeros(max(n - 1, 0), dtype=np.bool_)
     if n < 2:
         return out
     d = neighbour_steps(x, y)
-    tolerance = rule[_LINE_TOL]
+    tolerance = rule.line_tolerance
     factors = np.array([gap_factor(rule, g, step) for g in range(MAX_BRIDGED_GAP + 1)])
     for p in range(n - 1):
         if gap[p] > MAX_BRIDGED_GAP:
@@ -373,106 +345,12 @@ def break_flags(x, y, r, gap, step: float, rule: np.ndarray) -> np.ndarray:
     return out
 
 
-def is_break(seq: Sequence, rule: BreakpointRule) -> np.ndarray:
-    """For each pair of consecutive positions, True where a cluster ends."""
-    return break_flags(seq.x, seq.y, seq.r, seq.gap, seq.step, rule.as_array())
-
-
-@jit
-def seam_break(x, y, r, index, n_beams: int, step: float, rule: np.ndarray) -> bool:
+@kernel
+def seam_break(returns, n_beams, step, rule):
     """The breakpoint test between the last and the first position of a full circle."""
+    index, r, x, y = returns
     gap = index[0] + n_beams - index[-1]
     if gap > MAX_BRIDGED_GAP:
         return True
     d = math.hypot(x[0] - x[-1], y[0] - y[-1])
     return not d < threshold(rule, r[-1], r[0], gap, step)
-
-
-def seam_is_break(seq: Sequence, rule: BreakpointRule) -> bool:
-    """The same test between the last and the first position of a full circle."""
-    return bool(seam_break(seq.x, seq.y, seq.r, seq.index, seq.n_beams, seq.step, rule.as_array()))
-
-
-@jit
-def cluster_bounds(breaks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Inclusive ``start, end`` positions of the runs between ``breaks`` (flags per pair)."""
-    n = breaks.shape[0] + 1
-    count = 1
-    for flag in breaks:
-        count += flag
-    start = np.empty(count, dtype=np.int64)
-    end = np.empty(count, dtype=np.int64)
-    start[0] = 0
-    c = 0
-    for p in range(n - 1):
-        if breaks[p]:
-            end[c] = p
-            c += 1
-            start[c] = p + 1
-    end[c] = n - 1
-    return start, end
-
-
-@jit
-def break_beams(index: np.ndarray, end: np.ndarray, seam_break: bool) -> np.ndarray:
-    """Breakpoint beams: the last beam of each cluster but the last (and it too at a seam)."""
-    count = end.shape[0] if seam_break else end.shape[0] - 1
-    return np.sort(index[end[:count]])
-
-
-def cluster(seq: Sequence, breaks: np.ndarray, *, seam_break: bool = False) -> Clusters:
-    """Cut the sequence at ``breaks`` (one flag per consecutive pair).
-
-    ``seam_break`` adds the breakpoint of a full-circle scan whose last and first
-    returns are not continuous; with a rotated sequence the caller passes the
-    break that the rotation put at the end.
-    """
-    if len(seq) == 0:
-        empty = np.zeros(0, dtype=np.intp)
-        return Clusters(empty, empty, empty)
-    start, end = cluster_bounds(np.asarray(breaks, dtype=np.bool_))
-    return Clusters(start, end, break_beams(seq.index, end, seam_break))
-
-
-@jit
-def seam_rotation(x, y, r, index, gap, n_beams: int, step: float, rule) -> tuple[int, bool, bool]:
-    """How a full circle is clustered: ``(rotate_to, seam_break, ring)``.
-
-    A full circle whose seam fails the test is clustered as it is (with the seam
-    break). One whose seam passes is rotated to start right after its first
-    gap, so that the cluster across the seam is one run of positions. One
-    without any gap is a closed ring: the caller picks where to cut it.
-    """
-    if seam_break(x, y, r, index, n_beams, step, rule):
-        return 0, True, False
-    breaks = break_flags(x, y, r, gap, step, rule)
-    for p in range(breaks.shape[0]):
-        if breaks[p]:
-            return p + 1, True, False
-    return 0, False, True
-
-
-def cluster_scan(
-    seq: Sequence, rule: BreakpointRule, ring_anchor: Callable[[Sequence], int]
-) -> tuple[Sequence, Clusters, bool]:
-    """Clusters of a whole scan, with the seam of a full circle joined when continuous.
-
-    A full circle whose seam passes the test is rotated to start right after its
-    first gap, so that the cluster across the seam is one run of positions. A
-    full circle without any gap (a room seen all round) is one closed ring: it is
-    rotated to start at ``ring_anchor(seq)`` (a strong corner, so that the cut the
-    ring needs falls where the scan turns anyway).
-
-    Returns the (possibly rotated) sequence, its clusters and whether it is a ring.
-    """
-    if not is_full_circle(seq.n_beams, seq.step) or len(seq) < 3:
-        return seq, cluster(seq, is_break(seq, rule)), False
-    rotate_to, seam, ring = seam_rotation(
-        seq.x, seq.y, seq.r, seq.index, seq.gap, seq.n_beams, seq.step, rule.as_array()
-    )
-    if ring:
-        seq = rotate(seq, ring_anchor(seq))
-        return seq, cluster(seq, np.zeros(len(seq) - 1, dtype=bool)), True
-    if rotate_to:
-        seq = rotate(seq, rotate_to)
-    return seq, cluster(seq, is_break(seq, rule), seam_break=seam), False

@@ -11,10 +11,12 @@ Two readings of the paper's isolated-noise rule:
                    that would otherwise form a one-point cluster).
 
 Step 3 replaces a noise point and its two neighbours by the mean of a window of
-``N`` points centred on it (:func:`replace_by_window_mean`). The window never
+``N`` points centred on it (:func:`window_means`). The window never
 spans a pair of returns that the raw breakpoint test separates, so smoothing
 cannot move a breakpoint. The default instead drops an isolated point (it then
-counts as one missing beam, which clustering bridges): no point is invented.
+counts as one missing beam, which clustering bridges): no point is invented. It
+also drops single-return clusters and two-return clusters that lie in depth between
+their neighbours (mixed pixels); :func:`denoise` is the whole stage.
 
 References
 ----------
@@ -27,23 +29,32 @@ import math
 
 import numpy as np
 
-from scanlines._jit import jit
-from scanlines.steps.breakpoints import MAX_BRIDGED_GAP, BreakpointRule, cluster_bounds, threshold
-from scanlines.steps.points import Sequence
+from scanlines._jit import kernel
+from scanlines.steps.breakpoints import break_flags, seam_break, threshold
+from scanlines.steps.clusters import cluster_bounds, cluster_ids
+from scanlines.steps.returns import MAX_BRIDGED_GAP, Returns, beam_gaps, without
 
 __all__ = [
-    "MIN_NOISE_SIGMA",
-    "estimate_noise",
+    "DENOISE",
+    "DENOISE_CODES",
+    "ISOLATED",
+    "LITERAL",
+    "NO_DENOISE",
+    "denoise",
+    "in_between_clusters",
     "isolated_noise",
     "literal_noise",
-    "replace_by_window_mean",
-    "run_ids",
     "small_clusters",
+    "window_means",
 ]
 
+DENOISE = ("isolated", "paper", "none")
+DENOISE_CODES = {name: code for code, name in enumerate(DENOISE)}
+ISOLATED, LITERAL, NO_DENOISE = range(3)
 
-@jit
-def literal_noise(d: np.ndarray) -> np.ndarray:
+
+@kernel
+def literal_noise(d):
     """Step 2 as written, on neighbour distances ``d`` (length n - 1): a mask of n points."""
     n = d.shape[0] + 1
     noise = np.zeros(n, dtype=np.bool_)
@@ -52,9 +63,13 @@ def literal_noise(d: np.ndarray) -> np.ndarray:
     return noise
 
 
-@jit
-def isolated_noise_mask(x, y, r, gap, step: float, rule: np.ndarray, breaks) -> np.ndarray:
-    """Kernel of :func:`isolated_noise` on the sequence's arrays."""
+@kernel
+def isolated_noise(returns, gap, step, rule, breaks):
+    """Points cut off from both neighbours that are themselves continuous (a spike).
+
+    ``breaks`` are the :func:`~scanlines.steps.breakpoints.break_flags` of ``returns``.
+    """
+    _, r, x, y = returns
     n = x.shape[0]
     noise = np.zeros(n, dtype=np.bool_)
     for i in range(1, n - 1):
@@ -68,30 +83,16 @@ def isolated_noise_mask(x, y, r, gap, step: float, rule: np.ndarray, breaks) -> 
     return noise
 
 
-def isolated_noise(seq: Sequence, rule: BreakpointRule, breaks: np.ndarray) -> np.ndarray:
-    """Points cut off from both neighbours that are themselves continuous (a spike).
+@kernel
+def window_means(x, y, noise, window, breaks):
+    """Step 3: noise point ``i`` and its neighbours become the mean of ``window`` points.
 
-    ``breaks`` is :func:`~scanlines.steps.breakpoints.is_break` of ``seq``.
+    The window ``[i - window//2, i - window//2 + window - 1]`` is clipped to the
+    raw cluster of ``i`` (``breaks`` from the raw data), and neighbours across a
+    raw break are left alone. Returns the moved coordinates.
     """
-    return isolated_noise_mask(
-        seq.x, seq.y, seq.r, seq.gap, seq.step, rule.as_array(), np.asarray(breaks, dtype=np.bool_)
-    )
-
-
-@jit
-def run_ids(breaks: np.ndarray) -> np.ndarray:
-    """Cluster number of every position, given the break flags between positions."""
-    ids = np.zeros(breaks.shape[0] + 1, dtype=np.int64)
-    for p in range(breaks.shape[0]):
-        ids[p + 1] = ids[p] + breaks[p]
-    return ids
-
-
-@jit
-def window_means(x, y, noise, window: int, breaks) -> tuple[np.ndarray, np.ndarray]:
-    """Kernel of :func:`replace_by_window_mean`: the moved coordinates."""
     n = x.shape[0]
-    ids = run_ids(breaks)
+    ids = cluster_ids(breaks)
     cluster_start = np.zeros(n, dtype=np.int64)
     cluster_end = np.zeros(n, dtype=np.int64)
     for p in range(1, n):
@@ -124,135 +125,8 @@ def window_means(x, y, noise, window: int, breaks) -> tuple[np.ndarray, np.ndarr
     return new_x, new_y
 
 
-def replace_by_window_mean(
-    seq: Sequence, noise: np.ndarray, window: int, breaks: np.ndarray
-) -> Sequence:
-    """Step 3: noise point ``i`` and its neighbours become the mean of ``window`` points.
-
-    The window ``[i - window//2, i - window//2 + window - 1]`` is clipped to the
-    raw cluster of ``i`` (``breaks`` from the raw data), and neighbours across a
-    raw break are left alone.
-    """
-    if not np.any(noise):
-        return seq
-    x, y = window_means(
-        seq.x, seq.y, np.asarray(noise, dtype=np.bool_), int(window), np.asarray(breaks, bool)
-    )
-    return seq.with_points(x, y)
-
-
-MIN_NOISE_SIGMA = 1e-3
-"""Floor (metres) of the estimated noise: ranges logged to 1 mm or 1 cm carry at
-least this much quantisation noise, and a noise-free simulation must not make
-the criterion divide by zero."""
-
-
-@jit
-def noise_from_ranges(r, gap, cluster_start, cluster_end) -> float:
-    """Kernel of :func:`estimate_noise`."""
-    n = r.shape[0]
-    interior = np.ones(n, dtype=np.bool_)
-    interior[cluster_start] = False
-    interior[cluster_end] = False
-    second = np.empty(n)
-    count = 0
-    for i in range(1, n - 1):
-        if interior[i] and gap[i - 1] == 1 and gap[i] == 1:
-            second[count] = abs(r[i + 1] - 2.0 * r[i] + r[i - 1])
-            count += 1
-    if count < 3:
-        return MIN_NOISE_SIGMA
-    sigma = np.median(second[:count]) / (0.6745 * math.sqrt(6.0))
-    return max(sigma, MIN_NOISE_SIGMA)
-
-
-@jit
-def chord_samples(x, y, r, gap, cluster_start, cluster_end) -> tuple[np.ndarray, np.ndarray]:
-    """Range-noise samples from chords, and the range of each: ``(sample, at)``.
-
-    Each interior return ``P_i`` with neighbours on both sides gives one sample: its
-    distance from the chord ``P_{i-1} P_{i+1}`` over ``sqrt(1.5) cos(beta)`` (``beta`` the
-    angle between its beam and the chord's normal; only ``beta`` < 60 deg). On a straight
-    surface that distance is noise alone, at any incidence and resolution, where the
-    second difference of the ranges also holds the surface's geometry (at 1 deg, on
-    slanted walls far away, as much as the noise).
-    """
-    n = r.shape[0]
-    interior = np.ones(n, dtype=np.bool_)
-    interior[cluster_start] = False
-    interior[cluster_end] = False
-    sample = np.empty(n)
-    at = np.empty(n)
-    count = 0
-    for i in range(1, n - 1):
-        if not (interior[i] and gap[i - 1] == 1 and gap[i] == 1):
-            continue
-        cx, cy = x[i + 1] - x[i - 1], y[i + 1] - y[i - 1]
-        length = math.hypot(cx, cy)
-        if length == 0.0 or r[i] <= 0.0:
-            continue
-        nx, ny = -cy / length, cx / length
-        cos_beta = abs(nx * x[i] + ny * y[i]) / r[i]
-        if cos_beta < MIN_CHORD_COS:
-            continue
-        off = abs((x[i] - x[i - 1]) * nx + (y[i] - y[i - 1]) * ny)
-        sample[count] = off / (cos_beta * math.sqrt(1.5))
-        at[count] = r[i]
-        count += 1
-    return sample[:count], at[:count]
-
-
-@jit
-def noise_growth(x, y, r, gap, cluster_start, cluster_end) -> tuple[float, float, float]:
-    """How the range noise grows with range: ``(sigma_far, slope, far_range)``.
-
-    The samples of :func:`chord_samples` are split at their median range; the robust
-    noise of each half and the median range of each half give a line
-    ``sigma(r) = sigma_far + slope (r - far_range)`` (``slope >= 0``, 0 when the noise does
-    not grow, as on sensors with a constant range error).
-    """
-    sample, at = chord_samples(x, y, r, gap, cluster_start, cluster_end)
-    if sample.shape[0] < 6:
-        return 0.0, 0.0, 0.0
-    middle = np.median(at)
-    near, far = at <= middle, at > middle
-    if not far.any():
-        return 0.0, 0.0, 0.0
-    sigma_near, sigma_far = np.median(sample[near]) / 0.6745, np.median(sample[far]) / 0.6745
-    near_range, far_range = np.median(at[near]), np.median(at[far])
-    if far_range <= near_range:
-        return 0.0, 0.0, 0.0
-    return sigma_far, max((sigma_far - sigma_near) / (far_range - near_range), 0.0), far_range
-
-
-MIN_CHORD_COS = 0.5
-"""Chord samples of :func:`noise_growth` come from surfaces within 60 deg of facing the beam."""
-
-
-def estimate_noise(seq: Sequence, cluster_start: np.ndarray, cluster_end: np.ndarray) -> float:
-    """Robust range-noise estimate from the scan itself, in metres.
-
-    On a smooth surface the second difference of three consecutive ranges,
-    ``r_{i+1} - 2 r_i + r_{i-1}``, is noise with standard deviation ``sigma sqrt(6)``
-    (its geometric part, ``r'' dtheta^2``, is far smaller at the resolutions of
-    real scanners); the median absolute value, robust to the few corners and
-    edges, gives ``sigma``. Triples across a missing beam or a cluster end are
-    left out.
-    """
-    if len(seq) == 0:
-        return MIN_NOISE_SIGMA
-    return float(
-        noise_from_ranges(
-            seq.r,
-            seq.gap,
-            np.asarray(cluster_start, dtype=np.int64),
-            np.asarray(cluster_end, dtype=np.int64),
-        )
-    )
-
-
-@jit
-def small_clusters(breaks: np.ndarray, min_points: int, seam_joined: bool = False) -> np.ndarray:
+@kernel
+def small_clusters(breaks, min_points, seam_joined):
     """Mask of the points of clusters with fewer than ``min_points`` returns.
 
     A cluster of one or two returns between two jumps is, far more often than a
@@ -260,7 +134,7 @@ def small_clusters(breaks: np.ndarray, min_points: int, seam_joined: bool = Fals
     echo. ``seam_joined`` counts the first and last clusters of a full circle
     whose seam is continuous as one.
     """
-    ids = run_ids(breaks)
+    ids = cluster_ids(breaks)
     sizes = np.bincount(ids)
     if seam_joined and sizes.shape[0] > 1:
         sizes[0] = sizes[-1] = sizes[0] + sizes[-1]
@@ -270,8 +144,8 @@ def small_clusters(breaks: np.ndarray, min_points: int, seam_joined: bool = Fals
     return out
 
 
-@jit
-def in_between_clusters(r, gap, breaks, small, margin: float) -> np.ndarray:
+@kernel
+def in_between_clusters(r, gap, breaks, small, margin):
     """Mask of the returns of two-return clusters that lie in depth between their neighbours.
 
     A mixed pixel is a return between the two surfaces of a depth jump; two of them, or one
@@ -294,4 +168,59 @@ def in_between_clusters(r, gap, breaks, small, margin: float) -> np.ndarray:
         high = max(r[a - 1], r[b + 1]) + margin
         if low < r[a] < high and low < r[b] < high:
             out[a] = out[b] = True
+    return out
+
+
+@kernel
+def denoise(returns, n_beams, step, full_circle, rule, kind, window, min_cluster_points, margin):
+    """Steps 2-3 by ``kind`` (:data:`ISOLATED`, :data:`LITERAL` or :data:`NO_DENOISE`).
+
+    ``window`` is the literal rule's mean-filter window, ``min_cluster_points`` the
+    smallest cluster the isolated rule keeps and ``margin`` the breakpoint margin the
+    two-return test allows. Returns the cleaned returns, the beams dropped as noise
+    and the break flags of the cleaned returns when known (empty otherwise).
+    """
+    none = np.zeros(0, dtype=np.int64)
+    unknown = np.zeros(0, dtype=np.bool_)
+    if kind == NO_DENOISE or returns.index.shape[0] < 3:
+        return returns, none, unknown
+    index, _, x, y = returns
+    gap = beam_gaps(index, n_beams)
+    raw_breaks = break_flags(returns, gap, step, rule)
+    if kind == LITERAL:
+        noise = literal_noise(np.hypot(x[1:] - x[:-1], y[1:] - y[:-1]))
+        if not noise.any():
+            return returns, none, raw_breaks
+        x, y = window_means(x, y, noise, window, raw_breaks)
+        return Returns(index, np.hypot(x, y), x, y), none, unknown
+    noise = isolated_noise(returns, gap, step, rule, raw_breaks)
+    if min_cluster_points > 1:
+        noise |= _small_or_in_between(
+            returns, noise, raw_breaks, n_beams, step, full_circle, rule, min_cluster_points, margin
+        )
+    if not noise.any():
+        return returns, none, raw_breaks
+    return without(returns, noise), index[noise], unknown
+
+
+@kernel
+def _small_or_in_between(
+    returns, noise, raw_breaks, n_beams, step, full_circle, rule, least, margin
+):
+    """Mask of the returns (not yet ``noise``) in clusters smaller than ``least`` once the
+    noise is dropped, and, for ``least == 2``, of the two-return clusters in between."""
+    kept = np.flatnonzero(~noise)
+    kept_returns = without(returns, noise)
+    kept_gap = beam_gaps(kept_returns.index, n_beams)
+    joined = (
+        full_circle and kept.shape[0] >= 3 and not seam_break(kept_returns, n_beams, step, rule)
+    )
+    kept_breaks = raw_breaks
+    if noise.any():  # else the kept returns are all returns: same breaks
+        kept_breaks = break_flags(kept_returns, kept_gap, step, rule)
+    small = small_clusters(kept_breaks, least, joined)
+    if least == 2:
+        small |= in_between_clusters(kept_returns.r, kept_gap, kept_breaks, small, margin)
+    out = np.zeros(noise.shape[0], dtype=np.bool_)
+    out[kept[small]] = True
     return out

@@ -1,9 +1,8 @@
 """Line fitting for runs of points (sec. 2.4 and Step 8 of [1]_).
 
-Two fits, each of a run ``[a, b]`` in O(1) from running sums (:func:`prefix_moments`),
+Two fits, each of a run ``[a, b]`` in O(1) from running sums (:class:`Moments`),
 so the threshold sweep can score every segmentation it tries without refitting
-points. The kernels take one run (``tls_run``, ``paper_run``, ``run_cost``); the
-wrappers (``tls_lines``, ``paper_lines``, ``RunCost``) take arrays of runs:
+points (``fit_run``, ``run_cost``; ``fit_many`` for arrays of runs):
 
 ``"tls"``    total least squares in Hesse normal form ``x cos a + y sin a = rho``:
              minimises orthogonal distances, represents every line (vertical
@@ -25,21 +24,31 @@ References
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
-from scanlines._jit import jit
+from scanlines._jit import kernel
 
 __all__ = [
     "FITS",
-    "Lines",
+    "FIT_CODES",
+    "PAPER",
+    "TLS",
     "Moments",
     "RunCost",
-    "line_covariances",
-    "paper_lines",
-    "point_residuals",
-    "tls_lines",
+    "fit_many",
+    "fit_run",
+    "hesse_difference",
+    "inverse_square_sums",
+    "line_intersection",
+    "prefix_moments",
+    "run_cost",
+    "run_covariances",
+    "run_labels",
+    "tls_axis",
+    "tls_run",
+    "wrap_angle",
 ]
 
 FITS = ("tls", "paper")
@@ -48,9 +57,31 @@ TLS, PAPER = 0, 1
 PAPER_SUBSETS = 5
 
 
-@jit
-def prefix_moments(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, float, float]:
-    """Running sums ``(Sx, Sy, Sxx, Sxy, Syy)`` (shape (5, n + 1)) about the mean point."""
+class Moments(NamedTuple):
+    """Prefix sums of a point sequence; sums over any run ``[a, b]`` in O(1).
+
+    ``table`` (shape (5, n + 1)) holds the running sums of ``x, y, xx, xy, yy``
+    relative to the mean point ``(ox, oy)``, which keeps them well conditioned;
+    the origin is added back where absolute positions matter.
+    """
+
+    table: np.ndarray
+    ox: float
+    oy: float
+
+
+class RunCost(NamedTuple):
+    """What the fitting error of a run needs: the fit code, the moments and, for a cost
+    in noise units, the running sums of ``1 / r^2`` (empty for the plain error)."""
+
+    fit: int
+    moments: Moments
+    inv_r2: np.ndarray
+
+
+@kernel
+def prefix_moments(x, y):
+    """:class:`Moments` of the points ``x, y``."""
     n = x.shape[0]
     ox = 0.0
     oy = 0.0
@@ -68,67 +99,60 @@ def prefix_moments(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, float, flo
         table[2, i + 1] = table[2, i] + u * u
         table[3, i + 1] = table[3, i] + u * v
         table[4, i + 1] = table[4, i] + v * v
-    return table, ox, oy
+    return Moments(table, ox, oy)
 
 
-class Moments:
-    """Prefix sums of a point sequence; sums over any run ``[a, b]`` in O(1).
-
-    Coordinates are taken relative to their mean, which keeps the sums well
-    conditioned; ``origin`` is added back where absolute positions matter.
-    ``table`` holds the running sums of ``x, y, xx, xy, yy`` as rows.
-    """
-
-    __slots__ = ("origin", "table")
-
-    def __init__(self, x: np.ndarray, y: np.ndarray) -> None:
-        x = np.ascontiguousarray(x, dtype=np.float64)
-        y = np.ascontiguousarray(y, dtype=np.float64)
-        self.table, ox, oy = prefix_moments(x, y)
-        self.origin = (ox, oy)
-
-    @property
-    def sx(self) -> np.ndarray:
-        return self.table[0]
-
-    @property
-    def sy(self) -> np.ndarray:
-        return self.table[1]
-
-    def sums(self, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, ...]:
-        """``n, Sx, Sy, Sxx, Sxy, Syy`` over inclusive runs ``[a, b]`` (relative coordinates)."""
-        lo, hi = a, b + 1
-        t = self.table
-        return ((hi - lo).astype(np.float64), *(t[row, hi] - t[row, lo] for row in range(5)))
+@kernel(inline=True)
+def wrap_angle(angle):
+    """``angle`` wrapped to ``(-pi, pi]``."""
+    return math.pi - (math.pi - angle) % (2.0 * math.pi)
 
 
-@dataclass(frozen=True, slots=True)
-class Lines:
-    """Fitted lines of many runs: Hesse parameters and the fit's own error."""
-
-    rho: np.ndarray
-    alpha: np.ndarray
-    sse: np.ndarray
-
-
-@jit(inline=True)
-def hesse(alpha: float, rho: float) -> tuple[float, float]:
+@kernel(inline=True)
+def hesse(alpha, rho):
     """Normalise to ``rho >= 0`` and ``alpha`` in ``(-pi, pi]``."""
     if rho < 0.0:
         rho = -rho
         alpha = alpha + math.pi
-    return math.pi - (math.pi - alpha) % (2.0 * math.pi), rho
+    return wrap_angle(alpha), rho
 
 
-@jit(inline=True)
-def tls_axis(table: np.ndarray, a: int, b: int) -> tuple[float, float, float, float, float]:
+@kernel(inline=True)
+def hesse_difference(rho_1, alpha_1, rho_2, alpha_2):
+    """``(rho_1 - rho_2, alpha_1 - alpha_2)`` of two Hesse lines, the angle wrapped.
+
+    Hesse parameters are ambiguous for a line through the origin (``(rho, alpha)``
+    and ``(-rho, alpha + pi)``); of the two the one with the smaller angle
+    difference is used.
+    """
+    direct = wrap_angle(alpha_1 - alpha_2)
+    flipped = wrap_angle(alpha_1 - alpha_2 + math.pi)
+    if abs(flipped) < abs(direct):
+        return rho_1 + rho_2, flipped
+    return rho_1 - rho_2, direct
+
+
+@kernel(inline=True)
+def line_intersection(rho_i, alpha_i, rho_j, alpha_j):
+    """Intersection ``(x, y)`` of two Hesse lines; NaN for parallel lines."""
+    det = math.sin(alpha_j - alpha_i)
+    if not abs(det) > 1e-12:
+        return math.nan, math.nan
+    x = (rho_i * math.sin(alpha_j) - rho_j * math.sin(alpha_i)) / det
+    y = (rho_j * math.cos(alpha_i) - rho_i * math.cos(alpha_j)) / det
+    return x, y
+
+
+@kernel(inline=True)
+def tls_axis(moments, a, b):
     """Normal of the total-least-squares line of run ``[a, b]``, up to its sign.
 
     Returns ``(nx, ny, sse, mx, my)``: the eigenvector of the smaller eigenvalue
     of the scatter matrix, from the half-angle formulas (no trigonometric calls:
     this is the innermost operation of the method), the orthogonal error, and
-    the run's centroid relative to the table's origin. The run must not be empty.
+    the run's centroid relative to the moments' origin. The run must not be empty.
     """
+    table = moments.table
     n = b + 1 - a
     sx = table[0, b + 1] - table[0, a]
     sy = table[1, b + 1] - table[1, a]
@@ -147,39 +171,36 @@ def tls_axis(table: np.ndarray, a: int, b: int) -> tuple[float, float, float, fl
     return nx, ny, sse, mx, my
 
 
-@jit(inline=True)
-def tls_normal(
-    table: np.ndarray, ox: float, oy: float, a: int, b: int
-) -> tuple[float, float, float, float]:
+@kernel(inline=True)
+def tls_normal(moments, a, b):
     """Total-least-squares line of run ``[a, b]`` as ``(cos alpha, sin alpha, rho, sse)``.
 
     ``rho >= 0``; NaN for an empty run.
     """
     if b < a:
         return math.nan, math.nan, math.nan, math.nan
-    nx, ny, sse, mx, my = tls_axis(table, a, b)
-    rho = (mx + ox) * nx + (my + oy) * ny
+    nx, ny, sse, mx, my = tls_axis(moments, a, b)
+    rho = (mx + moments.ox) * nx + (my + moments.oy) * ny
     if rho < 0.0:
         return -nx, -ny, -rho, sse
     return nx, ny, rho, sse
 
 
-@jit(inline=True)
-def tls_run(table: np.ndarray, ox: float, oy: float, a: int, b: int) -> tuple[float, float, float]:
+@kernel(inline=True)
+def tls_run(moments, a, b):
     """Total-least-squares line ``(rho, alpha, sse)`` of run ``[a, b]``; NaN for an empty run."""
-    nx, ny, rho, sse = tls_normal(table, ox, oy, a, b)
+    nx, ny, rho, sse = tls_normal(moments, a, b)
     return rho, math.atan2(ny, nx), sse
 
 
-@jit
-def paper_run(
-    table: np.ndarray, ox: float, oy: float, a: int, b: int
-) -> tuple[float, float, float]:
+@kernel
+def paper_run(moments, a, b):
     """Eq. 15-17 on the five sub-set means of run ``[a, b]``; ``sse`` is eq. 14.
 
     NaN when the line has no slope (the x spread of the means is rounding
     error next to their y spread) or the run is empty.
     """
+    table, ox, oy = moments
     n = b + 1 - a
     if n <= 0:
         return math.nan, math.nan, math.nan
@@ -219,70 +240,33 @@ def paper_run(
     return rho, alpha, sse
 
 
-@jit(inline=True)
-def fit_run(
-    fit: int, table: np.ndarray, ox: float, oy: float, a: int, b: int
-) -> tuple[float, float, float]:
-    """Line of run ``[a, b]`` by fit code (:data:`TLS` or :data:`PAPER`)."""
+@kernel(inline=True)
+def fit_run(fit, moments, a, b):
+    """Line ``(rho, alpha, sse)`` of run ``[a, b]`` by fit code (:data:`TLS` or :data:`PAPER`)."""
     if fit == PAPER:
-        return paper_run(table, ox, oy, a, b)
-    return tls_run(table, ox, oy, a, b)
+        return paper_run(moments, a, b)
+    return tls_run(moments, a, b)
 
 
-@jit
-def fit_many(
-    fit: int, table: np.ndarray, ox: float, oy: float, a: np.ndarray, b: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+@kernel
+def fit_many(fit, moments, a, b):
     """:func:`fit_run` over runs ``[a[k], b[k]]``: arrays ``rho, alpha, sse``."""
     count = a.shape[0]
     rho = np.empty(count)
     alpha = np.empty(count)
     sse = np.empty(count)
     for k in range(count):
-        rho[k], alpha[k], sse[k] = fit_run(fit, table, ox, oy, a[k], b[k])
+        rho[k], alpha[k], sse[k] = fit_run(fit, moments, a[k], b[k])
     return rho, alpha, sse
 
 
-@jit(inline=True)
-def line_intersection(rho_i: float, alpha_i: float, rho_j: float, alpha_j: float):
-    """Intersection ``(x, y)`` of two Hesse lines; NaN for parallel lines."""
-    det = math.sin(alpha_j - alpha_i)
-    if not abs(det) > 1e-12:
-        return math.nan, math.nan
-    x = (rho_i * math.sin(alpha_j) - rho_j * math.sin(alpha_i)) / det
-    y = (rho_j * math.cos(alpha_i) - rho_i * math.cos(alpha_j)) / det
-    return x, y
-
-
-def _fit(fit: int, moments: Moments, a: np.ndarray, b: np.ndarray) -> Lines:
-    ox, oy = moments.origin
-    a = np.asarray(a, dtype=np.int64)
-    b = np.asarray(b, dtype=np.int64)
-    return Lines(*fit_many(fit, moments.table, ox, oy, a, b))
-
-
-def tls_lines(moments: Moments, a: np.ndarray, b: np.ndarray) -> Lines:
-    """Total-least-squares lines of runs ``[a, b]``; ``sse`` is the orthogonal error."""
-    return _fit(TLS, moments, a, b)
-
-
-def paper_lines(moments: Moments, a: np.ndarray, b: np.ndarray) -> Lines:
-    """Eq. 15-17 on the five sub-set means of each run; ``sse`` is eq. 14 (vertical, squared)."""
-    return _fit(PAPER, moments, a, b)
-
-
-def fit_runs(fit: str, moments: Moments, a: np.ndarray, b: np.ndarray) -> Lines:
-    """Dispatch to :func:`tls_lines` or :func:`paper_lines` by name."""
-    return _fit(FIT_CODES[fit], moments, a, b)
-
-
 MIN_INCIDENCE_WEIGHT = 0.1
-"""Floor of :class:`RunCost`'s weight ``cos^2`` of the incidence (72 deg): on a wall
+"""Floor of :func:`run_cost`'s weight ``cos^2`` of the incidence (72 deg): on a wall
 seen closer to grazing, model errors, not range noise, dominate the residuals."""
 
 
-@jit
-def inverse_square_sums(r: np.ndarray) -> np.ndarray:
+@kernel
+def inverse_square_sums(r):
     """Running sums of ``1 / r^2`` (a micrometre floor keeps one absurd range harmless)."""
     out = np.zeros(r.shape[0] + 1)
     for i in range(r.shape[0]):
@@ -291,21 +275,20 @@ def inverse_square_sums(r: np.ndarray) -> np.ndarray:
     return out
 
 
-@jit(inline=True)
-def run_cost(
-    fit: int, table: np.ndarray, ox: float, oy: float, inv_r2: np.ndarray, a: int, b: int
-) -> float:
-    """Fitting error of run ``[a, b]``; in noise units when ``inv_r2`` (running sums) is given.
+@kernel(inline=True)
+def run_cost(cost, a, b):
+    """Fitting error of run ``[a, b]``; in noise units when ``cost.inv_r2`` is given.
 
     Range noise moves a return along its beam; on a line at incidence ``beta``
     only ``cos(beta)`` of it shows as an orthogonal residual, so the error is
     divided by the mean ``cos^2(beta_i) = (rho / r_i)^2`` of the run's points.
     An empty ``inv_r2`` gives the plain error.
     """
-    if fit == PAPER:
-        rho, _, sse = paper_run(table, ox, oy, a, b)
+    if cost.fit == PAPER:
+        rho, _, sse = paper_run(cost.moments, a, b)
     else:
-        _, _, rho, sse = tls_normal(table, ox, oy, a, b)
+        _, _, rho, sse = tls_normal(cost.moments, a, b)
+    inv_r2 = cost.inv_r2
     if inv_r2.shape[0] == 0 or b < a:
         return sse
     mean_inv_r2 = (inv_r2[b + 1] - inv_r2[a]) / (b - a + 1)
@@ -315,62 +298,8 @@ def run_cost(
     return sse / min(max(weight, MIN_INCIDENCE_WEIGHT), 1.0)
 
 
-@jit
-def run_costs(
-    fit: int,
-    table: np.ndarray,
-    ox: float,
-    oy: float,
-    inv_r2: np.ndarray,
-    a: np.ndarray,
-    b: np.ndarray,
-) -> np.ndarray:
-    """:func:`run_cost` of each run ``[a[k], b[k]]``."""
-    out = np.empty(a.shape[0])
-    for k in range(a.shape[0]):
-        out[k] = run_cost(fit, table, ox, oy, inv_r2, a[k], b[k])
-    return out
-
-
-class RunCost:
-    """Fitting error of runs ``[a, b]``, optionally in units of their expected noise.
-
-    With ``r`` given, each run's error is divided by the mean ``cos^2`` of the
-    incidence of its points (see :func:`run_cost`), so one radial noise level
-    serves walls seen head-on and slanted alike. Without ``r`` it is the plain
-    error of the fit.
-    """
-
-    __slots__ = ("fit", "inv_r2", "moments")
-
-    def __init__(self, moments: Moments, fit: str, r: np.ndarray | None = None) -> None:
-        self.moments = moments
-        self.fit = fit
-        self.inv_r2 = (
-            np.zeros(0) if r is None else inverse_square_sums(np.asarray(r, dtype=np.float64))
-        )
-
-    def many(self, *runs: tuple[np.ndarray, np.ndarray]) -> list[np.ndarray]:
-        """The cost of several sets of runs in one call."""
-        sizes = [len(a) for a, _ in runs]
-        joined = self(np.concatenate([a for a, _ in runs]), np.concatenate([b for _, b in runs]))
-        return np.split(joined, np.cumsum(sizes)[:-1])
-
-    def __call__(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        ox, oy = self.moments.origin
-        return run_costs(
-            FIT_CODES[self.fit],
-            self.moments.table,
-            ox,
-            oy,
-            self.inv_r2,
-            np.asarray(a, dtype=np.int64),
-            np.asarray(b, dtype=np.int64),
-        )
-
-
-@jit
-def run_labels(a: np.ndarray, b: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+@kernel
+def run_labels(a, b, n):
     """Positions covered by runs ``[a, b]`` and the run number of each (runs may overlap)."""
     total = 0
     for k in range(a.shape[0]):
@@ -386,35 +315,9 @@ def run_labels(a: np.ndarray, b: np.ndarray, n: int) -> tuple[np.ndarray, np.nda
     return position, run
 
 
-@jit
-def point_residuals(
-    x: np.ndarray,
-    y: np.ndarray,
-    rho: np.ndarray,
-    alpha: np.ndarray,
-    position: np.ndarray,
-    run: np.ndarray,
-) -> np.ndarray:
-    """Signed orthogonal distance of each labelled point to its run's line."""
-    cos_a, sin_a = np.cos(alpha), np.sin(alpha)
-    out = np.empty(position.shape[0])
-    for i in range(position.shape[0]):
-        p, k = position[i], run[i]
-        out[i] = x[p] * cos_a[k] + y[p] * sin_a[k] - rho[k]
-    return out
-
-
-def line_covariances(
-    x: np.ndarray,
-    y: np.ndarray,
-    r: np.ndarray,
-    rho: np.ndarray,
-    alpha: np.ndarray,
-    position: np.ndarray,
-    run: np.ndarray,
-    range_sigma: float,
-) -> np.ndarray:
-    """Covariance of ``(rho, alpha)`` of each run, propagated from range noise.
+@kernel
+def run_covariances(returns, rho, alpha, a, b, range_sigma):
+    """Covariance of ``(rho, alpha)`` of the line of each run ``[a, b]``, shape (runs, 2, 2).
 
     First-order propagation for the orthogonal fit: a range error ``e`` on a beam
     at incidence ``cos(theta - alpha) = rho / r`` moves the point ``e rho / r``
@@ -423,22 +326,8 @@ def line_covariances(
     ``d rho = mean(e') + t0 d alpha`` (after [2]_). Degenerate runs (two
     points, a paper fit without slope) give inf or NaN entries, not errors.
     """
-    with np.errstate(all="ignore"):
-        return covariances(
-            np.asarray(x, dtype=np.float64),
-            np.asarray(y, dtype=np.float64),
-            np.asarray(r, dtype=np.float64),
-            np.asarray(rho, dtype=np.float64),
-            np.asarray(alpha, dtype=np.float64),
-            np.asarray(position, dtype=np.int64),
-            np.asarray(run, dtype=np.int64),
-            float(range_sigma),
-        )
-
-
-@jit
-def covariances(x, y, r, rho, alpha, position, run, range_sigma):
-    """The kernel of :func:`line_covariances`: an array of shape (runs, 2, 2)."""
+    _, r, x, y = returns
+    position, run = run_labels(a, b, x.shape[0])
     runs = rho.shape[0]
     cos_a, sin_a = np.cos(alpha), np.sin(alpha)
     count = np.zeros(runs)

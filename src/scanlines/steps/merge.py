@@ -1,13 +1,24 @@
-"""Refining a segmentation: merge collinear neighbours, split on a residual bound.
+"""Merging neighbouring runs whose lines agree.
 
-``merge_collinear`` joins two neighbouring segments of one cluster when the
-joined fit explains the points as well, by the same criterion the sweep uses:
-``(SSE_joined - SSE_1 - SSE_2) / sigma^2 < penalty * ln(n)``. It undoes cuts at
-noise peaks that a single global threshold lets through.
+``merge_by_criterion``  joins two neighbouring runs of one cluster when the joined fit
+                        explains the points as well, by the criterion the threshold
+                        sweep uses: ``(SSE_joined - SSE_1 - SSE_2) / sigma^2 < penalty ln(n)``.
+                        It undoes cuts at noise peaks that a single global threshold
+                        lets through (the adaptive method).
+``merge_by_chi_square`` joins neighbouring runs of one group whose lines agree within
+                        a chi-square bound on ``(rho, alpha)``, with covariances
+                        propagated from the range noise and the angle difference wrapped
+                        to ``(-pi, pi]``, as the merge of split-and-merge [1]_ [2]_.
 
-``split_by_residual`` enforces a hard bound: while a point of a segment lies
-farther than ``max_residual`` from its line, the segment is cut at its worst
-point (as iterative end-point fit does) and that point is left out of both parts.
+Both are greedy: the best pair first, refitted, until no pair passes.
+
+References
+----------
+.. [1] V. Nguyen, A. Martinelli, N. Tomatis and R. Siegwart, "A comparison of line
+   extraction algorithms using 2D laser rangefinder for indoor mobile robotics",
+   IEEE/RSJ IROS 2005, 1929-1934.
+.. [2] K. O. Arras and R. Siegwart, "Feature extraction and scene interpretation
+   for map-based navigation and map building", SPIE Mobile Robotics XII, 1997.
 """
 
 from __future__ import annotations
@@ -16,28 +27,29 @@ import math
 
 import numpy as np
 
-from scanlines._jit import jit
-from scanlines.steps.fit import FIT_CODES, Moments, RunCost, fit_run, run_cost
+from scanlines._jit import kernel
+from scanlines.steps.fit import TLS, fit_many, hesse_difference, run_cost, run_covariances, tls_run
 
-__all__ = ["merge_collinear", "split_by_residual"]
+__all__ = ["chi_square", "merge_by_chi_square", "merge_by_criterion", "pair_chi_squares"]
 
 
-@jit
-def merge_runs(fit, table, ox, oy, inv_r2, a, b, cluster, segment_cost: float):
-    """Kernel of :func:`merge_collinear` (``segment_cost`` in the cost's units).
+@kernel
+def merge_by_criterion(cost, a, b, cluster, segment_cost):
+    """Greedily merge the neighbour pair that lowers the criterion most, until none does.
 
-    The costs of the parts and of each joined pair are kept between rounds;
-    a merge changes only the pairs next to it.
+    ``cost`` is a :class:`~scanlines.steps.fit.RunCost`, ``segment_cost`` the charge
+    of one segment in its units. The costs of the parts and of each joined pair are
+    kept between rounds; a merge changes only the pairs next to it.
     """
     a, b, cluster = a.copy(), b.copy(), cluster.copy()
     m = a.shape[0]
     part = np.empty(m)
     for k in range(m):
-        part[k] = run_cost(fit, table, ox, oy, inv_r2, a[k], b[k])
+        part[k] = run_cost(cost, a[k], b[k])
     joined = np.full(max(m - 1, 0), math.nan)
     for k in range(m - 1):
         if cluster[k] == cluster[k + 1]:
-            joined[k] = run_cost(fit, table, ox, oy, inv_r2, a[k], b[k + 1])
+            joined[k] = run_cost(cost, a[k], b[k + 1])
     while m >= 2:
         best, best_change = -1, math.inf
         for k in range(m - 1):
@@ -57,99 +69,69 @@ def merge_runs(fit, table, ox, oy, inv_r2, a, b, cluster, segment_cost: float):
         for k in (best - 1, best):
             if 0 <= k < m - 1:
                 same = cluster[k] == cluster[k + 1]
-                cost = run_cost(fit, table, ox, oy, inv_r2, a[k], b[k + 1])
-                joined[k] = cost if same else math.nan
+                value = run_cost(cost, a[k], b[k + 1])
+                joined[k] = value if same else math.nan
     return a[:m], b[:m], cluster[:m]
 
 
-def merge_collinear(
-    cost: RunCost,
-    a: np.ndarray,
-    b: np.ndarray,
-    cluster: np.ndarray,
-    *,
-    sigma: float,
-    penalty: float,
-    n_points: int,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Greedily merge the neighbour pair that lowers the criterion most, until none does."""
-    ox, oy = cost.moments.origin
-    return merge_runs(
-        FIT_CODES[cost.fit],
-        cost.moments.table,
-        ox,
-        oy,
-        cost.inv_r2,
-        np.asarray(a, dtype=np.int64),
-        np.asarray(b, dtype=np.int64),
-        np.asarray(cluster, dtype=np.int64),
-        penalty * math.log(max(n_points, 2)) * sigma * sigma,
-    )
+@kernel(inline=True)
+def chi_square(rho_1, alpha_1, rho_2, alpha_2, covariance_1, covariance_2):
+    """``dL^T (P_1 + P_2)^-1 dL`` of two lines; NaN where the sum is singular."""
+    d_rho, d_alpha = hesse_difference(rho_1, alpha_1, rho_2, alpha_2)
+    p = covariance_1[0, 0] + covariance_2[0, 0]
+    q = covariance_1[0, 1] + covariance_2[0, 1]
+    s = covariance_1[1, 1] + covariance_2[1, 1]
+    det = p * s - q * q
+    if not det > 0.0:  # degenerate runs carry inf/NaN covariances
+        return math.nan
+    return (s * d_rho * d_rho - 2.0 * q * d_rho * d_alpha + p * d_alpha * d_alpha) / det
 
 
-@jit
-def split_runs(x, y, fit, table, ox, oy, a, b, cluster, max_residual: float, min_points: int):
-    """Kernel of :func:`split_by_residual`: each run is split recursively, left part first."""
-    out_a = np.empty(x.shape[0] + 1, dtype=np.int64)
-    out_b = np.empty(x.shape[0] + 1, dtype=np.int64)
-    out_cluster = np.empty(x.shape[0] + 1, dtype=np.int64)
-    count = 0
-    stack_a = np.empty(x.shape[0] + 1, dtype=np.int64)
-    stack_b = np.empty(x.shape[0] + 1, dtype=np.int64)
-    for k in range(a.shape[0]):
-        top = 0
-        stack_a[0], stack_b[0] = a[k], b[k]
-        top = 1
-        while top:
-            top -= 1
-            lo, hi = stack_a[top], stack_b[top]
-            if hi - lo + 1 < max(min_points, 1):
-                continue
-            rho, alpha, _ = fit_run(fit, table, ox, oy, lo, hi)
-            c, s = math.cos(alpha), math.sin(alpha)
-            worst, worst_at = -1.0, -1
-            for p in range(lo, hi + 1):
-                distance = abs(x[p] * c + y[p] * s - rho)
-                if distance > worst:  # NaN (no line) never counts
-                    worst, worst_at = distance, p
-            if worst > max_residual:
-                stack_a[top], stack_b[top] = worst_at + 1, hi  # right part after the left
-                stack_a[top + 1], stack_b[top + 1] = lo, worst_at - 1
-                top += 2
-                continue
-            out_a[count], out_b[count], out_cluster[count] = lo, hi, cluster[k]
-            count += 1
-    return out_a[:count], out_b[:count], out_cluster[:count]
+@kernel
+def pair_chi_squares(rho, alpha, covariance, first, second):
+    """:func:`chi_square` of the line pairs ``(first[i], second[i])``."""
+    out = np.empty(first.shape[0])
+    for i in range(first.shape[0]):
+        j, k = first[i], second[i]
+        out[i] = chi_square(rho[j], alpha[j], rho[k], alpha[k], covariance[j], covariance[k])
+    return out
 
 
-def split_by_residual(
-    x: np.ndarray,
-    y: np.ndarray,
-    moments: Moments,
-    fit: str,
-    a: np.ndarray,
-    b: np.ndarray,
-    cluster: np.ndarray,
-    *,
-    max_residual: float,
-    min_points: int,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Cut segments at their worst point until every point is within ``max_residual``.
+@kernel
+def merge_by_chi_square(returns, moments, a, b, group, range_sigma, threshold):
+    """Merge neighbouring runs of one group while their lines pass the chi-square test.
 
-    Parts shorter than ``min_points`` are dropped. Terminates because every cut
-    removes a point.
+    The pair with the smallest chi-square below ``threshold`` is merged (the runs
+    and everything between them), refitted, and the test repeated. Returns new
+    ``a, b, group`` arrays.
     """
-    ox, oy = moments.origin
-    return split_runs(
-        np.asarray(x, dtype=np.float64),
-        np.asarray(y, dtype=np.float64),
-        FIT_CODES[fit],
-        moments.table,
-        ox,
-        oy,
-        np.asarray(a, dtype=np.int64),
-        np.asarray(b, dtype=np.int64),
-        np.asarray(cluster, dtype=np.int64),
-        float(max_residual),
-        int(min_points),
-    )
+    a, b, group = a.copy(), b.copy(), group.copy()
+    m = a.shape[0]
+    rho, alpha, _ = fit_many(TLS, moments, a, b)
+    covariance = run_covariances(returns, rho, alpha, a, b, range_sigma)
+    while m >= 2:
+        best, best_value = -1, math.inf
+        for k in range(m - 1):
+            if group[k] != group[k + 1]:
+                continue
+            value = chi_square(
+                rho[k], alpha[k], rho[k + 1], alpha[k + 1], covariance[k], covariance[k + 1]
+            )
+            if value != value:
+                value = math.inf
+            if best < 0 or value < best_value:
+                best, best_value = k, value
+        if best < 0 or not best_value < threshold:
+            break
+        b[best] = b[best + 1]
+        for k in range(best + 1, m - 1):  # delete run best + 1
+            a[k], b[k], group[k] = a[k + 1], b[k + 1], group[k + 1]
+            rho[k], alpha[k], covariance[k] = rho[k + 1], alpha[k + 1], covariance[k + 1]
+        m -= 1
+        rho[best], alpha[best], _ = tls_run(moments, a[best], b[best])
+        one_a, one_b = np.full(1, a[best]), np.full(1, b[best])
+        one_rho, one_alpha = np.full(1, rho[best]), np.full(1, alpha[best])
+        covariance[best] = run_covariances(returns, one_rho, one_alpha, one_a, one_b, range_sigma)[
+            0
+        ]
+    return a[:m], b[:m], group[:m]

@@ -1,0 +1,266 @@
+"""What every method is: the :class:`Method` protocol and its two kinds of implementation.
+
+A method is a class with a ``name``, its ``parameters`` (name ->
+:class:`~scanlines.params.Param`), named ``presets`` and :meth:`Method.extract`, which
+goes from one scan's arrays to an :class:`~scanlines.Extraction`. An instance holds
+resolved, validated parameters; :class:`~scanlines.Extractor` builds it once and calls
+it per scan.
+
+:class:`CompiledMethod`
+    The whole method is one kernel (adaptive, iepf, pdbs, split_merge). Its parameters
+    become a frozen dataclass of typed settings (:attr:`CompiledMethod.Settings`),
+    passed to the kernel as a one-element numpy record whose fields the kernel reads
+    by name.
+:class:`ClusteredMethod`
+    The method's own search is Python over numpy (line tracking, line regression,
+    RANSAC, Hough); clustering before it and the events and assembly after it are the
+    shared kernels, so that no step exists twice.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from typing import Any, ClassVar
+
+import numpy as np
+
+from scanlines._jit import COMPILED, kernel
+from scanlines.extraction import Extraction
+from scanlines.params import Param
+from scanlines.scan import is_full_circle
+from scanlines.steps.assemble import Output, empty_result, finish, to_extraction
+from scanlines.steps.breakpoints import NO_RULE, RULE_CODES, RuleSpec, scan_rule
+from scanlines.steps.clusters import cluster_returns
+from scanlines.steps.fit import prefix_moments
+from scanlines.steps.returns import Returns, beam_gaps, valid_returns, without
+
+__all__ = [
+    "NO_CLUSTERING",
+    "ClusteredMethod",
+    "CompiledMethod",
+    "Method",
+    "as_record",
+    "cluster_scan",
+    "output_of",
+    "rule_spec_of",
+]
+
+NO_CLUSTERING = "none"
+"""The ``breakpoints`` value of a method that works on the whole scan."""
+
+RING_WINDOW = 5
+"""Points fitted on each side of the turn angle that anchors a ring (a full circle
+without any gap is cut at its strongest corner)."""
+
+
+class Method:
+    """An extractor configured with resolved parameters (see the module docstring).
+
+    A subclass sets ``name``, ``parameters`` and (optionally) ``presets`` and
+    implements :meth:`extract`.
+    """
+
+    name: ClassVar[str] = ""
+    parameters: ClassVar[Mapping[str, Param]] = {}
+    presets: ClassVar[Mapping[str, Mapping[str, Any]]] = {}
+
+    def __init__(self, params: Mapping[str, Any]) -> None:
+        self.params = params
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return type(self), (dict(self.params),)
+
+    def extract(
+        self,
+        ranges: np.ndarray,
+        valid: np.ndarray,
+        cos: np.ndarray,
+        sin: np.ndarray,
+        step: float,
+        angle_min: float,
+    ) -> Extraction:
+        """Features of one scan.
+
+        ``ranges`` and the mask ``valid`` of beams with a return (float64 and bool,
+        C-contiguous), ``cos, sin`` the bearing tables of the beams relative to beam
+        0, ``step`` the angular increment (its sign is ignored), ``angle_min`` the
+        bearing of beam 0 (results are in the sensor frame).
+        """
+        raise NotImplementedError
+
+    def extract_many(
+        self,
+        stack: np.ndarray,
+        valid: np.ndarray,
+        cos: np.ndarray,
+        sin: np.ndarray,
+        step: float,
+        angle_min: float,
+    ) -> list[Extraction]:
+        """:meth:`extract` of each row of a stack of scans of one sensor."""
+        return [
+            self.extract(row, mask, cos, sin, step, angle_min)
+            for row, mask in zip(stack, valid, strict=True)
+        ]
+
+
+_FIELD_TYPES = {"bool": np.bool_, "int": np.int64, "float": np.float64}
+
+
+def as_record(settings: Any) -> np.ndarray:
+    """A frozen dataclass of ``bool``, ``int`` and ``float`` fields as a one-element numpy
+    record array, the form a kernel takes (numba reads its fields by name, and the
+    dispatcher types it as fast as a plain array)."""
+    fields = dataclasses.fields(settings)
+    dtype = np.dtype([(field.name, _FIELD_TYPES[str(field.type)]) for field in fields])
+    record = np.zeros(1, dtype=dtype)
+    for field in fields:
+        record[field.name] = getattr(settings, field.name)
+    # Plain Python (no numba) reads fields as attributes of a recarray's elements; numba
+    # types a recarray more slowly than the plain array it reads the same way.
+    return record if COMPILED else record.view(np.recarray)
+
+
+class CompiledMethod(Method):
+    """A method that is one kernel from a scan's arrays to the result arrays.
+
+    A subclass sets ``Settings`` (a frozen dataclass), :meth:`settings_of` (resolved
+    parameters -> settings) and ``kernel(ranges, valid, cos, sin, step, full_circle,
+    angle_min, *arguments)`` as a ``staticmethod``; :meth:`kernel_arguments` returns
+    the kernel's last arguments, by default the settings record.
+    """
+
+    Settings: ClassVar[type]
+
+    def __init__(self, params: Mapping[str, Any]) -> None:
+        super().__init__(params)
+        self.settings = self.settings_of(params)
+        self.arguments = self.kernel_arguments()
+
+    @classmethod
+    def settings_of(cls, params: Mapping[str, Any]) -> Any:
+        raise NotImplementedError
+
+    def kernel_arguments(self) -> tuple[Any, ...]:
+        return (as_record(self.settings),)
+
+    @staticmethod
+    def kernel(*args: Any) -> tuple[np.ndarray, ...]:
+        raise NotImplementedError
+
+    def extract(self, ranges, valid, cos, sin, step, angle_min) -> Extraction:
+        full_circle = is_full_circle(ranges.shape[0], step)
+        arrays = self.kernel(
+            ranges, valid, cos, sin, abs(step), full_circle, angle_min, *self.arguments
+        )
+        return to_extraction(arrays, self.name, self.params)
+
+    def extract_many(self, stack, valid, cos, sin, step, angle_min) -> list[Extraction]:
+        full_circle = is_full_circle(stack.shape[1], step)
+        kernel, arguments, step = self.kernel, self.arguments, abs(step)
+        return [
+            to_extraction(
+                kernel(row, mask, cos, sin, step, full_circle, angle_min, *arguments),
+                self.name,
+                self.params,
+            )
+            for row, mask in zip(stack, valid, strict=True)
+        ]
+
+
+def rule_spec_of(params: Mapping[str, Any]) -> RuleSpec:
+    """The clustering rule of a method's resolved parameters (``breakpoints="none"``:
+    :data:`~scanlines.steps.breakpoints.NO_RULE`)."""
+    name = params["breakpoints"]
+    return RuleSpec(
+        NO_RULE if name == NO_CLUSTERING else RULE_CODES[name],
+        params["k"],
+        params.get("noise_k", 0.0),
+        params.get("line_k", 0.0),
+        math.radians(params["abd_lambda"]),
+        params["pdbs_c0"],
+        params["jump_distance"],
+    )
+
+
+def output_of(params: Mapping[str, Any]) -> Output:
+    """The :class:`~scanlines.steps.assemble.Output` of a method's resolved parameters."""
+    return Output(
+        params["min_points"],
+        params["min_length"],
+        params["range_sigma"],
+        params["corner_beams"],
+        params["corner_distance"],
+        math.radians(params["corner_angle"]),
+    )
+
+
+class ClusteredMethod(Method):
+    """A method whose own search (:meth:`find_runs`) is Python over numpy.
+
+    :meth:`extract` clusters the scan's returns by the method's ``breakpoints`` rule
+    (``"none"``: one cluster of every return), calls :meth:`find_runs`, and finishes
+    with the shared kernels: small runs dropped, corners (and, without clustering,
+    breakpoints) between consecutive segments, lines fitted and assembled.
+    """
+
+    def __init__(self, params: Mapping[str, Any]) -> None:
+        super().__init__(params)
+        self.rule = rule_spec_of(params)
+        self.output = output_of(params)
+
+    def find_runs(
+        self, returns: Returns, gap: np.ndarray, start: np.ndarray, end: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Segments of the clusters ``[start[c], end[c]]`` of ``returns`` (``gap``: beams
+        between consecutive positions).
+
+        Returns ``a, b, group, dropped``: the runs ``[a, b]`` (positions, in order of
+        ``a``), the cluster of each, and the positions to drop as outliers (none of
+        them a run's first or last position).
+        """
+        raise NotImplementedError
+
+    def extract(self, ranges, valid, cos, sin, step, angle_min) -> Extraction:
+        n_beams, step = ranges.shape[0], abs(step)
+        full_circle = is_full_circle(n_beams, step)
+        returns = valid_returns(ranges, valid, cos, sin)
+        none = np.zeros(0, dtype=np.int64)
+        if returns.index.shape[0] == 0:
+            return to_extraction(empty_result(none, none), self.name, self.params)
+        returns, start, end, breakpoints, ring = cluster_scan(
+            returns, n_beams, step, full_circle, self.rule
+        )
+        gap = beam_gaps(returns.index, n_beams)
+        a, b, group, dropped = (
+            np.ascontiguousarray(v, dtype=np.int64)
+            for v in self.find_runs(returns, gap, start, end)
+        )
+        outliers = returns.index[dropped]
+        if dropped.size:
+            returns, a, b = _without_positions(returns, a, b, dropped)
+        arrays = finish(
+            returns, n_beams, full_circle, prefix_moments(returns.x, returns.y), (a, b, group),
+            (self.rule.kind != NO_RULE, ring, breakpoints), outliers, angle_min, self.output,
+        )  # fmt: skip
+        return to_extraction(arrays, self.name, self.params)
+
+
+def _without_positions(returns: Returns, a: np.ndarray, b: np.ndarray, drop: np.ndarray):
+    """The returns without positions ``drop``, and the runs ``[a, b]`` renumbered."""
+    mask = np.zeros(returns.index.shape[0], dtype=bool)
+    mask[drop] = True
+    new_position = np.cumsum(~mask) - 1
+    return without(returns, mask), new_position[a], new_position[b]
+
+
+@kernel
+def cluster_scan(returns, n_beams, step, full_circle, spec):
+    """:func:`~scanlines.steps.clusters.cluster_returns` by the rule of the
+    :class:`~scanlines.steps.breakpoints.RuleSpec` ``spec``, its noise from the scan."""
+    rule = scan_rule(spec, returns.r, beam_gaps(returns.index, n_beams))
+    no_flags = np.zeros(0, dtype=np.bool_)
+    whole = spec.kind == NO_RULE
+    return cluster_returns(returns, n_beams, step, full_circle, rule, RING_WINDOW, no_flags, whole)
