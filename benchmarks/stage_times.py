@@ -17,9 +17,17 @@ import numpy as np
 
 from scanlines import Extractor
 from scanlines.methods import adaptive as ad
+from scanlines.methods.base import as_record
 from scanlines.sim import random_scene
 from scanlines.steps import fit
-from scanlines.steps.denoise import noise_from_ranges
+from scanlines.steps.assemble import assemble
+from scanlines.steps.clusters import cluster_returns
+from scanlines.steps.corners import turn_window
+from scanlines.steps.denoise import denoise
+from scanlines.steps.events import junction_events
+from scanlines.steps.noise import range_noise
+from scanlines.steps.returns import beam_gaps, valid_returns
+from scanlines.steps.split import cut_at, refine_cuts
 
 
 def best_us(call, repeats: int) -> float:
@@ -41,59 +49,70 @@ def main() -> None:
     args = parser.parse_args()
     scan = random_scene(args.seed, args.sensor).scan(args.seed).scan
     extractor = Extractor()
-    s, grid = ad.settings(extractor.params)
-    cos, sin = extractor._bearings(len(scan), scan.angle_increment)
+    settings = ad.AdaptiveSettings.of(extractor.params)
+    record, grid = as_record(settings), np.zeros(0)
+    s = record[0]
+    local = scan.angle_increment * np.arange(len(scan))
+    cos, sin = np.cos(local), np.sin(local)
     step, n_beams = abs(scan.angle_increment), len(scan)
-    index = np.flatnonzero(scan.valid)
-    r = scan.ranges[index]
-    x, y = r * cos[index], r * sin[index]
-    gap = ad._gaps(index, n_beams)
-    first, last = np.zeros(1, np.int64), np.full(1, r.size - 1)
-    sigma = noise_from_ranges(r, gap, first, last)
-    rule = ad._rule(s, sigma)
-    window = ad._slope_window(x, y, index, sigma, s[ad.SLOPE_WINDOW])
+    returns = valid_returns(scan.ranges, scan.valid, cos, sin)
+    gap = beam_gaps(returns.index, n_beams)
+    sigma = range_noise(returns.r, gap)
+    rule = ad.breakpoint_rule(s, returns, gap, step, sigma)
+    margin = settings.noise_k * math.sqrt(2.0) * sigma
+    window = turn_window(returns.x, returns.y, returns.index, sigma)
     no_breaks = np.zeros(0, np.bool_)
-    clustered = ad._cluster_scan(index, r, x, y, n_beams, step, False, rule, window, no_breaks)
-    start, end, breakpoints = clustered[4], clustered[5], clustered[6]
-    table, ox, oy = fit.prefix_moments(x, y)
-    inv_r2 = fit.inverse_square_sums(r)
-    scores = ad._scores(x, y, r, index, n_beams, step, table, start, end, window, s)
-    corners, sigma2 = ad._choose_corners(table, ox, oy, inv_r2, start, end, scores, sigma, s, grid)
-    a, b, owner = ad._segments(x, y, table, ox, oy, inv_r2, start, end, corners, sigma2, s)
-    cut = ad._cut(start, end, corners, False)
+    clustered = cluster_returns(returns, n_beams, step, False, rule, window, no_breaks, False)
+    start, end, breakpoints = clustered[1], clustered[2], clustered[3]
+    moments = fit.prefix_moments(returns.x, returns.y)
+    cost = fit.RunCost(settings.fit, moments, fit.inverse_square_sums(returns.r))
+    scores = ad.corner_scores(
+        returns, n_beams, step, moments, start, end, window, settings.corner_score
+    )
+    corners, sigma2 = ad.choose_corners(cost, start, end, scores, sigma, s, grid)
+    a, b, owner = ad.segments(returns, cost, start, end, corners, sigma2, s)
+    cut = cut_at(start, end, corners, False)
     rows = {
         "whole call (Extractor)": lambda: extractor(scan),
-        "whole kernel": lambda: ad.extract_scan(
-            scan.ranges, scan.valid, cos, sin, step, False, scan.angle_min, s, grid
+        "whole kernel": lambda: ad.adaptive_scan(
+            scan.ranges, scan.valid, cos, sin, step, False, scan.angle_min, record, grid
         ),
-        "noise estimate": lambda: noise_from_ranges(r, gap, first, last),
-        "denoise (2 break passes)": lambda: ad._denoise(
-            index, r, x, y, n_beams, step, False, rule, s
+        "noise estimate": lambda: range_noise(returns.r, gap),
+        "denoise (2 break passes)": lambda: denoise(
+            returns,
+            n_beams,
+            step,
+            False,
+            rule,
+            settings.denoise,
+            settings.window,
+            settings.min_cluster_points,
+            margin,
         ),
-        "slope window (median)": lambda: ad._slope_window(x, y, index, sigma, s[ad.SLOPE_WINDOW]),
-        "clustering": lambda: ad._cluster_scan(
-            index, r, x, y, n_beams, step, False, rule, window, no_breaks
+        "turn window (median)": lambda: turn_window(returns.x, returns.y, returns.index, sigma),
+        "clustering": lambda: cluster_returns(
+            returns, n_beams, step, False, rule, window, no_breaks, False
         ),
-        "running sums": lambda: fit.prefix_moments(x, y),
-        "turn-angle scores": lambda: ad._scores(
-            x, y, r, index, n_beams, step, table, start, end, window, s
+        "running sums": lambda: fit.prefix_moments(returns.x, returns.y),
+        "turn-angle scores": lambda: ad.corner_scores(
+            returns, n_beams, step, moments, start, end, window, settings.corner_score
         ),
-        "candidates + sweep + choice": lambda: ad._choose_corners(
-            table, ox, oy, inv_r2, start, end, scores, sigma, s, grid
+        "candidates + sweep + choice": lambda: ad.choose_corners(
+            cost, start, end, scores, sigma, s, grid
         ),
-        "cut, refine, merge, split": lambda: ad._segments(
-            x, y, table, ox, oy, inv_r2, start, end, corners, sigma2, s
+        "cut, refine, merge, split": lambda: ad.segments(
+            returns, cost, start, end, corners, sigma2, s
         ),
-        "  of which: refine splits": lambda: ad._refine_splits(0, table, ox, oy, inv_r2, *cut),
-        "corner beams": lambda: ad._corner_beams(
-            x, y, index, table, ox, oy, 0, a, b, owner, False, False, sigma2
+        "  of which: refine cuts": lambda: refine_cuts(cost, *cut),
+        "corner beams": lambda: junction_events(
+            returns, settings.fit, moments, a, b, owner, False, False, sigma2
         ),
-        "assembly (fits, covariances)": lambda: ad.assemble_runs(
-            index, x, y, r, a, b, 0, table, ox, oy, 0.0, 0.01, breakpoints, corners, breakpoints
+        "assembly (fits, covariances)": lambda: assemble(
+            returns, settings.fit, moments, a, b, 0.0, 0.01, breakpoints, corners, breakpoints
         ),
     }
     print(
-        f"{args.sensor}, seed {args.seed}: {r.size} returns, {len(start)} clusters, "
+        f"{args.sensor}, seed {args.seed}: {returns.r.size} returns, {len(start)} clusters, "
         f"{len(a)} segments; best of 3 x {args.repeats} calls"
     )
     for name, call in rows.items():
