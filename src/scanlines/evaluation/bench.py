@@ -116,7 +116,7 @@ class BenchConfig:
     profile_top:
         Functions listed by the profile.
     quick:
-        Recorded in the output (set by :meth:`quick`).
+        Recorded in the output (set by :meth:`quick_config`).
     """
 
     methods: tuple[str, ...] = ()

@@ -193,6 +193,7 @@ Runner = Callable[[SceneCase], Extraction]
 
 @lru_cache(maxsize=32)
 def _runner(spec: MethodSpec) -> Runner:
+    """What ``spec`` does with a scene (one extractor per spec and process)."""
     if spec.is_truth:
         return _truth_row
     extractor = spec.extractor()
@@ -223,17 +224,11 @@ def _run_job(
     out = []
     for spec in specs:
         extraction = timed[spec.label].results[0]
+        us = int(timed[spec.label].samples_ns[0, 0]) / 1000.0
+        nonfinite = int(np.count_nonzero(~np.isfinite(extraction.lines).all(axis=1)))
+        found = score(extraction, case.truth, case.scan, tol)
         out.append(
-            ScanRecord(
-                case.sensor,
-                case.index,
-                case.seed,
-                case.kind,
-                spec,
-                int(timed[spec.label].samples_ns[0, 0]) / 1000.0,
-                int(np.count_nonzero(~np.isfinite(extraction.lines).all(axis=1))),
-                score(extraction, case.truth, case.scan, tol),
-            )
+            ScanRecord(case.sensor, case.index, case.seed, case.kind, spec, us, nonfinite, found)
         )
     return out
 

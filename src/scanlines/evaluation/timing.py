@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import gc
 import time
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Hashable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, Generic, TypeVar
@@ -39,6 +39,7 @@ __all__ = ["REFERENCE", "Failure", "Timed", "time_calls"]
 REFERENCE = "iepf"
 """The method time ratios refer to (the paper's comparison); below 1 is faster."""
 
+Key = TypeVar("Key", bound=Hashable)
 Item = TypeVar("Item")
 Result = TypeVar("Result")
 
@@ -84,19 +85,19 @@ class Timed(Generic[Result]):
 
 
 def time_calls(
-    calls: Mapping[str, Callable[[Item], Result]],
+    calls: Mapping[Key, Callable[[Item], Result]],
     items: Sequence[Item],
     passes: int = 1,
     *,
     catch: bool = False,
-    after_pass: Callable[[str], None] | None = None,
-) -> dict[str, Timed[Result]]:
+    after_pass: Callable[[Key], None] | None = None,
+) -> dict[Key, Timed[Result]]:
     """Time every callable on every item by the rule of the module docstring.
 
     Parameters
     ----------
     calls:
-        ``name -> callable(item)``, timed in this order within each pass.
+        ``key -> callable(item)``, timed in this order within each pass.
     items:
         What the callables are called on (scans, scenes).
     passes:
@@ -105,25 +106,25 @@ def time_calls(
         Record an exception as the callable's :attr:`Timed.failure` and stop calling it,
         instead of raising it.
     after_pass:
-        Called with the name after each pass of each callable (a failed one included).
+        Called with the key after each pass of each callable (a failed one included).
     """
-    results: dict[str, list[Any]] = {name: [] for name in calls}
-    samples = {name: np.zeros((passes, len(items)), np.int64) for name in calls}
-    failures: dict[str, Failure] = {}
+    results: dict[Key, list[Any]] = {key: [] for key in calls}
+    samples = {key: np.zeros((passes, len(items)), np.int64) for key in calls}
+    failures: dict[Key, Failure] = {}
     with _collector_paused():
         for p in range(passes):
-            for name, call in calls.items():
-                if name not in failures:
-                    kept = results[name] if p == 0 else None
-                    failed = _one_pass(call, items, samples[name][p], kept)
+            for key, call in calls.items():
+                if key not in failures:
+                    kept = results[key] if p == 0 else None
+                    failed = _one_pass(call, items, samples[key][p], kept)
                     if failed is not None:
                         index, error = failed
                         if not catch:
                             raise error
-                        failures[name] = Failure(p, index, error)
+                        failures[key] = Failure(p, index, error)
                 if after_pass is not None:
-                    after_pass(name)
-    return {name: Timed(results[name], samples[name], failures.get(name)) for name in calls}
+                    after_pass(key)
+    return {key: Timed(results[key], samples[key], failures.get(key)) for key in calls}
 
 
 def _one_pass(
