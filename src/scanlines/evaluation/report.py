@@ -1,8 +1,7 @@
 """Writing results down: markdown tables, number formats, JSON values, CSV files.
 
 Every report of :mod:`scanlines.evaluation` (the ``eval`` outputs, ``RESULTS.md``,
-``PERFORMANCE.md``) and the command line tables use these, so a number looks the same
-wherever it is printed:
+``PERFORMANCE.md``) and the command line tables write through this one module:
 
 * :func:`number` formats a value, or gives ``-`` when there is none (``None``, NaN,
   infinite); :func:`percent` and :func:`microseconds` are its two special cases;
@@ -26,6 +25,7 @@ from typing import Any
 import numpy as np
 
 __all__ = [
+    "MISSING",
     "TableData",
     "command_line",
     "jsonable",
