@@ -114,20 +114,20 @@ def _scene_set(
 ) -> SceneSet | None:
     """The scene set to evaluate on: loaded, generated and saved, or none (generate)."""
     from scanlines.errors import ParameterError
-    from scanlines.evaluation import scenes as sc
+    from scanlines.evaluation.scenes import DEFAULT_SCENES, generate_scene_set, load_scene_set
 
     if scenes is not None:
         if save_scenes is not None:
             raise ParameterError("--scenes and --save-scenes exclude each other")
         if seed is not None or noise is not None:
             raise ParameterError("--seed and --noise describe generated scenes, not --scenes")
-        return sc.load_scene_set(scenes)
+        return load_scene_set(scenes)
     if save_scenes is None:
         return None
     with _progress("generating scenes") as advance:
-        generated = sc.generate_scene_set(
+        generated = generate_scene_set(
             sensors,
-            sc.DEFAULT_SCENES if n is None else n,
+            DEFAULT_SCENES if n is None else n,
             0 if seed is None else seed,
             noise or "realistic",
             on_scene=advance,
