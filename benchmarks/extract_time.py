@@ -4,9 +4,11 @@
     python benchmarks/extract_time.py [--scenes 50] [--repeats 20]
 
 481 beams: the SICK TiM571 preset (160 deg at 1/3 deg, the paper's sensor). 181 beams: the
-SICK LMS 1 deg preset widened to 181 beams (-90..+90 deg). Realistic noise, seeded scenes; each
-scan is extracted ``repeats`` times after a warm-up and the median of all calls is printed.
-Speed is measured here, never asserted in tests.
+SICK LMS 1 deg preset widened to 181 beams (-90..+90 deg). Realistic noise, seeded scenes;
+``repeats`` timed passes over the scans by the project's one timing rule
+(``scanlines.evaluation.timing``: every timed call right after an untimed call on the same
+scan), and the median of all timed calls is printed. Speed is measured here, never asserted in
+tests.
 """
 
 from __future__ import annotations
@@ -14,10 +16,11 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import math
-import statistics
-import time
+
+import numpy as np
 
 from scanlines import Extractor
+from scanlines.evaluation.timing import time_calls
 from scanlines.sim import get_sensor, random_scene
 
 
@@ -27,29 +30,18 @@ def sensors():
 
 
 def median_us(extractor: Extractor, scans, repeats: int) -> float:
-    for scan in scans[:5]:
-        extractor(scan)
-    samples = []
-    for scan in scans:
-        for _ in range(repeats):
-            start = time.perf_counter()
-            extractor(scan)
-            samples.append(time.perf_counter() - start)
-    return 1e6 * statistics.median(samples)
+    """Median time of one call, over ``repeats`` passes over ``scans``."""
+    timed = time_calls({"call": extractor}, scans, repeats)["call"]
+    return float(np.median(timed.samples_ns)) / 1000.0
 
 
 def batch_us(extractor: Extractor, scans, repeats: int) -> float:
     """Median over repeats of one ``batch`` call over all scans, per scan."""
     first = scans[0]
-    stack = [s.ranges for s in scans]
+    stack = np.stack([s.ranges for s in scans])
     args = (first.angle_min, first.angle_increment, first.range_min, first.range_max)
-    extractor.batch(stack[:5], *args)
-    samples = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        extractor.batch(stack, *args)
-        samples.append((time.perf_counter() - start) / len(scans))
-    return 1e6 * statistics.median(samples)
+    timed = time_calls({"batch": lambda rows: extractor.batch(rows, *args)}, [stack], repeats)
+    return float(np.median(timed["batch"].samples_ns)) / 1000.0 / len(scans)
 
 
 def main() -> None:

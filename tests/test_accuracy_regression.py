@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import pytest
 
-from scanlines.evaluate import evaluate, parse_specs
+from scanlines.evaluation.evaluate import evaluate
+from scanlines.evaluation.specs import parse_specs
 
 # sensor: (bp F1, corner F1, TruePos, FalsePos ceiling); measured 2026-11-25:
 # lms_1deg 0.942 0.877 0.975 0.045 | lms_05deg 0.947 0.867 0.918 0.089

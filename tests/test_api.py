@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import ast
 import importlib
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -120,15 +122,53 @@ def test_paper_preset_exists():
     assert "paper" in scanlines.method_info("adaptive")["presets"]
 
 
+def _module_imports(path, name: str, package: str) -> set[str]:
+    """The ``scanlines`` modules a module imports at its top level."""
+    found = set()
+    for node in ast.parse(path.read_text()).body:
+        if isinstance(node, ast.Import):
+            found.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module:
+            base = node.module if node.level == 0 else package
+            found.add(base)
+            found.update(f"{base}.{alias.name}" for alias in node.names)
+    return {module for module in found if module.startswith("scanlines")}
+
+
 def test_modules_import_without_cycles():
-    for name in ("scanlines.steps.select", "scanlines.methods.adaptive", "scanlines.extractor"):
+    """The graph of top-level imports between the package's modules has no cycle."""
+    root = Path(scanlines.__file__).parent
+    modules = {}
+    for path in root.rglob("*.py"):
+        parts = path.relative_to(root.parent).with_suffix("").parts
+        is_package = parts[-1] == "__init__"
+        name = ".".join(parts[:-1] if is_package else parts)
+        modules[name] = (path, name if is_package else name.rpartition(".")[0])
+    graph = {
+        name: sorted(_module_imports(path, name, package) & modules.keys() - {name})
+        for name, (path, package) in modules.items()
+    }
+    done: set[str] = set()
+
+    def visit(name: str, trail: tuple[str, ...]) -> None:
+        assert name not in trail, "import cycle: " + " -> ".join((*trail, name))
+        if name in done:
+            return
+        for imported in graph[name]:
+            visit(imported, (*trail, name))
+        done.add(name)
+
+    for name in graph:
+        visit(name, ())
+    assert len(done) == len(modules) > 50
+    for name in ("scanlines.steps.select", "scanlines.methods.adaptive", "scanlines.evaluation"):
         importlib.import_module(name)
 
 
 def test_plot_title_counts_features_in_words():
     matplotlib = pytest.importorskip("matplotlib")
     matplotlib.use("Agg")
-    from scanlines.plot import plot_extraction
+    from scanlines.viz.scans import plot_extraction
 
     scan = scan_of([((2.0, -3.0), (2.0, 3.0))], fov_deg=90, step_deg=1.0)  # one wall
     title = plot_extraction(scan, extract(scan), title="wall").get_title()

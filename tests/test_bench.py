@@ -9,7 +9,10 @@ import sys
 import pytest
 
 import scanlines
-from scanlines import bench
+from scanlines.evaluation import bench
+from scanlines.evaluation.bench_results import SCHEMA
+from scanlines.evaluation.performance_page import render_markdown
+from scanlines.evaluation.report import microseconds
 from scanlines.methods import REGISTRY
 from scanlines.methods.iepf import Iepf
 
@@ -42,7 +45,7 @@ def test_quick_json_has_every_method_and_positive_timings(quick_run):
     out, folder = quick_run
     assert out.returncode == 0, out.stderr
     data = json.loads((folder / "out.json").read_text())
-    assert data["schema"] == bench.SCHEMA
+    assert data["schema"] == SCHEMA
     selected = list(scanlines.method_names())
     assert data["methods"] == selected
     assert data["settings"]["quick"] is True
@@ -116,7 +119,7 @@ def test_write_docs_to_docs_path(quick_run):
     # the numbers of the page are the numbers of the run
     data = json.loads((folder / "out.json").read_text())
     intel = data["datasets"][0]["results"]["iepf"]
-    assert bench._fmt_us(intel["median_us"]) in text
+    assert microseconds(intel["median_us"]) in text
     assert f"wrote {page}" in out.stdout
 
 
@@ -187,14 +190,14 @@ def test_failing_method_is_reported_not_fatal(monkeypatch):
     data = result.to_dict()
     json.dumps(data, allow_nan=False)
     assert data["datasets"][0]["results"]["boom"]["median_us"] is None
-    page = bench.render_markdown(result)
+    page = render_markdown(result)
     assert "boom on purpose" in page
     assert "| boom | error |" in page
 
 
 def test_import_needs_no_rich():
     code = (
-        "import sys, scanlines.bench; "
+        "import sys, scanlines.evaluation.bench, scanlines.evaluation.performance_page; "
         "print(sorted(m for m in sys.modules if m.startswith(('rich', 'matplotlib', 'typer'))))"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

@@ -1,4 +1,4 @@
-"""The ``truth`` row of ``scanlines.evaluate``: the true segments fitted to their own returns."""
+"""The ``truth`` row of the evaluation: the true segments fitted to their own returns."""
 
 from __future__ import annotations
 
@@ -12,16 +12,11 @@ import pytest
 
 import scanlines
 from scanlines.errors import ParameterError
-from scanlines.evaluate import (
-    TRUTH,
-    evaluate,
-    generate_scene_set,
-    make_scene,
-    parse_spec,
-    parse_specs,
-    truth_extraction,
-)
-from scanlines.metrics import score
+from scanlines.evaluation.evaluate import evaluate
+from scanlines.evaluation.metrics import score
+from scanlines.evaluation.scenes import generate_scene_set, make_scene
+from scanlines.evaluation.specs import TRUTH, parse_spec, parse_specs
+from scanlines.evaluation.truth_row import truth_extraction
 from scanlines.sim import NoiseModel, SensorSpec, World, box, simulate, wall
 
 SENSORS = ("lms_1deg", "tim571")

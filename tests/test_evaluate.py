@@ -1,4 +1,4 @@
-"""``scanlines.evaluate`` and ``scanlines eval``: specs, seeds, scene sets, outputs."""
+"""``scanlines.evaluation`` and ``scanlines eval``: specs, seeds, scene sets, outputs."""
 
 from __future__ import annotations
 
@@ -13,21 +13,15 @@ import numpy as np
 import pytest
 
 from scanlines.errors import LogFormatError, ParameterError
-from scanlines.evaluate import (
-    ALL_SENSORS,
-    MethodSpec,
-    evaluate,
-    event_f1,
+from scanlines.evaluation.evaluate import ALL_SENSORS, evaluate, event_f1, worst_scans
+from scanlines.evaluation.scenes import (
     generate_scene_set,
     load_scene_set,
     make_scene,
-    parse_spec,
-    parse_specs,
-    save_scene_set,
     scene_seed,
-    worst_scans,
 )
-from scanlines.metrics import Tolerances
+from scanlines.evaluation.scores import Tolerances
+from scanlines.evaluation.specs import MethodSpec, parse_spec, parse_specs
 
 SPECS = ("adaptive", "adaptive:paper")
 SENSORS = ("lms_1deg", "urg04lx")
@@ -215,7 +209,7 @@ def test_json_states_the_tolerances_and_has_no_nan(small_result, tmp_path):
 
 
 def test_saved_scene_set_round_trips(tmp_path):
-    path = save_scene_set(tmp_path / "set.npz", ["tim571", "lms_1deg"], 2, seed=3)
+    path = generate_scene_set(["tim571", "lms_1deg"], 2, seed=3).save(tmp_path / "set.npz")
     loaded = load_scene_set(path)
     assert loaded.sensors == ("tim571", "lms_1deg")
     assert (loaded.seed, loaded.noise, len(loaded)) == (3, "realistic", 4)
@@ -263,7 +257,7 @@ def test_not_a_scene_set(tmp_path):
 
 def test_import_needs_neither_matplotlib_nor_rich():
     code = (
-        "import sys, scanlines.evaluate; "
+        "import sys, scanlines.evaluation.evaluate, scanlines.viz.evaluation; "
         "print([m for m in sys.modules if m.split('.')[0] in ('matplotlib', 'rich')])"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

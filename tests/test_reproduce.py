@@ -10,24 +10,15 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from scanlines import Extractor, Scan
+from scanlines import Extraction, Extractor, Scan
 from scanlines.data import sample
-from scanlines.extraction import Extraction
+from scanlines.evaluation.cases import Case, line_similarity, score_case, score_labelled
+from scanlines.evaluation.experiments import PAPER_SPEED_RATIO, Headline, headline, run_dataset
+from scanlines.evaluation.metrics import accuracy_rate, environmental_similarity
+from scanlines.evaluation.results_page import verdict_similarity, verdict_speed
+from scanlines.evaluation.scores import Tolerances
+from scanlines.evaluation.specs import parse_specs
 from scanlines.io import open_log
-from scanlines.metrics import Tolerances, accuracy_rate, environmental_similarity
-from scanlines.reproduce import (
-    PAPER_SPEED_RATIO,
-    Case,
-    Headline,
-    _verdict_similarity,
-    _verdict_speed,
-    headline,
-    line_similarity,
-    parse_specs,
-    run_dataset,
-    score_case,
-    score_labelled,
-)
 
 
 @dataclass(frozen=True)
@@ -125,7 +116,7 @@ def test_bad_option_is_one_line_and_exit_2(tmp_path):
 
 def test_import_needs_no_plotting_or_console_libraries():
     code = (
-        "import sys, scanlines.reproduce; "
+        "import sys, scanlines.evaluation.reproduce; "
         "print(sorted(m for m in sys.modules if m.split('.')[0] in ('matplotlib', 'rich')))"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
@@ -262,9 +253,9 @@ def _headline(gain: float, ratio: float) -> Headline:
 
 
 def test_verdicts_say_plainly_when_a_claim_does_not_reproduce():
-    assert _verdict_speed(_headline(0, 0.25)).startswith("does not reproduce: 4.00x slower")
-    assert _verdict_speed(_headline(0, 2.0)).startswith("faster, but not 4x")
-    assert _verdict_speed(_headline(0, PAPER_SPEED_RATIO)).startswith("reproduces")
-    assert _verdict_similarity(_headline(-5.0, 1)).startswith("does not reproduce")
-    assert _verdict_similarity(_headline(3.0, 1)).startswith("same direction, smaller")
-    assert _verdict_similarity(_headline(10.0, 1)).startswith("reproduces")
+    assert verdict_speed(_headline(0, 0.25)).startswith("does not reproduce: 4.00x slower")
+    assert verdict_speed(_headline(0, 2.0)).startswith("faster, but not 4x")
+    assert verdict_speed(_headline(0, PAPER_SPEED_RATIO)).startswith("reproduces")
+    assert verdict_similarity(_headline(-5.0, 1)).startswith("does not reproduce")
+    assert verdict_similarity(_headline(3.0, 1)).startswith("same direction, smaller")
+    assert verdict_similarity(_headline(10.0, 1)).startswith("reproduces")

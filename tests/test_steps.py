@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from scanlines import Scan, extract
-from scanlines.evaluate import make_scene
+from scanlines.evaluation.scenes import make_scene
 from scanlines.steps.breakpoints import (
     MAX_BRIDGED_SHARE,
     RULE_CODES,

@@ -3,10 +3,10 @@
     python docs/decisions/ceiling.py            # 300 scenes per sensor, seed 0
     python docs/decisions/ceiling.py -n 20 --seed 1
 
-The truth row (``scanlines eval -m truth``, :func:`scanlines.evaluate.truth_extraction`)
+The truth row (``scanlines eval -m truth``, :func:`scanlines.evaluation.truth_row.truth_extraction`)
 has one segment per true segment, over the same beams. Every counted true segment
 (``>= min_segment_beams`` beams) left unmatched by the segment matching of
-:func:`scanlines.metrics.score` is put in one class, from the found segments that
+:func:`scanlines.evaluation.metrics.score` is put in one class, from the found segments that
 overlap it by at least ``overlap`` of both spans:
 
 * ``overlap``: none overlaps it enough;
@@ -16,8 +16,9 @@ overlap it by at least ``overlap`` of both spans:
 
 It also gives the truth row's TruePos by the true segment's span in beams, and with
 one component of the preset's noise switched off (:data:`VARIANTS`). Same scenes,
-seeds and tolerances as ``scanlines eval``; the matching is the metric's own (its private
-helpers), and the matched count is checked against :func:`~scanlines.metrics.score`.
+seeds and tolerances as ``scanlines eval``; the matching is the metric's own (its
+building blocks), and the matched count is checked against
+:func:`~scanlines.evaluation.metrics.score`.
 """
 
 from __future__ import annotations
@@ -28,17 +29,19 @@ from dataclasses import replace
 
 import numpy as np
 
-from scanlines.evaluate import SceneCase, iter_scenes, truth_extraction
-from scanlines.extraction import ALPHA, RHO, Extraction
-from scanlines.metrics import (
-    Tolerances,
-    _greedy_one_to_one,
-    _line_differences,
+from scanlines import Extraction, Scan
+from scanlines.evaluation.metrics import (
+    line_differences,
+    match_one_to_one,
     score,
     segment_overlap,
 )
-from scanlines.scan import Scan
-from scanlines.sim import SENSORS, Truth, get_sensor, random_scene
+from scanlines.evaluation.scenes import SceneCase, iter_scenes
+from scanlines.evaluation.scores import Tolerances
+from scanlines.evaluation.truth import Truth
+from scanlines.evaluation.truth_row import truth_extraction
+from scanlines.extraction import ALPHA, RHO
+from scanlines.sim import SENSORS, get_sensor, random_scene
 
 REASONS = ("overlap", "rho only", "alpha only", "both", "taken")
 SPAN_BINS = (("8-15", 8, 15), ("16-31", 16, 31), ("32-63", 32, 63), ("64+", 64, np.inf))
@@ -54,11 +57,11 @@ def classify(extraction: Extraction, truth: Truth, tol: Tolerances) -> tuple[lis
     overlapping = (shared >= tol.overlap * f_span[:, None]) & (
         shared >= tol.overlap * t_span[None, :]
     )
-    drho, dalpha = _line_differences(
+    drho, dalpha = line_differences(
         extraction.lines[:, RHO], extraction.lines[:, ALPHA], ts.rho, ts.alpha
     )
     cost = drho / tol.rho + dalpha / tol.alpha
-    _, matched = _greedy_one_to_one(overlapping & (drho <= tol.rho) & (dalpha <= tol.alpha), cost)
+    _, matched = match_one_to_one(overlapping & (drho <= tol.rho) & (dalpha <= tol.alpha), cost)
     classes, spans = [], []
     for j in np.flatnonzero(t_span >= tol.min_segment_beams):
         if j in matched:

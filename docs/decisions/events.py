@@ -17,8 +17,8 @@ Two tables per sensor preset, on the scenes, seeds and tolerances of ``scanlines
    pixel, or one on a plain surface; a missed true event reported as the other kind, or
    missed; a missed corner by the returns on its shorter side.
 
-The matching is the metric's own (:func:`scanlines.metrics.match_events`), and the counts
-are checked against :func:`scanlines.metrics.score`.
+The matching is the metric's own (:func:`scanlines.evaluation.metrics.match_events`), and
+the counts are checked against :func:`scanlines.evaluation.metrics.score`.
 """
 
 from __future__ import annotations
@@ -29,13 +29,12 @@ from collections import Counter
 
 import numpy as np
 
-from scanlines import Extractor
-from scanlines.evaluate import iter_scenes
-from scanlines.extraction import Extraction
-from scanlines.metrics import Tolerances, _event_dont_care, match_events, score
-from scanlines.scan import Scan
-from scanlines.sim import SENSORS, Truth
-from scanlines.sim.noise import BeamStatus
+from scanlines import Extraction, Extractor, Scan
+from scanlines.evaluation.metrics import event_dont_care, match_events, score
+from scanlines.evaluation.scenes import iter_scenes
+from scanlines.evaluation.scores import Tolerances
+from scanlines.evaluation.truth import BeamStatus, Truth
+from scanlines.sim import SENSORS
 
 NEAR_NOISE_BEAMS = 3
 """A false event this close to an outlier or mixed pixel is put in that class."""
@@ -47,7 +46,7 @@ NEAR_NOISE_BEAMS = 3
 def undecidable_breakpoints(truth: Truth, scan: Scan, tol: Tolerances) -> tuple[int, int]:
     """Counted true breakpoints that look exactly like a corner, and those of them with a mixed pixel."""
     returns = np.flatnonzero(truth.true_return)
-    counted = ~_event_dont_care(truth.breakpoint_runs, tol.min_run)
+    counted = ~event_dont_care(truth.breakpoint_runs, tol.min_run)
     angles = scan.angles
     undecidable = with_mixed = 0
     for beam in truth.breakpoints[counted]:
@@ -120,7 +119,7 @@ def error_classes(found: Extraction, truth: Truth, tol: Tolerances) -> Counter:
             else:
                 label = "on a plain surface"
             out[f"false {kind}: {label}"] += 1
-        dont_care = _event_dont_care(runs, tol.min_run)
+        dont_care = event_dont_care(runs, tol.min_run)
         for j in np.flatnonzero(~t_matched & ~dont_care):
             if _within(true_at[j], found_other, tol.event_beams):
                 label = f"reported as a {other}"

@@ -14,8 +14,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 
 from scanlines import Extraction, Extractor, Scan, extract, method_info
+from scanlines.evaluation.metrics import aggregate, score
+from scanlines.evaluation.scores import Summary
 from scanlines.methods.consensus import inlier_runs
-from scanlines.metrics import Summary, aggregate, score
 from scanlines.sim import SimScan, random_scene
 from scanlines.steps.events import segment_events
 from scanlines.steps.fit import TLS, fit_many, hesse_difference, prefix_moments

@@ -13,13 +13,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from scanlines.extraction import Extraction
-from scanlines.metrics import (
-    EventScore,
-    ScanScore,
-    SegmentScore,
-    SimilarityScore,
-    Tolerances,
+from scanlines import Extraction, Scan
+from scanlines.evaluation.metrics import (
     accuracy_rate,
     aggregate,
     environmental_similarity,
@@ -30,7 +25,13 @@ from scanlines.metrics import (
     segment_overlap,
     wrap_angle,
 )
-from scanlines.scan import Scan
+from scanlines.evaluation.scores import (
+    EventScore,
+    ScanScore,
+    SegmentScore,
+    SimilarityScore,
+    Tolerances,
+)
 from scanlines.sim import (
     NoiseModel,
     SensorSpec,

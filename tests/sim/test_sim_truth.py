@@ -18,6 +18,7 @@ from scanlines.sim import (
     polyline,
     random_scene,
     round_pillar,
+    sensor_to_world,
     simulate,
     wall,
 )
@@ -168,7 +169,7 @@ def test_segment_lines_are_in_the_sensor_frame() -> None:
     world = World([wall((-10, 2), (10, 2))])
     truth = _exact(world, pose=(0.0, 0.0, math.pi / 2))
     np.testing.assert_allclose([truth.segments.rho[0], truth.segments.alpha[0]], [2, 0], atol=1e-12)
-    hit_world = truth.hit_points_world()
+    hit_world = sensor_to_world(truth.hit_points, truth.pose)
     np.testing.assert_allclose(hit_world[90], [0.0, 2.0], atol=1e-12)
     np.testing.assert_allclose(hit_world[truth.true_return][:, 1], 2.0)
 

@@ -10,7 +10,8 @@ import typer
 from scanlines.cli.common import guarded
 
 if TYPE_CHECKING:
-    from scanlines.bench import BenchResult, TableData
+    from scanlines.evaluation.bench_results import BenchResult
+    from scanlines.evaluation.report import TableData
 
 DEFAULT_DOCS = Path("docs/PERFORMANCE.md")
 
@@ -53,10 +54,6 @@ def bench_command(
     repeats: Annotated[
         int | None, typer.Option("--repeats", "-r", help="Timed passes (default 3).")
     ] = None,
-    warmup: Annotated[
-        int | None,
-        typer.Option("--warmup", help="Warm-up calls per method and dataset (default 3)."),
-    ] = None,
     beams: Annotated[
         list[int] | None,
         typer.Option(
@@ -93,7 +90,8 @@ def bench_command(
         typer.Option("--docs-path", help="Page written by --write-docs."),
     ] = DEFAULT_DOCS,
 ) -> None:
-    from scanlines import bench
+    from scanlines.evaluation import bench, performance_page
+    from scanlines.evaluation.report import command_line
 
     changes = {
         key: value
@@ -101,7 +99,6 @@ def bench_command(
             "real_scans": real_scans,
             "sim_scans": sim_scans,
             "repeats": repeats,
-            "warmup": warmup,
             "scaling_scans": scaling_scans,
         }.items()
         if value is not None
@@ -122,12 +119,12 @@ def bench_command(
     config = config.validated()  # bad input ends here, before anything is timed
 
     with _Progress() as progress:
-        result = bench.run(config, command=bench.command_line(), progress=progress)
+        result = bench.run(config, command=command_line(), progress=progress)
     _print(result)
     if json_path is not None:
         typer.echo(f"wrote {result.to_json(json_path)}")
     if write_docs:
-        typer.echo(f"wrote {bench.write_docs(result, docs_path)}")
+        typer.echo(f"wrote {performance_page.write_docs(result, docs_path)}")
 
 
 class _Progress:

@@ -10,8 +10,9 @@ import typer
 from scanlines.cli.common import guarded
 
 if TYPE_CHECKING:
-    from scanlines.evaluate import EvalResult, SceneSet
-    from scanlines.metrics import Tolerances
+    from scanlines.evaluation.evaluate import EvalResult
+    from scanlines.evaluation.scenes import SceneSet
+    from scanlines.evaluation.scores import Tolerances
 
 SPEC_HELP = (
     "Method spec METHOD[:PRESET][?NAME=VALUE&...][@LABEL], e.g. adaptive, adaptive:paper, "
@@ -68,9 +69,9 @@ def eval_command(
     worst: Annotated[int, typer.Option(help="Scans in worst.png.")] = 4,
     plots: Annotated[bool, typer.Option(help="Write bars.png and worst.png.")] = True,
 ) -> None:
-    from scanlines import evaluate as ev
+    from scanlines.evaluation.specs import parse_specs
 
-    specs = ev.parse_specs(method or ["adaptive"])
+    specs = parse_specs(method or ["adaptive"])
     tol = _tolerances(tol_beams, tol_rho, tol_alpha)
     scene_set = _scene_set(scenes, save_scenes, sensor, scenes_per_sensor, seed, noise)
     result = _evaluate_with_progress(
@@ -95,7 +96,7 @@ def _tolerances(beams: int, rho: float, alpha_deg: float) -> Tolerances:
     import math
 
     from scanlines.errors import ParameterError
-    from scanlines.metrics import Tolerances
+    from scanlines.evaluation.scores import Tolerances
 
     try:
         return Tolerances(event_beams=beams, rho=rho, alpha=math.radians(alpha_deg))
@@ -112,21 +113,21 @@ def _scene_set(
     noise: str | None,
 ) -> SceneSet | None:
     """The scene set to evaluate on: loaded, generated and saved, or none (generate)."""
-    from scanlines import evaluate as ev
     from scanlines.errors import ParameterError
+    from scanlines.evaluation.scenes import DEFAULT_SCENES, generate_scene_set, load_scene_set
 
     if scenes is not None:
         if save_scenes is not None:
             raise ParameterError("--scenes and --save-scenes exclude each other")
         if seed is not None or noise is not None:
             raise ParameterError("--seed and --noise describe generated scenes, not --scenes")
-        return ev.load_scene_set(scenes)
+        return load_scene_set(scenes)
     if save_scenes is None:
         return None
     with _progress("generating scenes") as advance:
-        generated = ev.generate_scene_set(
+        generated = generate_scene_set(
             sensors,
-            ev.DEFAULT_SCENES if n is None else n,
+            DEFAULT_SCENES if n is None else n,
             0 if seed is None else seed,
             noise or "realistic",
             on_scene=advance,
@@ -136,10 +137,10 @@ def _scene_set(
 
 
 def _evaluate_with_progress(specs, sensors, n, seed, noise, tol, scene_set, workers) -> EvalResult:
-    from scanlines import evaluate as ev
+    from scanlines.evaluation.evaluate import evaluate
 
     with _progress("evaluating") as advance:
-        return ev.evaluate(
+        return evaluate(
             specs,
             sensors,
             n,
@@ -187,7 +188,7 @@ def _print_tables(result: EvalResult) -> None:
     from rich.console import Console
     from rich.table import Table
 
-    from scanlines.evaluate import TABLE_COLUMNS, tolerance_caption
+    from scanlines.evaluation.evaluate import TABLE_COLUMNS, tolerance_caption
 
     config = result.config
     caption = (
@@ -219,8 +220,8 @@ TABLE_WIDTH = 180
 def _write_outputs(result: EvalResult, out: Path, worst: int | None) -> list[Path]:
     paths = [*result.to_csv(out), result.to_json(out / "summary.json")]
     if worst is not None:
-        from scanlines.evaluate import plot_bars, plot_worst
-        from scanlines.plot import save
+        from scanlines.viz.evaluation import plot_bars, plot_worst
+        from scanlines.viz.figures import save
 
         paths.append(save(plot_bars(result), out / "bars.png"))
         paths.append(save(plot_worst(result, worst), out / "worst.png"))

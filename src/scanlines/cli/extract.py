@@ -47,7 +47,8 @@ def extract_command(
     scan = load_one_scan(file, angle_min, angle_increment, range_max)
     result = extractor(scan)
     if plot is not None:
-        from scanlines.plot import plot_extraction, save
+        from scanlines.viz.figures import save
+        from scanlines.viz.scans import plot_extraction
 
         save(plot_extraction(scan, result, title=file.name), plot)
     if as_json:

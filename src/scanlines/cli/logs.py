@@ -248,8 +248,9 @@ def plot_command(
     from scanlines.errors import ParameterError
     from scanlines.extractor import Extractor
     from scanlines.io import open_log
-    from scanlines.plot import plot_extraction, plot_grid, save
     from scanlines.runner import parse_slice, select
+    from scanlines.viz.figures import save
+    from scanlines.viz.scans import plot_extraction, plot_grid
 
     if (scan is None) == (scans is None):
         raise ParameterError("give exactly one of --scan N or --scans START:STOP[:STEP]")
@@ -282,8 +283,9 @@ def demo_command(
     from scanlines.data import sample
     from scanlines.extractor import Extractor
     from scanlines.io import open_log
-    from scanlines.plot import plot_grid, save
     from scanlines.runner import run_log_to_file, select
+    from scanlines.viz.figures import save
+    from scanlines.viz.scans import plot_grid
 
     log = sample("intel")
     extractor = Extractor()

@@ -45,8 +45,9 @@ def reproduce_command(
     ] = None,
     seed: Annotated[int, typer.Option(help="Base seed of the simulated scenes.")] = 0,
 ) -> None:
-    from scanlines.bench import command_line
-    from scanlines.reproduce import ReproduceConfig, reproduce
+    from scanlines.evaluation.experiments import ReproduceConfig
+    from scanlines.evaluation.report import command_line
+    from scanlines.evaluation.reproduce import reproduce
 
     config = ReproduceConfig.quick_config(seed=seed) if quick else ReproduceConfig(seed=seed)
     if scenes_per_sensor is not None:

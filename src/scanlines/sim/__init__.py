@@ -17,26 +17,20 @@ Or by hand::
     world = World([wall((3, -4), (3, 4)), box((2, 0), 0.5, 0.5)])
     sim = simulate(world, "lms_1deg", pose=(0, 0, 0), seed=1)
 
-Only numpy is needed. The truth conventions are in :mod:`scanlines.sim.truth`, the
-noise model in :mod:`scanlines.sim.noise`, the sensor numbers in
-:mod:`scanlines.sim.sensors`.
+Only numpy is needed. The truth conventions are in :mod:`scanlines.sim.truth` (the
+truth types, re-exported here, in :mod:`scanlines.evaluation.truth`), the noise model in
+:mod:`scanlines.sim.noise`, the sensor numbers in :mod:`scanlines.sim.sensors`.
 """
 
 from __future__ import annotations
 
-from scanlines.sim.noise import NO_RETURN, BeamStatus, NoiseModel, NoisyRanges, apply_noise
+from scanlines.evaluation.truth import BeamStatus, TrueSegments, Truth
+from scanlines.sim.noise import NO_RETURN, NoiseModel, NoisyRanges, apply_noise
 from scanlines.sim.raycast import RayHits, cast_rays
 from scanlines.sim.scenes import SCENE_KINDS, Scene, random_scene
 from scanlines.sim.sensors import SENSORS, SensorSpec, get_sensor
 from scanlines.sim.simulate import SimScan, depth_jumps, simulate
-from scanlines.sim.truth import (
-    TrueSegments,
-    Truth,
-    compute_truth,
-    hesse_line,
-    sensor_to_world,
-    world_to_sensor,
-)
+from scanlines.sim.truth import compute_truth, hesse_line, sensor_to_world, world_to_sensor
 from scanlines.sim.world import (
     Shape,
     World,

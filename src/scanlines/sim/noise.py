@@ -33,32 +33,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
-from enum import IntEnum
 from typing import Any
 
 import numpy as np
 
-__all__ = ["NO_RETURN", "BeamStatus", "NoiseModel", "NoisyRanges", "apply_noise"]
+from scanlines.evaluation.truth import BeamStatus
+
+__all__ = ["NO_RETURN", "NoiseModel", "NoisyRanges", "apply_noise"]
 
 NO_RETURN = math.inf
 """Range written for a beam with no return (as in ROS ``LaserScan``)."""
-
-
-class BeamStatus(IntEnum):
-    """What happened to one simulated beam."""
-
-    HIT = 0
-    """A valid return of the true surface (with range noise)."""
-    NO_HIT = 1
-    """No surface along the beam: no return."""
-    DROPOUT = 2
-    """The beam hit a surface but the sensor returned nothing (random dropout)."""
-    OUTLIER = 3
-    """A spurious short return that belongs to no surface."""
-    MIXED = 4
-    """A mixed pixel: a return between two surfaces at a depth discontinuity."""
-    OUT_OF_RANGE = 5
-    """The measured range fell outside ``[range_min, range_max]``: no return."""
 
 
 @dataclass(frozen=True)

@@ -7,10 +7,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from scanlines.evaluation.truth import BeamStatus, Truth
 from scanlines.scan import Scan
-from scanlines.sim.noise import BeamStatus, NoiseModel, apply_noise
+from scanlines.sim.noise import NoiseModel, apply_noise
 from scanlines.sim.sensors import SensorSpec, get_sensor
-from scanlines.sim.truth import Truth, compute_truth
+from scanlines.sim.truth import compute_truth
 from scanlines.sim.world import World
 
 __all__ = ["SimScan", "as_rng", "depth_jumps", "simulate"]
@@ -25,7 +26,7 @@ class SimScan:
     scan:
         The measured :class:`~scanlines.Scan` (its ``pose`` is the sensor pose).
     truth:
-        The exact :class:`~scanlines.sim.truth.Truth`.
+        The exact :class:`~scanlines.evaluation.truth.Truth`.
     world:
         The world scanned.
     sensor:

@@ -28,6 +28,11 @@ Conventions (they follow the project's, see ``METHOD.md``):
   first/last beam.
 * Every event records the number of true returns in the run before and after it
   (``*_runs``), so that scoring can treat events next to tiny runs as "don't care".
+
+The types (:class:`~scanlines.evaluation.truth.Truth`, its
+:class:`~scanlines.evaluation.truth.TrueSegments` and
+:class:`~scanlines.evaluation.truth.BeamStatus`) belong to the evaluation, which scores
+against them; this module computes them.
 """
 
 from __future__ import annotations
@@ -37,10 +42,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from scanlines.sim.noise import BeamStatus
+from scanlines.evaluation.truth import BeamStatus, TrueSegments, Truth
 from scanlines.sim.world import World
 
-__all__ = ["TrueSegments", "Truth", "compute_truth", "hesse_line"]
+__all__ = ["compute_truth", "hesse_line", "sensor_to_world", "world_to_sensor"]
 
 _NONE, _BREAK, _CORNER = 0, 1, 2
 
@@ -48,156 +53,6 @@ _NONE, _BREAK, _CORNER = 0, 1, 2
 def _readonly(values: np.ndarray) -> np.ndarray:
     values.setflags(write=False)
     return values
-
-
-@dataclass(frozen=True, eq=False)
-class TrueSegments:
-    """The true segments of one scan, as parallel arrays (one row per segment).
-
-    Attributes
-    ----------
-    first, last:
-        Inclusive beam indices (``first > last`` only across the seam).
-    edge:
-        Edge id of the world edge the segment lies on.
-    n_returns:
-        True returns in the segment.
-    rho, alpha:
-        Hesse normal form of the true edge line in the sensor frame.
-    start, end:
-        ``M x 2`` exact hit points of the first and last beam (sensor frame).
-    """
-
-    first: np.ndarray
-    last: np.ndarray
-    edge: np.ndarray
-    n_returns: np.ndarray
-    rho: np.ndarray
-    alpha: np.ndarray
-    start: np.ndarray
-    end: np.ndarray
-
-    def __len__(self) -> int:
-        return len(self.first)
-
-    @property
-    def lines(self) -> np.ndarray:
-        """``M x 7`` rows like :attr:`scanlines.Extraction.lines` (rms is 0)."""
-        return np.column_stack(
-            (self.rho, self.alpha, self.start, self.end, np.zeros(len(self)))
-        ).reshape(-1, 7)
-
-
-@dataclass(frozen=True, eq=False)
-class Truth:
-    """Ground truth of one simulated scan (see the module docstring for the rules).
-
-    Attributes
-    ----------
-    n_beams:
-        Number of beams.
-    full_circle:
-        Whether the scan closes the circle (its seam is crossed like any pair).
-    pose:
-        Sensor pose ``(x, y, theta)`` in the world frame.
-    edge:
-        Edge each beam's ray hits (at any distance), ``-1`` for none.
-    true_ranges:
-        Exact range to that edge, ``inf`` for none.
-    hit_points:
-        ``N x 2`` exact hit points in the sensor frame (NaN for none).
-    incidence:
-        Angle in radians between each beam and the normal of the surface it hits
-        (0 = head-on, near pi/2 = grazing; NaN for none).
-    on_curve:
-        Beams whose ray hits a curved shape (not a line).
-    status:
-        :class:`BeamStatus` code of each beam.
-    breakpoints:
-        Sorted beam indices of the true breakpoints.
-    breakpoint_runs:
-        ``B x 2``: true returns in the run before and after each breakpoint.
-    corners:
-        Sorted beam indices of the true corners.
-    corner_points:
-        ``C x 2`` corner vertices in the sensor frame.
-    corner_runs:
-        ``C x 2``: true returns in the run before and after each corner.
-    segments:
-        The true segments.
-    """
-
-    n_beams: int
-    full_circle: bool
-    pose: tuple[float, float, float]
-    edge: np.ndarray
-    true_ranges: np.ndarray
-    hit_points: np.ndarray
-    incidence: np.ndarray
-    on_curve: np.ndarray
-    status: np.ndarray
-    breakpoints: np.ndarray
-    breakpoint_runs: np.ndarray
-    corners: np.ndarray
-    corner_points: np.ndarray
-    corner_runs: np.ndarray
-    segments: TrueSegments
-
-    @property
-    def true_return(self) -> np.ndarray:
-        """Beams whose measured range is a return of the surface they hit."""
-        return self.status == BeamStatus.HIT
-
-    @property
-    def outliers(self) -> np.ndarray:
-        """Beam indices of injected outliers (spurious short returns)."""
-        return np.flatnonzero(self.status == BeamStatus.OUTLIER)
-
-    @property
-    def mixed_pixels(self) -> np.ndarray:
-        """Beam indices of mixed pixels (returns between two surfaces)."""
-        return np.flatnonzero(self.status == BeamStatus.MIXED)
-
-    @property
-    def dropouts(self) -> np.ndarray:
-        """Beam indices of random dropouts."""
-        return np.flatnonzero(self.status == BeamStatus.DROPOUT)
-
-    def hit_points_world(self) -> np.ndarray:
-        """``N x 2`` exact hit points in the world frame (NaN for none)."""
-        return sensor_to_world(self.hit_points, self.pose)
-
-    def corner_points_world(self) -> np.ndarray:
-        """``C x 2`` corner vertices in the world frame."""
-        return sensor_to_world(self.corner_points, self.pose)
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain-Python form of the events and segments (JSON-serialisable)."""
-        seg = self.segments
-        return {
-            "n_beams": self.n_beams,
-            "full_circle": self.full_circle,
-            "pose": list(self.pose),
-            "breakpoints": self.breakpoints.tolist(),
-            "corners": self.corners.tolist(),
-            "corner_points": self.corner_points.tolist(),
-            "segments": [
-                {
-                    "first": int(seg.first[k]),
-                    "last": int(seg.last[k]),
-                    "edge": int(seg.edge[k]),
-                    "n_returns": int(seg.n_returns[k]),
-                    "rho": float(seg.rho[k]),
-                    "alpha": float(seg.alpha[k]),
-                    "start": seg.start[k].tolist(),
-                    "end": seg.end[k].tolist(),
-                }
-                for k in range(len(seg))
-            ],
-            "outliers": self.outliers.tolist(),
-            "mixed_pixels": self.mixed_pixels.tolist(),
-            "dropouts": self.dropouts.tolist(),
-        }
 
 
 def sensor_to_world(points: np.ndarray, pose: tuple[float, float, float]) -> np.ndarray:

@@ -1,33 +1,23 @@
-"""Pictures of scans and extracted features (matplotlib, imported on use)."""
+"""Pictures of scans and the features extracted from them."""
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from scanlines.extraction import Extraction
-from scanlines.scan import Scan
+from scanlines import Extraction, Scan
+from scanlines.viz.figures import pyplot
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-__all__ = ["plot_extraction", "plot_grid", "save"]
+__all__ = ["SEGMENT_COLOURS", "plot_extraction", "plot_grid"]
 
 SEGMENT_COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd", "#8c564b", "#e377c2", "#17becf")
-
-
-def _pyplot():
-    import matplotlib
-
-    if matplotlib.get_backend().lower() not in ("agg", "pdf", "svg", "cairo"):
-        matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+"""Colours of consecutive segments (matplotlib's tab10 without red, grey and olive)."""
 
 
 def plot_extraction(
@@ -43,7 +33,7 @@ def plot_extraction(
     Coordinates are the sensor frame (x forward, y left), in metres.
     """
     if ax is None:
-        _, ax = _pyplot().subplots(figsize=(7, 7))
+        _, ax = pyplot().subplots(figsize=(7, 7))
     points = scan.points
     ax.scatter(points[:, 0], points[:, 1], s=4, c="0.6", label="returns", zorder=1)
     for k, row in enumerate(extraction.lines):
@@ -103,7 +93,7 @@ def plot_grid(
     items: Sequence[tuple[Scan, Extraction, str]], *, columns: int = 3, size: float = 4.0
 ) -> Figure:
     """A grid of :func:`plot_extraction` panels, one per ``(scan, extraction, title)``."""
-    plt = _pyplot()
+    plt = pyplot()
     rows = max(1, -(-len(items) // columns))
     fig, axes = plt.subplots(rows, columns, figsize=(size * columns, size * rows), squeeze=False)
     for ax, (scan, extraction, title) in zip(axes.flat, items, strict=False):
@@ -112,13 +102,3 @@ def plot_grid(
         ax.axis("off")
     fig.tight_layout()
     return fig
-
-
-def save(figure_or_axes: Any, path: str | Path, *, dpi: int = 130) -> Path:
-    """Save a figure (or the figure of an axes) to ``path`` and close it."""
-    figure = getattr(figure_or_axes, "figure", figure_or_axes)
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    figure.savefig(path, dpi=dpi, bbox_inches="tight")
-    _pyplot().close(figure)
-    return path

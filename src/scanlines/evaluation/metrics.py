@@ -20,7 +20,7 @@ scans by :func:`aggregate`:
   count-based **accuracy rate** of its Table 3,
   ``1 - (|bp_found - bp_true| + |c_found - c_true|) / (bp_true + c_true)``.
 
-Don't-care rules (all parameters of :class:`Tolerances`):
+Don't-care rules (all parameters of :class:`~scanlines.evaluation.scores.Tolerances`):
 
 * segments shorter than ``min_segment_beams`` beams (index span) are don't care, true
   or found: a short true segment is never missed, a short found segment is never
@@ -32,8 +32,10 @@ Don't-care rules (all parameters of :class:`Tolerances`):
 * with ``curved_dont_care``, found events and segments on curved surfaces (round
   pillars, which have no true corners or segments) that match nothing are not false.
 
-Every result carries the :class:`Tolerances` it was computed with, and turns into a
-flat dict with ``to_dict()`` for CSV or JSON.
+Every result carries the :class:`~scanlines.evaluation.scores.Tolerances` it was
+computed with, and turns into a flat dict with ``to_dict()`` for CSV or JSON; the records
+are in :mod:`scanlines.evaluation.scores`. The truth is the simulator's, read through its
+types only (:mod:`scanlines.evaluation.truth`).
 
 References
 ----------
@@ -48,82 +50,37 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Sequence
-from dataclasses import asdict, dataclass, field
-from typing import Any
 
 import numpy as np
 
-from scanlines.extraction import ALPHA, END_X, END_Y, RHO, START_X, START_Y, Extraction
-from scanlines.scan import Scan
-from scanlines.sim.truth import Truth
+from scanlines import Extraction, Scan
+from scanlines.evaluation.scores import (
+    EventScore,
+    ScanScore,
+    SegmentScore,
+    SimilarityScore,
+    Summary,
+    Tolerances,
+    ratio_or_nan,
+)
+from scanlines.evaluation.truth import Truth
+from scanlines.extraction import ALPHA, END_X, END_Y, RHO, START_X, START_Y
 
 __all__ = [
-    "EventScore",
-    "ScanScore",
-    "SegmentScore",
-    "SimilarityScore",
-    "Summary",
-    "Tolerances",
     "accuracy_rate",
     "aggregate",
     "environmental_similarity",
+    "event_dont_care",
     "index_distance",
+    "line_differences",
     "match_events",
+    "match_one_to_one",
     "score",
     "score_events",
     "score_segments",
     "segment_overlap",
     "wrap_angle",
 ]
-
-
-@dataclass(frozen=True)
-class Tolerances:
-    """Matching tolerances and don't-care thresholds.
-
-    Parameters
-    ----------
-    event_beams:
-        Largest beam-index distance between a found and a true breakpoint or corner
-        that still matches.
-    rho:
-        Largest ``|d rho|`` in metres for a segment match (Nguyen et al. 2005 use
-        thresholds of this order).
-    alpha:
-        Largest ``|d alpha|`` in radians for a segment match (4 deg).
-    overlap:
-        Smallest beam-index overlap of a segment match, as a fraction of each segment's
-        span; also the share of a segment that must lie inside another to count
-        towards split and merge errors.
-    min_segment_beams:
-        Segments (true or found) spanning fewer beams are don't care.
-    min_run:
-        True events with fewer true returns than this on either side are don't care.
-    curved_dont_care:
-        Unmatched found events and segments on curved surfaces are not false.
-    """
-
-    event_beams: int = 2
-    rho: float = 0.05
-    alpha: float = math.radians(4.0)
-    overlap: float = 0.5
-    min_segment_beams: int = 8
-    min_run: int = 3
-    curved_dont_care: bool = True
-
-    def __post_init__(self) -> None:
-        if self.event_beams < 0 or self.min_segment_beams < 0 or self.min_run < 0:
-            raise ValueError("event_beams, min_segment_beams and min_run must be >= 0")
-        if not (self.rho >= 0 and self.alpha >= 0 and 0 < self.overlap <= 1):
-            raise ValueError("need rho >= 0, alpha >= 0 and 0 < overlap <= 1")
-
-    def to_dict(self) -> dict[str, Any]:
-        """Plain dict of the tolerances."""
-        return asdict(self)
-
-
-def _ratio(num: float, den: float) -> float:
-    return num / den if den else math.nan
 
 
 # --------------------------------------------------------------------------- events
@@ -163,10 +120,10 @@ def match_events(
         Positions (into ``found`` and ``true``) of the matched pairs.
     """
     d = index_distance(found, true, n_beams, circular=circular)
-    return _greedy_one_to_one(d <= tolerance, d.astype(np.float64))
+    return match_one_to_one(d <= tolerance, d.astype(np.float64))
 
 
-def _greedy_one_to_one(candidate: np.ndarray, cost: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def match_one_to_one(candidate: np.ndarray, cost: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """One-to-one matching over candidate ``(row, column)`` pairs, lowest cost first.
 
     Ties are broken by the lower column, then the lower row. The loop runs over
@@ -184,72 +141,6 @@ def _greedy_one_to_one(candidate: np.ndarray, cost: np.ndarray) -> tuple[np.ndar
             pairs.append((r, c))
     arr = np.array(pairs, dtype=np.intp).reshape(-1, 2)
     return arr[:, 0], arr[:, 1]
-
-
-@dataclass(frozen=True)
-class EventScore:
-    """Matching result for one kind of event (breakpoints or corners).
-
-    Attributes
-    ----------
-    tp, fp, fn:
-        True positives, false positives, false negatives (don't-care excluded).
-    n_true, n_found:
-        All true and found events, don't care included.
-    true_dont_care:
-        True events that are don't care.
-    found_ignored:
-        Found events that are neither true nor false positives.
-    offset_sum:
-        Sum of ``|found - true|`` beam distances over the true positives.
-    """
-
-    tp: int = 0
-    fp: int = 0
-    fn: int = 0
-    n_true: int = 0
-    n_found: int = 0
-    true_dont_care: int = 0
-    found_ignored: int = 0
-    offset_sum: float = 0.0
-
-    @property
-    def precision(self) -> float:
-        """``tp / (tp + fp)``; NaN when nothing counted was found."""
-        return _ratio(self.tp, self.tp + self.fp)
-
-    @property
-    def recall(self) -> float:
-        """``tp / (tp + fn)``; NaN when there is nothing counted to find."""
-        return _ratio(self.tp, self.tp + self.fn)
-
-    @property
-    def f1(self) -> float:
-        """``2 tp / (2 tp + fp + fn)``; NaN when all three are zero."""
-        return _ratio(2 * self.tp, 2 * self.tp + self.fp + self.fn)
-
-    @property
-    def mean_offset(self) -> float:
-        """Mean beam-index distance of the true positives."""
-        return _ratio(self.offset_sum, self.tp)
-
-    def __add__(self, other: EventScore) -> EventScore:
-        return EventScore(*(a + b for a, b in zip(_values(self), _values(other), strict=True)))
-
-    def to_dict(self, prefix: str = "") -> dict[str, Any]:
-        """Counts and rates as a flat dict, keys prefixed with ``prefix``."""
-        out = asdict(self)
-        out |= {
-            "precision": self.precision,
-            "recall": self.recall,
-            "f1": self.f1,
-            "mean_offset": self.mean_offset,
-        }
-        return {prefix + k: v for k, v in out.items()}
-
-
-def _values(obj: Any) -> tuple[Any, ...]:
-    return tuple(getattr(obj, f) for f in obj.__dataclass_fields__)
 
 
 def score_events(
@@ -343,10 +234,10 @@ def segment_overlap(
     return total
 
 
-def _line_differences(
+def line_differences(
     rho_f: np.ndarray, alpha_f: np.ndarray, rho_t: np.ndarray, alpha_t: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """``|d rho|`` and ``|d alpha|`` of every found/true pair.
+    """``|d rho|`` and ``|d alpha|`` of every found/true pair (``len(f) x len(t)``).
 
     The Hesse form is ambiguous for lines through the origin (``(rho, alpha)`` and
     ``(-rho, alpha + pi)`` are one line); the representation with the smaller angle
@@ -357,87 +248,6 @@ def _line_differences(
     flip = np.abs(da_flip) < np.abs(da)
     drho = np.where(flip, rho_f[:, None] + rho_t[None, :], rho_f[:, None] - rho_t[None, :])
     return np.abs(drho), np.abs(np.where(flip, da_flip, da))
-
-
-@dataclass(frozen=True)
-class SegmentScore:
-    """Segment matching result (Nguyen et al. 2005 style).
-
-    Attributes
-    ----------
-    n_true, n_found:
-        True and found segments that count (``>= min_segment_beams`` beams).
-    true_dont_care, found_dont_care:
-        Short segments, not counted.
-    matched:
-        Counted true segments matched one-to-one by a found segment.
-    false:
-        Counted found segments that match nothing (and are not ignored).
-    found_ignored:
-        Counted found segments matched to a don't-care true segment, or unmatched on a
-        curved surface.
-    split:
-        Counted true segments of which two or more counted found segments lie inside.
-    merge:
-        Counted found segments inside which two or more counted true segments lie.
-    sum_abs_drho, sum_abs_dalpha, sum_endpoint_error:
-        Sums over the matches of counted true segments (metres, radians, metres;
-        the endpoint error of a match is the mean of its start and end distances).
-    """
-
-    n_true: int = 0
-    n_found: int = 0
-    true_dont_care: int = 0
-    found_dont_care: int = 0
-    matched: int = 0
-    false: int = 0
-    found_ignored: int = 0
-    split: int = 0
-    merge: int = 0
-    sum_abs_drho: float = 0.0
-    sum_abs_dalpha: float = 0.0
-    sum_endpoint_error: float = 0.0
-
-    @property
-    def true_pos(self) -> float:
-        """Share of (counted) true segments found: Nguyen's TruePos."""
-        return _ratio(self.matched, self.n_true)
-
-    @property
-    def false_pos(self) -> float:
-        """Share of (counted, not ignored) found segments matching nothing: FalsePos."""
-        return _ratio(self.false, self.n_found - self.found_ignored)
-
-    @property
-    def mean_abs_drho(self) -> float:
-        """Mean ``|d rho|`` over matches, metres."""
-        return _ratio(self.sum_abs_drho, self.matched)
-
-    @property
-    def mean_abs_dalpha(self) -> float:
-        """Mean ``|d alpha|`` over matches, radians."""
-        return _ratio(self.sum_abs_dalpha, self.matched)
-
-    @property
-    def mean_endpoint_error(self) -> float:
-        """Mean distance between true and found endpoints over matches, metres."""
-        return _ratio(self.sum_endpoint_error, self.matched)
-
-    def __add__(self, other: SegmentScore) -> SegmentScore:
-        return SegmentScore(*(a + b for a, b in zip(_values(self), _values(other), strict=True)))
-
-    def to_dict(self, prefix: str = "") -> dict[str, Any]:
-        """Counts, sums and rates as a flat dict."""
-        out = asdict(self)
-        out |= {
-            "true_pos": self.true_pos,
-            "false_pos": self.false_pos,
-            "mean_abs_drho": self.mean_abs_drho,
-            "mean_abs_dalpha": self.mean_abs_dalpha,
-            "mean_abs_dalpha_deg": math.degrees(self.mean_abs_dalpha),
-            "mean_endpoint_error": self.mean_endpoint_error,
-        }
-        return {prefix + k: v for k, v in out.items()}
 
 
 def _segment_beams(
@@ -468,7 +278,7 @@ def score_segments(extraction: Extraction, truth: Truth, tol: Tolerances) -> Seg
     f_span, t_span = _spans(f_first, f_last, n), _spans(ts.first, ts.last, n)
     f_long, t_long = f_span >= tol.min_segment_beams, t_span >= tol.min_segment_beams
     shared = segment_overlap(f_first, f_last, ts.first, ts.last, n)
-    drho, dalpha = _line_differences(
+    drho, dalpha = line_differences(
         extraction.lines[:, RHO], extraction.lines[:, ALPHA], ts.rho, ts.alpha
     )
     overlapping = (shared >= tol.overlap * f_span[:, None]) & (
@@ -476,7 +286,7 @@ def score_segments(extraction: Extraction, truth: Truth, tol: Tolerances) -> Seg
     )
     candidate = overlapping & (drho <= tol.rho) & (dalpha <= tol.alpha)
     cost = drho / max(tol.rho, 1e-12) + dalpha / max(tol.alpha, 1e-12)
-    fpos, tpos = _greedy_one_to_one(candidate, cost)
+    fpos, tpos = match_one_to_one(candidate, cost)
 
     counted = t_long[tpos]
     f_c, t_c = fpos[counted], tpos[counted]
@@ -517,49 +327,6 @@ def score_segments(extraction: Extraction, truth: Truth, tol: Tolerances) -> Seg
 # --------------------------------------------------------------------------- paper measures
 
 
-@dataclass(frozen=True)
-class SimilarityScore:
-    """The paper's environmental similarity error: point-to-line distances.
-
-    Attributes
-    ----------
-    n_points:
-        Points assigned to segments.
-    sum_distance, sum_sq_distance:
-        Sums of the perpendicular distances and of their squares.
-    max_distance:
-        Largest distance (0 with no points).
-    """
-
-    n_points: int = 0
-    sum_distance: float = 0.0
-    sum_sq_distance: float = 0.0
-    max_distance: float = 0.0
-
-    @property
-    def mean(self) -> float:
-        """Mean perpendicular distance, metres."""
-        return _ratio(self.sum_distance, self.n_points)
-
-    @property
-    def rms(self) -> float:
-        """Root-mean-square perpendicular distance, metres."""
-        return math.sqrt(_ratio(self.sum_sq_distance, self.n_points))
-
-    def __add__(self, other: SimilarityScore) -> SimilarityScore:
-        return SimilarityScore(
-            self.n_points + other.n_points,
-            self.sum_distance + other.sum_distance,
-            self.sum_sq_distance + other.sum_sq_distance,
-            max(self.max_distance, other.max_distance),
-        )
-
-    def to_dict(self, prefix: str = "") -> dict[str, Any]:
-        """Sums, mean and RMS as a flat dict."""
-        out = asdict(self) | {"mean": self.mean, "rms": self.rms}
-        return {prefix + k: v for k, v in out.items()}
-
-
 def environmental_similarity(extraction: Extraction, scan: Scan) -> SimilarityScore:
     """Perpendicular distance of each point to its segment's line (the paper's Fig. 13).
 
@@ -589,36 +356,14 @@ def accuracy_rate(bp_found: int, bp_true: int, c_found: int, c_true: int) -> flo
     ``1 - (|bp_found - bp_true| + |c_found - c_true|) / (bp_true + c_true)``. It only
     compares counts, so a detection in the wrong place is not seen; it can be negative.
     """
-    return 1.0 - _ratio(abs(bp_found - bp_true) + abs(c_found - c_true), bp_true + c_true)
+    return 1.0 - ratio_or_nan(abs(bp_found - bp_true) + abs(c_found - c_true), bp_true + c_true)
 
 
 # --------------------------------------------------------------------------- per scan, pooled
 
 
-@dataclass(frozen=True)
-class ScanScore:
-    """All measures for one scan, with the tolerances used."""
-
-    breakpoints: EventScore
-    corners: EventScore
-    segments: SegmentScore
-    similarity: SimilarityScore
-    accuracy_rate: float
-    tolerances: Tolerances = field(default_factory=Tolerances)
-
-    def to_dict(self) -> dict[str, Any]:
-        """One flat dict (a CSV row): ``bp_*``, ``corner_*``, ``seg_*``, ``sim_*``, ``tol_*``."""
-        return (
-            self.breakpoints.to_dict("bp_")
-            | self.corners.to_dict("corner_")
-            | self.segments.to_dict("seg_")
-            | self.similarity.to_dict("sim_")
-            | {"accuracy_rate": self.accuracy_rate}
-            | {f"tol_{k}": v for k, v in self.tolerances.to_dict().items()}
-        )
-
-
-def _event_dont_care(runs: np.ndarray, min_run: int) -> np.ndarray:
+def event_dont_care(runs: np.ndarray, min_run: int) -> np.ndarray:
+    """Events (``K x 2`` run lengths before and after) next to a run shorter than ``min_run``."""
     return np.asarray(runs).reshape(-1, 2).min(axis=1, initial=np.iinfo(np.intp).max) < min_run
 
 
@@ -671,7 +416,7 @@ def score(
         tolerance=tol.event_beams,
         n_beams=n,
         circular=circular,
-        true_dont_care=_event_dont_care(truth.breakpoint_runs, tol.min_run),
+        true_dont_care=event_dont_care(truth.breakpoint_runs, tol.min_run),
         found_ignorable=ignorable(extraction.breakpoints),
     )
     corners = score_events(
@@ -680,7 +425,7 @@ def score(
         tolerance=tol.event_beams,
         n_beams=n,
         circular=circular,
-        true_dont_care=_event_dont_care(truth.corner_runs, tol.min_run),
+        true_dont_care=event_dont_care(truth.corner_runs, tol.min_run),
         found_ignorable=ignorable(extraction.corners),
     )
     return ScanScore(
@@ -696,50 +441,6 @@ def score(
         ),
         tolerances=tol,
     )
-
-
-@dataclass(frozen=True)
-class Summary:
-    """Scores pooled over scans (micro-averaged: counts and sums added, then rates).
-
-    Attributes
-    ----------
-    n_scans:
-        Scans pooled.
-    breakpoints, corners, segments, similarity:
-        Summed counts; their rate properties are the micro-averages.
-    accuracy_rate_mean:
-        Mean of the per-scan accuracy rates (scans without truth events skipped).
-    accuracy_rate_pooled:
-        The accuracy rate formula on the summed absolute count differences and summed
-        true counts.
-    tolerances:
-        The tolerances all the scores were computed with.
-    """
-
-    n_scans: int
-    breakpoints: EventScore
-    corners: EventScore
-    segments: SegmentScore
-    similarity: SimilarityScore
-    accuracy_rate_mean: float
-    accuracy_rate_pooled: float
-    tolerances: Tolerances
-
-    def to_dict(self) -> dict[str, Any]:
-        """One flat dict, keys as in :meth:`ScanScore.to_dict`."""
-        return (
-            {"n_scans": self.n_scans}
-            | self.breakpoints.to_dict("bp_")
-            | self.corners.to_dict("corner_")
-            | self.segments.to_dict("seg_")
-            | self.similarity.to_dict("sim_")
-            | {
-                "accuracy_rate_mean": self.accuracy_rate_mean,
-                "accuracy_rate_pooled": self.accuracy_rate_pooled,
-            }
-            | {f"tol_{k}": v for k, v in self.tolerances.to_dict().items()}
-        )
 
 
 def aggregate(scores: Iterable[ScanScore]) -> Summary:
@@ -773,6 +474,6 @@ def aggregate(scores: Iterable[ScanScore]) -> Summary:
         accuracy_rate_mean=float(rates[np.isfinite(rates)].mean())
         if np.isfinite(rates).any()
         else math.nan,
-        accuracy_rate_pooled=1.0 - _ratio(diff, bps.n_true + corners.n_true),
+        accuracy_rate_pooled=1.0 - ratio_or_nan(diff, bps.n_true + corners.n_true),
         tolerances=tol,
     )

@@ -1,0 +1,45 @@
+"""Scoring extractors against ground truth, timing them, and writing the results down.
+
+The modules, by subject (import them by name; importing this package imports none of
+them, so that :mod:`scanlines.sim` can use :mod:`~scanlines.evaluation.truth`)::
+
+    truth             the truth types (Truth, TrueSegments, BeamStatus); no simulator
+    scores            Tolerances and the score records (EventScore, ..., Summary)
+    metrics           score(), aggregate() and the matching they are built on
+    specs             method specs: METHOD[:PRESET][?NAME=VALUE&...][@LABEL]
+    scenes            seeded simulated scenes, scene sets saved to .npz
+    truth_row         the "truth" reference row (the one module using scanlines.steps)
+    evaluate          evaluate(): specs on scenes, per-scan and pooled scores (scanlines eval)
+    timing            the one timing rule every time here is taken by
+    machine           the machine a time was measured on
+    report            markdown tables, number formats, JSON values, CSV files
+    cases             a scan with truth, labels or neither, and one method's score on it
+    experiments       the paper's experiments (scanlines reproduce): what is measured
+    results_page      RESULTS.md from a measured run
+    reproduce         reproduce(): measure, draw the figures, write RESULTS.md
+    bench             the speed of every method (scanlines bench)
+    bench_results     what bench measured, as JSON and tables
+    performance_page  PERFORMANCE.md from a bench run
+
+The figures are in :mod:`scanlines.viz`.
+"""
+
+__all__ = [
+    "bench",
+    "bench_results",
+    "cases",
+    "evaluate",
+    "experiments",
+    "machine",
+    "metrics",
+    "performance_page",
+    "report",
+    "reproduce",
+    "results_page",
+    "scenes",
+    "scores",
+    "specs",
+    "timing",
+    "truth",
+    "truth_row",
+]

@@ -1,0 +1,96 @@
+"""The machine a time was measured on, as the pages state it.
+
+:func:`machine_info` describes the processor, cores, Python, numpy, BLAS, numba and the
+thread-count environment, with the load average before the run; ``bench`` and
+``reproduce`` print it next to every time they report.
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["load_average", "machine_info"]
+
+
+def load_average() -> list[float] | None:
+    """The 1, 5 and 15 minute load averages, rounded; ``None`` where there are none."""
+    try:
+        return [round(x, 2) for x in os.getloadavg()]
+    except (AttributeError, OSError):
+        return None
+
+
+def machine_info() -> dict[str, Any]:
+    """CPU, cores, Python, numpy and BLAS, thread-count environment variables, load."""
+    cpu, physical = _cpu_from_proc()
+    try:
+        usable = len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        usable = None
+    thread_vars = sorted(
+        k
+        for k in os.environ
+        if k.startswith("OPENBLAS") or k in ("OMP_NUM_THREADS", "MKL_NUM_THREADS")
+    )
+    return {
+        "cpu": cpu or platform.processor() or "unknown",
+        "cores_logical": os.cpu_count(),
+        "cores_physical": physical,
+        "cores_usable": usable,
+        "platform": platform.platform(),
+        "python": f"{platform.python_implementation()} {platform.python_version()}",
+        "numpy": np.__version__,
+        "numba": _numba_version(),
+        "blas": _blas(),
+        "openblas_env": {k: os.environ[k] for k in thread_vars if k.startswith("OPENBLAS")},
+        "thread_env": {k: os.environ[k] for k in thread_vars if not k.startswith("OPENBLAS")},
+        "loadavg_before": load_average(),
+    }
+
+
+def _cpu_from_proc() -> tuple[str | None, int | None]:
+    try:
+        text = Path("/proc/cpuinfo").read_text(encoding="utf-8", errors="replace")
+    except OSError:
+        return None, None
+    model = None
+    cores: set[tuple[str, str]] = set()
+    physical_id = core_id = None
+    for line in text.splitlines():
+        key, _, value = line.partition(":")
+        key, value = key.strip(), value.strip()
+        if key == "model name" and model is None:
+            model = value
+        elif key == "physical id":
+            physical_id = value
+        elif key == "core id":
+            core_id = value
+        elif not key and physical_id is not None and core_id is not None:
+            cores.add((physical_id, core_id))
+            physical_id = core_id = None
+    if physical_id is not None and core_id is not None:
+        cores.add((physical_id, core_id))
+    return model, (len(cores) or None)
+
+
+def _numba_version() -> str | None:
+    """The version of numba, which compiles the kernels; ``None`` when it is not installed."""
+    try:
+        import numba
+    except ImportError:
+        return None
+    return numba.__version__
+
+
+def _blas() -> str | None:
+    try:
+        config = np.show_config(mode="dicts")
+        blas = config["Build Dependencies"]["blas"]
+        return f"{blas.get('name', '?')} {blas.get('version', '')}".strip()
+    except Exception:  # older numpy, or a layout change: not worth failing the bench
+        return None
