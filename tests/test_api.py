@@ -173,3 +173,12 @@ def test_plot_title_counts_features_in_words():
     scan = scan_of([((2.0, -3.0), (2.0, 3.0))], fov_deg=90, step_deg=1.0)  # one wall
     title = plot_extraction(scan, extract(scan), title="wall").get_title()
     assert title == "wall\n1 segment, 0 breakpoints, 0 corners"
+
+
+def test_calling_the_methods_package_is_a_deprecated_alias_of_method_names():
+    import scanlines.methods.adaptive as adaptive_module
+
+    assert adaptive_module.Adaptive.name == "adaptive"
+    with pytest.warns(DeprecationWarning, match="method_names"):
+        listed = scanlines.methods()
+    assert listed == scanlines.method_names()

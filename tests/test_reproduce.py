@@ -116,7 +116,7 @@ def test_bad_option_is_one_line_and_exit_2(tmp_path):
 
 def test_import_needs_no_plotting_or_console_libraries():
     code = (
-        "import sys, scanlines.evaluation.reproduce; "
+        "import sys, scanlines.reproduce; "
         "print(sorted(m for m in sys.modules if m.split('.')[0] in ('matplotlib', 'rich')))"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)

@@ -38,7 +38,7 @@ from scanlines.evaluation.metrics import (
 )
 from scanlines.evaluation.scenes import SceneCase, iter_scenes
 from scanlines.evaluation.scores import Tolerances
-from scanlines.evaluation.truth import Truth
+from scanlines.truth import Truth
 from scanlines.evaluation.truth_row import truth_extraction
 from scanlines.extraction import ALPHA, RHO
 from scanlines.sim import SENSORS, get_sensor, random_scene

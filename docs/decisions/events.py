@@ -33,7 +33,7 @@ from scanlines import Extraction, Extractor, Scan
 from scanlines.evaluation.metrics import event_dont_care, match_events, score
 from scanlines.evaluation.scenes import iter_scenes
 from scanlines.evaluation.scores import Tolerances
-from scanlines.evaluation.truth import BeamStatus, Truth
+from scanlines.truth import BeamStatus, Truth
 from scanlines.sim import SENSORS
 
 NEAR_NOISE_BEAMS = 3

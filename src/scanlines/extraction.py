@@ -10,6 +10,8 @@ from typing import Any
 
 import numpy as np
 
+from scanlines.json_values import jsonable
+
 __all__ = ["Extraction", "Segment"]
 
 # Columns of Extraction.lines, one row per segment.
@@ -155,7 +157,7 @@ class Extraction:
         """Plain-Python form (JSON-serialisable)."""
         return {
             "method": self.method,
-            "params": {k: _jsonable(v) for k, v in self.params.items()},
+            "params": {k: jsonable(v) for k, v in self.params.items()},
             "segments": [
                 {
                     "first": s.first,
@@ -182,11 +184,3 @@ def _frozen(values: np.ndarray, dtype: type) -> np.ndarray:
     if arr.flags.writeable:
         arr.setflags(write=False)
     return arr
-
-
-def _jsonable(value: Any) -> Any:
-    if isinstance(value, tuple):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, float) and not math.isfinite(value):
-        return None if math.isnan(value) else ("inf" if value > 0 else "-inf")
-    return value

@@ -47,7 +47,7 @@ def reproduce_command(
 ) -> None:
     from scanlines.evaluation.experiments import ReproduceConfig
     from scanlines.evaluation.report import command_line
-    from scanlines.evaluation.reproduce import reproduce
+    from scanlines.reproduce import reproduce
 
     config = ReproduceConfig.quick_config(seed=seed) if quick else ReproduceConfig(seed=seed)
     if scenes_per_sensor is not None:

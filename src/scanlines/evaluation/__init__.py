@@ -1,9 +1,8 @@
 """Scoring extractors against ground truth, timing them, and writing the results down.
 
 The modules, by subject (import them by name; importing this package imports none of
-them, so that :mod:`scanlines.sim` can use :mod:`~scanlines.evaluation.truth`)::
+them). The truth types they score against are :mod:`scanlines.truth`::
 
-    truth             the truth types (Truth, TrueSegments, BeamStatus); no simulator
     scores            Tolerances and the score records (EventScore, ..., Summary)
     metrics           score(), aggregate() and the matching they are built on
     specs             method specs: METHOD[:PRESET][?NAME=VALUE&...][@LABEL]
@@ -16,12 +15,12 @@ them, so that :mod:`scanlines.sim` can use :mod:`~scanlines.evaluation.truth`)::
     cases             a scan with truth, labels or neither, and one method's score on it
     experiments       the paper's experiments (scanlines reproduce): what is measured
     results_page      RESULTS.md from a measured run
-    reproduce         reproduce(): measure, draw the figures, write RESULTS.md
     bench             the speed of every method (scanlines bench)
     bench_results     what bench measured, as JSON and tables
     performance_page  PERFORMANCE.md from a bench run
 
-The figures are in :mod:`scanlines.viz`.
+The figures are in :mod:`scanlines.viz`; :func:`scanlines.reproduce.reproduce` measures,
+draws and writes ``RESULTS.md``.
 """
 
 __all__ = [
@@ -34,12 +33,10 @@ __all__ = [
     "metrics",
     "performance_page",
     "report",
-    "reproduce",
     "results_page",
     "scenes",
     "scores",
     "specs",
     "timing",
-    "truth",
     "truth_row",
 ]

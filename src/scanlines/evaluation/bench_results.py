@@ -13,16 +13,14 @@ import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
+from scanlines.evaluation.bench_config import BenchConfig
 from scanlines.evaluation.report import MISSING, TableData, microseconds, number
 from scanlines.evaluation.timing import Timed
 from scanlines.io.writers import write_text_atomically
-
-if TYPE_CHECKING:
-    from scanlines.evaluation.bench import BenchConfig
 
 __all__ = [
     "SCHEMA",

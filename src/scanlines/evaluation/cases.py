@@ -25,8 +25,8 @@ import numpy as np
 from scanlines import Extraction, Scan
 from scanlines.evaluation.metrics import accuracy_rate, score, score_events
 from scanlines.evaluation.scores import EventScore, SimilarityScore, Tolerances
-from scanlines.evaluation.truth import Truth
 from scanlines.extraction import ALPHA, RHO
+from scanlines.truth import Truth
 
 __all__ = [
     "Case",

@@ -39,7 +39,7 @@ import numpy as np
 
 from scanlines import Extraction, ParameterError
 from scanlines.evaluation.metrics import aggregate, score
-from scanlines.evaluation.report import jsonable, number, write_csv
+from scanlines.evaluation.report import number, write_csv
 from scanlines.evaluation.scenes import (
     DEFAULT_SCENES,
     OnScene,
@@ -53,6 +53,7 @@ from scanlines.evaluation.scores import ScanScore, Summary, Tolerances
 from scanlines.evaluation.specs import MethodSpec, parse_specs
 from scanlines.evaluation.timing import time_calls
 from scanlines.evaluation.truth_row import truth_extraction
+from scanlines.json_values import jsonable
 from scanlines.sim import get_sensor
 
 __all__ = [

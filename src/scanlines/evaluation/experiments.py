@@ -4,7 +4,7 @@ Everything here runs on what the repository holds: the two real excerpts of
 :mod:`scanlines.data` (Intel Research Lab, Freiburg 079), the hand labels of ten Intel
 frames (:mod:`scanlines.data.labels`) and the scan simulator (:mod:`scanlines.sim`).
 :func:`run` measures; :mod:`scanlines.evaluation.results_page` writes the page and
-:mod:`scanlines.viz.reproduce` its figures (:func:`scanlines.evaluation.reproduce.reproduce`
+:mod:`scanlines.viz.reproduce` its figures (:func:`scanlines.reproduce.reproduce`
 does all three).
 
 What is measured

@@ -35,7 +35,7 @@ Don't-care rules (all parameters of :class:`~scanlines.evaluation.scores.Toleran
 Every result carries the :class:`~scanlines.evaluation.scores.Tolerances` it was
 computed with, and turns into a flat dict with ``to_dict()`` for CSV or JSON; the records
 are in :mod:`scanlines.evaluation.scores`. The truth is the simulator's, read through its
-types only (:mod:`scanlines.evaluation.truth`).
+types only (:mod:`scanlines.truth`).
 
 References
 ----------
@@ -63,8 +63,8 @@ from scanlines.evaluation.scores import (
     Tolerances,
     ratio_or_nan,
 )
-from scanlines.evaluation.truth import Truth
 from scanlines.extraction import ALPHA, END_X, END_Y, RHO, START_X, START_Y
+from scanlines.truth import Truth
 
 __all__ = [
     "accuracy_rate",

@@ -1,4 +1,4 @@
-"""Writing results down: markdown tables, number formats, JSON values, CSV files.
+"""Writing results down: markdown tables, number formats, CSV files.
 
 Every report of :mod:`scanlines.evaluation` (the ``eval`` outputs, ``RESULTS.md``,
 ``PERFORMANCE.md``) and the command line tables write through this one module:
@@ -7,8 +7,6 @@ Every report of :mod:`scanlines.evaluation` (the ``eval`` outputs, ``RESULTS.md`
   infinite); :func:`percent` and :func:`microseconds` are its two special cases;
 * :func:`markdown_table` writes a table, and :class:`TableData` holds one with its title
   and caption for the command (rich) and the pages (markdown) alike;
-* :func:`jsonable` turns results into JSON values (NaN becomes ``null``, infinities
-  ``"inf"``/``"-inf"``), :func:`write_csv` writes rows of dicts;
 * :func:`command_line` is the command a page records as its origin.
 """
 
@@ -22,13 +20,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 __all__ = [
     "MISSING",
     "TableData",
     "command_line",
-    "jsonable",
     "markdown_table",
     "microseconds",
     "number",
@@ -114,23 +109,6 @@ class TableData:
 
 
 # --------------------------------------------------------------------------- files
-
-
-def jsonable(value: Any) -> Any:
-    """``value`` with numpy scalars as Python ones, tuples as lists and NaN as ``None``.
-
-    Infinities become ``"inf"`` and ``"-inf"`` (JSON has no number for them); mapping
-    keys become strings.
-    """
-    if isinstance(value, dict):
-        return {str(k): jsonable(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [jsonable(v) for v in value]
-    if isinstance(value, np.generic):
-        value = value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return None if math.isnan(value) else ("inf" if value > 0 else "-inf")
-    return value
 
 
 def write_csv(path: Path, rows: list[dict[str, Any]]) -> Path:

@@ -30,8 +30,8 @@ from typing import Any
 import numpy as np
 
 from scanlines import LogFormatError, ParameterError, Scan
-from scanlines.evaluation.truth import TrueSegments, Truth
 from scanlines.sim import SENSORS, NoiseModel, get_sensor, random_scene
+from scanlines.truth import TrueSegments, Truth
 
 __all__ = [
     "DEFAULT_SCENES",

@@ -20,10 +20,10 @@ import numpy as np
 
 from scanlines import Extraction, Scan
 from scanlines.evaluation.specs import TRUTH
-from scanlines.evaluation.truth import Truth
 from scanlines.steps.assemble import assemble, to_extraction
 from scanlines.steps.fit import TLS, prefix_moments, run_labels
 from scanlines.steps.returns import Returns
+from scanlines.truth import Truth
 
 __all__ = ["truth_extraction"]
 

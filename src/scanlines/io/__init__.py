@@ -48,10 +48,12 @@ read or written.
 from __future__ import annotations
 
 import inspect
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 from scanlines.errors import ParameterError
+from scanlines.io.bag_writer import Ros2BagWriter
 from scanlines.io.base import LogReader
 from scanlines.io.carmen import CarmenReader
 from scanlines.io.coreslam import CoreSlamReader
@@ -63,11 +65,10 @@ from scanlines.io.transform import points_to_world, to_world
 from scanlines.io.writers import (
     CSV_COLUMNS,
     CsvWriter,
+    Frame,
     JsonlWriter,
     ResultWriter,
-    Ros2BagWriter,
     meta_path_for,
-    open_writer,
 )
 
 __all__ = [
@@ -151,3 +152,62 @@ def open_log(path: str | Path, *, format: str | None = None, **options: Any) -> 
             f"{format} options: {', '.join(accepted)}"
         )
     return READERS[format](path, **options)
+
+
+#: Output suffix -> writer class (a path without suffix: a ROS 2 bag directory).
+WRITERS: dict[str, type[ResultWriter]] = {
+    ".jsonl": JsonlWriter,
+    ".csv": CsvWriter,
+    ".mcap": Ros2BagWriter,
+}
+
+
+def open_writer(
+    path: str | Path,
+    *,
+    meta: Mapping[str, Any] | None = None,
+    frame: Frame = "sensor",
+    **options: Any,
+) -> ResultWriter:
+    """Open a result writer, choosing the format from the path.
+
+    Parameters
+    ----------
+    path:
+        ``*.jsonl``, ``*.csv``, ``*.mcap``, or a path without suffix (or an
+        existing ROS 2 bag directory) for a ROS 2 bag directory.
+    meta:
+        Metadata for ``<path>.meta.json``: typically ``input``, ``method``,
+        ``params``, ``reader`` (the reader's :meth:`~scanlines.io.base.LogReader.options`).
+    frame:
+        ``"sensor"`` or ``"world"`` (see the module docstring).
+    **options:
+        Format options (``Ros2BagWriter``: ``storage``, ``topic``,
+        ``markers_topic``, ``laser_frame``, ``world_frame``, ``overwrite``).
+
+    Returns
+    -------
+    ResultWriter
+        A context manager; call ``write(index, scan, extraction)`` per scan.
+
+    Examples
+    --------
+    >>> with open_log("run.clf") as reader, open_writer("out.jsonl") as writer:  # doctest: +SKIP
+    ...     for index, scan in reader.enumerate():
+    ...         writer.write(index, scan, extract(scan))
+    ...     writer.update_meta(counts={"skipped_records": reader.error_count})
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix in WRITERS:
+        cls = WRITERS[suffix]
+    elif suffix == "" or (path.is_dir() and (path / "metadata.yaml").exists()):
+        cls = Ros2BagWriter
+    else:
+        raise ParameterError(
+            f"{path}: unknown output format {suffix!r}; use .jsonl, .csv, .mcap or a directory "
+            f"path without suffix (ROS 2 bag)"
+        )
+    if options and cls is not Ros2BagWriter:
+        raise ParameterError(f"{path}: options {sorted(options)} apply only to ROS 2 bag output")
+    return cls(path, meta=meta, frame=frame, **options)

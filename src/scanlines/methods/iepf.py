@@ -163,6 +163,21 @@ def iepf_scan(ranges, valid, cos, sin, step, full_circle, angle_min, settings):
     returns = valid_returns(ranges, valid, cos, sin)
     if returns.index.shape[0] == 0:
         return empty_result(none, none)
+    returns, moments, runs, clusters = cluster_and_split(returns, n_beams, step, full_circle, s)
+    return finish(
+        returns, n_beams, full_circle, moments, runs, clusters, none, angle_min, output(s)
+    )
+
+
+@kernel
+def cluster_and_split(returns, n_beams, step, full_circle, s):
+    """Steps 1-2 of the split methods: cluster by the rule, split every cluster at the point
+    farthest from its chord (or line) while it is farther than ``split_distance``.
+
+    Returns the (possibly rotated) returns, their moments, the runs ``(a, b, group)`` and
+    the clustering ``(True, ring, breakpoints)`` as :func:`~scanlines.steps.assemble.finish`
+    takes them.
+    """
     returns, start, end, breakpoints, ring = cluster_scan(
         returns, n_beams, step, full_circle, rule_spec(s)
     )
@@ -171,7 +186,4 @@ def iepf_scan(ranges, valid, cos, sin, step, full_circle, angle_min, settings):
     a, b, group = split_at_farthest(
         returns.x, returns.y, moments, start, end, clusters, s.split_distance, s.split_reference
     )
-    return finish(
-        returns, n_beams, full_circle, moments, (a, b, group), (True, ring, breakpoints), none,
-        angle_min, output(s),
-    )  # fmt: skip
+    return returns, moments, (a, b, group), (True, ring, breakpoints)

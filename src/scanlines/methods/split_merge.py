@@ -61,16 +61,14 @@ from typing import Any, ClassVar
 import numpy as np
 
 from scanlines._jit import kernel
-from scanlines.methods.base import CompiledMethod, cluster_scan
-from scanlines.methods.iepf import SplitSettings, output, rule_spec
+from scanlines.methods.base import CompiledMethod
+from scanlines.methods.iepf import SplitSettings, cluster_and_split, output
 from scanlines.params import Param, number, segment_params, with_default
 from scanlines.steps.assemble import drop_small, empty_result, finish
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, LITERAL_CLUSTERING
 from scanlines.steps.events import EVENT_PARAMS
-from scanlines.steps.fit import prefix_moments
 from scanlines.steps.merge import merge_by_chi_square
 from scanlines.steps.returns import valid_returns, without
-from scanlines.steps.split import split_at_farthest
 
 
 class SplitMerge(CompiledMethod):
@@ -124,19 +122,14 @@ def split_merge_scan(ranges, valid, cos, sin, step, full_circle, angle_min, sett
     returns, outliers = drop_outliers(returns, s.outlier_distance, s.split_distance)
     if returns.index.shape[0] == 0:
         return empty_result(np.zeros(0, dtype=np.int64), outliers)
-    returns, start, end, breakpoints, ring = cluster_scan(
-        returns, n_beams, step, full_circle, rule_spec(s)
-    )
-    moments = prefix_moments(returns.x, returns.y)
-    clusters = np.arange(start.shape[0])
-    a, b, group = split_at_farthest(
-        returns.x, returns.y, moments, start, end, clusters, s.split_distance, s.split_reference
+    returns, moments, (a, b, group), clusters = cluster_and_split(
+        returns, n_beams, step, full_circle, s
     )
     a, b, group = drop_small(returns.x, returns.y, a, b, group, s.min_points, s.min_length)
     a, b, group = merge_by_chi_square(returns, moments, a, b, group, s.range_sigma, s.merge_chi2)
     return finish(
-        returns, n_beams, full_circle, moments, (a, b, group), (True, ring, breakpoints),
-        outliers, angle_min, output(s),
+        returns, n_beams, full_circle, moments, (a, b, group), clusters, outliers, angle_min,
+        output(s),
     )  # fmt: skip
 
 

@@ -18,13 +18,12 @@ Or by hand::
     sim = simulate(world, "lms_1deg", pose=(0, 0, 0), seed=1)
 
 Only numpy is needed. The truth conventions are in :mod:`scanlines.sim.truth` (the
-truth types, re-exported here, in :mod:`scanlines.evaluation.truth`), the noise model in
+truth types, re-exported here, in :mod:`scanlines.truth`), the noise model in
 :mod:`scanlines.sim.noise`, the sensor numbers in :mod:`scanlines.sim.sensors`.
 """
 
 from __future__ import annotations
 
-from scanlines.evaluation.truth import BeamStatus, TrueSegments, Truth
 from scanlines.sim.noise import NO_RETURN, NoiseModel, NoisyRanges, apply_noise
 from scanlines.sim.raycast import RayHits, cast_rays
 from scanlines.sim.scenes import SCENE_KINDS, Scene, random_scene
@@ -41,6 +40,7 @@ from scanlines.sim.world import (
     round_pillar,
     wall,
 )
+from scanlines.truth import BeamStatus, TrueSegments, Truth
 
 __all__ = [
     "NO_RETURN",

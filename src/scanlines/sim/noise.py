@@ -37,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from scanlines.evaluation.truth import BeamStatus
+from scanlines.truth import BeamStatus
 
 __all__ = ["NO_RETURN", "NoiseModel", "NoisyRanges", "apply_noise"]
 

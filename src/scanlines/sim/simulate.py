@@ -7,12 +7,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from scanlines.evaluation.truth import BeamStatus, Truth
 from scanlines.scan import Scan
 from scanlines.sim.noise import NoiseModel, apply_noise
 from scanlines.sim.sensors import SensorSpec, get_sensor
 from scanlines.sim.truth import compute_truth
 from scanlines.sim.world import World
+from scanlines.truth import BeamStatus, Truth
 
 __all__ = ["SimScan", "as_rng", "depth_jumps", "simulate"]
 

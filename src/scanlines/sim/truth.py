@@ -42,8 +42,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from scanlines.evaluation.truth import BeamStatus, TrueSegments, Truth
 from scanlines.sim.world import World
+from scanlines.truth import BeamStatus, TrueSegments, Truth
 
 __all__ = ["compute_truth", "hesse_line", "sensor_to_world", "world_to_sensor"]
 

@@ -1,11 +1,36 @@
-"""Shared building blocks of every extractor, in the order data flows through them.
+"""The building blocks of every extractor, one implementation each, in the order data flows.
 
-``points``       the valid returns of a scan as a sequence (with the seam of full circles)
-``breakpoints``  neighbour-distance tests and clustering (adaptive, ABD, PDBS, fixed)
-``denoise``      isolated-noise detection and the paper's window-mean replacement
-``corners``      corner scores (slope difference, turn angle) and candidate peaks
-``fit``          line fits (total least squares, the paper's 5-point OLS), SSE, covariance
-``select``       the threshold sweep and its selection criterion
-``merge``        merging collinear neighbours and splitting by a maximum residual
-``assemble``     turning sequence positions into an :class:`~scanlines.Extraction`
+Everything here is a kernel (decorated :func:`scanlines._jit.kernel`): compiled by numba,
+it takes arrays, scalars and the bundles below, trusts them and validates nothing. The
+validated entry points are :class:`~scanlines.Scan` and :class:`~scanlines.Extractor`;
+``docs/ARCHITECTURE.md`` gives the conventions.
+
+``returns``      the valid returns of a scan (:class:`~scanlines.steps.returns.Returns`)
+``noise``        range noise measured from the scan: one sigma, its growth with range
+``breakpoints``  the clustering rules (adaptive, ABD, PDBS, fixed) and the break test
+``clusters``     runs of one surface, with the seam of full circles joined
+``denoise``      isolated returns, small and in-between clusters, the paper's window mean
+``corners``      corner scores (turn angle, the paper's Dk) and their peaks
+``fit``          line fits from running sums (total least squares, the paper's 5-point
+                 OLS), fitting costs, covariances (:class:`~scanlines.steps.fit.Moments`)
+``select``       the threshold sweep and its criterion (BIC, smallest SSE)
+``split``        recursive splits (end-point fit, residual bound), cuts at corners
+``merge``        merging neighbours (by the criterion, by chi-square)
+``events``       corners and breakpoints between consecutive segments
+``assemble``     the result arrays of an :class:`~scanlines.Extraction`
 """
+
+__all__ = [
+    "assemble",
+    "breakpoints",
+    "clusters",
+    "corners",
+    "denoise",
+    "events",
+    "fit",
+    "merge",
+    "noise",
+    "returns",
+    "select",
+    "split",
+]

@@ -23,7 +23,7 @@ from scanlines.evaluation.evaluate import (
     worst_scans,
 )
 from scanlines.evaluation.scores import Summary
-from scanlines.evaluation.truth import Truth
+from scanlines.truth import Truth
 from scanlines.viz.figures import pyplot
 from scanlines.viz.scans import plot_extraction
 

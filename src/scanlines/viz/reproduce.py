@@ -1,7 +1,7 @@
 """The figures of ``RESULTS.md``: the paper's Fig. 13 redone, and the ground-truth bars.
 
 :func:`write_figures` writes them (:data:`FIGURES`) for
-:func:`scanlines.evaluation.reproduce.reproduce`.
+:func:`scanlines.reproduce.reproduce`.
 """
 
 from __future__ import annotations

@@ -1,11 +1,14 @@
 """The paper's experiments, redone on the data scanlines ships: ``scanlines reproduce``.
 
+The one place where measuring (:mod:`scanlines.evaluation`) and drawing
+(:mod:`scanlines.viz`) meet, so it stands above both.
+
 :func:`reproduce` measures (:func:`scanlines.evaluation.experiments.run`, whose module
 says what and how), draws the figures (:mod:`scanlines.viz.reproduce`) and writes the
 page (:mod:`scanlines.evaluation.results_page`): ``<out>/RESULTS.md`` and
 ``<out>/figures/*.png``.
 
-``import scanlines.evaluation.reproduce`` needs numpy only; the figures import
+``import scanlines.reproduce`` needs numpy only; the figures import
 matplotlib when they are drawn.
 """
 

@@ -1,0 +1,253 @@
+"""Writing extraction results as a ROS 2 bag directory or a single ``.mcap`` file.
+
+The layout (topics, message types, markers, frames) is in :mod:`scanlines.io.writers`;
+:func:`scanlines.io.open_writer` picks this writer for ``*.mcap`` and paths without a
+suffix.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+import shutil
+import tempfile
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from scanlines.errors import ParameterError
+from scanlines.extraction import END_X, END_Y, START_X, START_Y
+from scanlines.io.writers import UNSTAMPED_PERIOD, Frame, ResultWriter, ScanFeatures
+from scanlines.scan import Scan
+
+__all__ = ["Ros2BagWriter"]
+
+
+_COLORS = {
+    "segments": (0.1, 0.8, 0.2, 1.0),
+    "breakpoints": (0.9, 0.1, 0.1, 1.0),
+    "corners": (0.1, 0.3, 1.0, 1.0),
+}
+_SCALES = {"segments": 0.03, "breakpoints": 0.08, "corners": 0.12}
+
+
+class Ros2BagWriter(ResultWriter):
+    """Scans and feature markers as a ROS 2 bag directory or a single ``.mcap`` file.
+
+    Parameters
+    ----------
+    path:
+        ``*.mcap`` (one MCAP file) or a directory path (a ROS 2 bag).
+    meta, frame:
+        See :class:`ResultWriter`.
+    storage:
+        ``"mcap"`` (default) or ``"sqlite3"``, for a bag directory.
+    topic:
+        Topic of the ``LaserScan`` messages.
+    markers_topic:
+        Topic of the ``MarkerArray`` messages.
+    laser_frame, world_frame:
+        ``frame_id`` of the scans and of world-frame markers.
+    overwrite:
+        Replace an existing output (a directory only if it is a ROS 2 bag).
+    """
+
+    format_name = "ros2"
+
+    def __init__(
+        self,
+        path: str | Path,
+        *,
+        meta: Mapping[str, Any] | None = None,
+        frame: Frame = "sensor",
+        storage: Literal["mcap", "sqlite3"] = "mcap",
+        topic: str = "/scan",
+        markers_topic: str = "/scanlines/markers",
+        laser_frame: str = "laser",
+        world_frame: str = "map",
+        overwrite: bool = True,
+    ) -> None:
+        super().__init__(path, meta=meta, frame=frame)
+        from rosbags.rosbag2 import StoragePlugin, Writer
+        from rosbags.typesys import Stores, get_typestore
+
+        self.single_file = self.path.suffix.lower() == ".mcap"
+        if self.single_file:
+            storage = "mcap"
+        if storage not in ("mcap", "sqlite3"):
+            raise ParameterError(f"storage must be 'mcap' or 'sqlite3', got {storage!r}")
+        self._check_target(overwrite)
+        self.storage = storage
+        self.topic = topic
+        self.laser_frame = laser_frame
+        self.marker_frame = world_frame if frame == "world" else laser_frame
+        self.world_frame = world_frame
+        self._types = get_typestore(Stores.ROS2_HUMBLE)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._tmpdir = Path(
+            tempfile.mkdtemp(dir=self.path.parent, prefix=f".{self.path.name}.", suffix=".tmp")
+        )
+        self._bag_dir = self._tmpdir / (self.path.stem if self.single_file else self.path.name)
+        plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
+        self._writer = Writer(self._bag_dir, version=8, storage_plugin=plugin)
+        try:
+            self._writer.open()
+            add = self._writer.add_connection
+            self._scan_conn = add(topic, "sensor_msgs/msg/LaserScan", typestore=self._types)
+            self._marker_conn = add(
+                markers_topic, "visualization_msgs/msg/MarkerArray", typestore=self._types
+            )
+            self._tf_conn = add("/tf", "tf2_msgs/msg/TFMessage", typestore=self._types)
+        except BaseException:
+            self._abort()
+            raise
+
+    def _check_target(self, overwrite: bool) -> None:
+        if not self.path.exists():
+            return
+        if not overwrite:
+            raise FileExistsError(f"{self.path} exists")
+        if self.single_file == self.path.is_dir():
+            wanted = "an .mcap file" if self.single_file else "a bag directory"
+            raise ParameterError(f"{self.path} exists and is not {wanted}; not replacing it")
+        if self.path.is_dir() and not (self.path / "metadata.yaml").exists():
+            raise ParameterError(
+                f"{self.path} is a directory that is not a ROS 2 bag; not replacing it"
+            )
+
+    # -- message construction -------------------------------------------------------------
+
+    def _stamp(self, features: ScanFeatures) -> tuple[Any, int]:
+        seconds = features.scan.timestamp
+        if seconds is None or not math.isfinite(seconds) or seconds < 0:
+            seconds = features.index * UNSTAMPED_PERIOD
+        sec = math.floor(seconds)
+        nanosec = round((seconds - sec) * 1e9)
+        if nanosec >= 1_000_000_000:
+            sec, nanosec = sec + 1, nanosec - 1_000_000_000
+        time = self._types.types["builtin_interfaces/msg/Time"](sec=sec, nanosec=nanosec)
+        return time, sec * 1_000_000_000 + nanosec
+
+    def _header(self, stamp: Any, frame_id: str) -> Any:
+        return self._types.types["std_msgs/msg/Header"](stamp=stamp, frame_id=frame_id)
+
+    def _laser_scan(self, scan: Scan, stamp: Any) -> Any:
+        n = len(scan)
+        intensities = scan.intensities if scan.intensities is not None else np.empty(0)
+        return self._types.types["sensor_msgs/msg/LaserScan"](
+            header=self._header(stamp, self.laser_frame),
+            angle_min=scan.angle_min,
+            angle_max=scan.angle_min + (n - 1) * scan.angle_increment,
+            angle_increment=scan.angle_increment,
+            time_increment=0.0,
+            scan_time=0.0,
+            range_min=scan.range_min,
+            range_max=scan.range_max,
+            ranges=np.asarray(scan.ranges, dtype=np.float32),
+            intensities=np.asarray(intensities, dtype=np.float32),
+        )
+
+    def _marker(self, stamp: Any, namespace: str, marker_id: int, points: np.ndarray) -> Any:
+        t = self._types.types
+        marker_type = t["visualization_msgs/msg/Marker"]
+        if namespace == "":
+            kind, action, scale, color = (
+                marker_type.SPHERE_LIST,
+                marker_type.DELETEALL,
+                1.0,
+                (0,) * 4,
+            )
+        else:
+            kind = marker_type.LINE_LIST if namespace == "segments" else marker_type.SPHERE_LIST
+            action, scale, color = marker_type.ADD, _SCALES[namespace], _COLORS[namespace]
+        header = self._header(stamp, self.marker_frame)
+        return marker_type(
+            header=header,
+            ns=namespace,
+            id=marker_id,
+            type=kind,
+            action=action,
+            pose=t["geometry_msgs/msg/Pose"](
+                position=t["geometry_msgs/msg/Point"](x=0.0, y=0.0, z=0.0),
+                orientation=t["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0),
+            ),
+            scale=t["geometry_msgs/msg/Vector3"](x=scale, y=scale, z=scale),
+            color=t["std_msgs/msg/ColorRGBA"](r=color[0], g=color[1], b=color[2], a=color[3]),
+            lifetime=t["builtin_interfaces/msg/Duration"](sec=0, nanosec=0),
+            frame_locked=False,
+            points=[t["geometry_msgs/msg/Point"](x=float(x), y=float(y), z=0.0) for x, y in points],
+            colors=[],
+            texture_resource="",
+            texture=t["sensor_msgs/msg/CompressedImage"](
+                header=header, format="", data=np.empty(0, dtype=np.uint8)
+            ),
+            uv_coordinates=[],
+            text="",
+            mesh_resource="",
+            mesh_file=t["visualization_msgs/msg/MeshFile"](
+                filename="", data=np.empty(0, dtype=np.uint8)
+            ),
+            mesh_use_embedded_materials=False,
+        )
+
+    def _markers(self, features: ScanFeatures, stamp: Any) -> Any:
+        lines = features.extraction.lines
+        segment_points = lines[:, [START_X, START_Y, END_X, END_Y]].reshape(-1, 2)
+        groups = (
+            ("segments", segment_points),
+            ("breakpoints", features.breakpoint_points),
+            ("corners", features.corner_points),
+        )
+        markers = [self._marker(stamp, "", 0, np.empty((0, 2)))]
+        markers += [
+            self._marker(stamp, name, 0, points) for name, points in groups if len(points) > 0
+        ]
+        return self._types.types["visualization_msgs/msg/MarkerArray"](markers=markers)
+
+    def _transform(self, pose: Sequence[float], stamp: Any) -> Any:
+        t = self._types.types
+        x, y, theta = pose
+        transform = t["geometry_msgs/msg/TransformStamped"](
+            header=self._header(stamp, self.world_frame),
+            child_frame_id=self.laser_frame,
+            transform=t["geometry_msgs/msg/Transform"](
+                translation=t["geometry_msgs/msg/Vector3"](x=x, y=y, z=0.0),
+                rotation=t["geometry_msgs/msg/Quaternion"](
+                    x=0.0, y=0.0, z=math.sin(theta / 2.0), w=math.cos(theta / 2.0)
+                ),
+            ),
+        )
+        return t["tf2_msgs/msg/TFMessage"](transforms=[transform])
+
+    # -- hooks ----------------------------------------------------------------------------
+
+    def _write(self, features: ScanFeatures) -> None:
+        stamp, bag_time = self._stamp(features)
+        serialize = self._types.serialize_cdr
+        scan_msg = self._laser_scan(features.scan, stamp)
+        self._writer.write(
+            self._scan_conn, bag_time, serialize(scan_msg, "sensor_msgs/msg/LaserScan")
+        )
+        markers = self._markers(features, stamp)
+        self._writer.write(
+            self._marker_conn, bag_time, serialize(markers, "visualization_msgs/msg/MarkerArray")
+        )
+        if features.scan.pose is not None:
+            tf = self._transform(features.scan.pose, stamp)
+            self._writer.write(self._tf_conn, bag_time, serialize(tf, "tf2_msgs/msg/TFMessage"))
+
+    def _commit(self) -> None:
+        self._writer.close()
+        source = self._bag_dir / f"{self._bag_dir.name}.mcap" if self.single_file else self._bag_dir
+        if self.path.is_dir():
+            shutil.rmtree(self.path)
+        os.replace(source, self.path)
+        shutil.rmtree(self._tmpdir, ignore_errors=True)
+
+    def _abort(self) -> None:
+        with contextlib.suppress(Exception):
+            self._writer.abort()
+        shutil.rmtree(self._tmpdir, ignore_errors=True)
