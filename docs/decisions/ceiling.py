@@ -38,10 +38,10 @@ from scanlines.evaluation.metrics import (
 )
 from scanlines.evaluation.scenes import SceneCase, iter_scenes
 from scanlines.evaluation.scores import Tolerances
-from scanlines.truth import Truth
 from scanlines.evaluation.truth_row import truth_extraction
 from scanlines.extraction import ALPHA, RHO
 from scanlines.sim import SENSORS, get_sensor, random_scene
+from scanlines.truth import Truth
 
 REASONS = ("overlap", "rho only", "alpha only", "both", "taken")
 SPAN_BINS = (("8-15", 8, 15), ("16-31", 16, 31), ("32-63", 32, 63), ("64+", 64, np.inf))

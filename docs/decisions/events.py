@@ -33,8 +33,8 @@ from scanlines import Extraction, Extractor, Scan
 from scanlines.evaluation.metrics import event_dont_care, match_events, score
 from scanlines.evaluation.scenes import iter_scenes
 from scanlines.evaluation.scores import Tolerances
-from scanlines.truth import BeamStatus, Truth
 from scanlines.sim import SENSORS
+from scanlines.truth import BeamStatus, Truth
 
 NEAR_NOISE_BEAMS = 3
 """A false event this close to an outlier or mixed pixel is put in that class."""
