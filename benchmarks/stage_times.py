@@ -4,18 +4,20 @@
 
 Each stage is called from Python with the inputs the full kernel would give it, so every line
 includes about 1 us of call overhead and the boxing of its outputs; the stages add up to a
-little more than the kernel. Speed is measured here, never asserted in tests.
+little more than the kernel. Times are taken by the package's one timing rule
+(:func:`scanlines.evaluation.timing.time_calls`): the median of ``repeats`` samples per stage,
+passes interleaved between stages. Speed is measured here, never asserted in tests.
 """
 
 from __future__ import annotations
 
 import argparse
 import math
-import time
 
 import numpy as np
 
 from scanlines import Extractor
+from scanlines.evaluation.timing import time_calls
 from scanlines.methods import adaptive as ad
 from scanlines.methods.base import as_record
 from scanlines.sim import random_scene
@@ -28,17 +30,6 @@ from scanlines.steps.events import junction_events
 from scanlines.steps.noise import range_noise
 from scanlines.steps.returns import beam_gaps, valid_returns
 from scanlines.steps.split import cut_at, refine_cuts
-
-
-def best_us(call, repeats: int) -> float:
-    call()
-    best = math.inf
-    for _ in range(3):
-        start = time.perf_counter()
-        for _ in range(repeats):
-            call()
-        best = min(best, (time.perf_counter() - start) / repeats)
-    return 1e6 * best
 
 
 def main() -> None:
@@ -111,12 +102,15 @@ def main() -> None:
             returns, settings.fit, moments, a, b, 0.0, 0.01, breakpoints, corners, breakpoints
         ),
     }
+    timed = time_calls(
+        {name: (lambda _, call=call: call()) for name, call in rows.items()}, [None], args.repeats
+    )
     print(
         f"{args.sensor}, seed {args.seed}: {returns.r.size} returns, {len(start)} clusters, "
-        f"{len(a)} segments; best of 3 x {args.repeats} calls"
+        f"{len(a)} segments; median of {args.repeats} calls"
     )
-    for name, call in rows.items():
-        print(f"{name:32s} {best_us(call, args.repeats):8.1f} us")
+    for name, result in timed.items():
+        print(f"{name:32s} {np.median(result.samples_ns) / 1000:8.1f} us")
 
 
 if __name__ == "__main__":

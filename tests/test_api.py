@@ -182,3 +182,17 @@ def test_calling_the_methods_package_is_a_deprecated_alias_of_method_names():
     with pytest.warns(DeprecationWarning, match="method_names"):
         listed = scanlines.methods()
     assert listed == scanlines.method_names()
+
+
+def test_an_extractor_pickles_with_its_parameters():
+    import pickle
+
+    extractor = scanlines.Extractor("iepf", split_distance=0.05)
+    copy = pickle.loads(pickle.dumps(extractor))
+    assert (copy.method, copy.preset, dict(copy.params)) == (
+        "iepf",
+        None,
+        dict(extractor.params),
+    )
+    scan = scan_of([((2.0, -3.0), (2.0, 3.0))], fov_deg=90, step_deg=1.0)
+    assert copy(scan).first.tolist() == extractor(scan).first.tolist()

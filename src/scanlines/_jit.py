@@ -70,6 +70,11 @@ def kernel(function: F | None = None, *, inline: bool = False) -> Any:
     small bundles of :mod:`scanlines.steps` (named tuples, settings records), trusts
     them and validates nothing; validation happens once, in the public entry points.
 
+    A kernel is compiled once per distinct set of argument types, and numba types a
+    module constant passed as an argument as a literal of its own: pass
+    ``np.int64(CONSTANT)`` where other callers pass a variable, or the kernel (and all
+    it calls) is compiled twice.
+
     ``inline=True`` (as ``@kernel(inline=True)``) is for the small scalar helpers of
     the inner loops (a line fit from running sums, a threshold): numba calls
     between separately compiled functions are not inlined by LLVM, and such a

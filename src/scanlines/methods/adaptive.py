@@ -362,7 +362,7 @@ def adaptive_scan(ranges, valid, cos, sin, step, full_circle, angle_min, setting
     if s.auto_slope_window:
         window = turn_window(returns.x, returns.y, returns.index, sigma)
     returns, start, end, breakpoints, ring = cluster_returns(
-        returns, n_beams, step, full_circle, rule, window, breaks, False
+        returns, n_beams, step, full_circle, rule, window, breaks
     )
     moments = prefix_moments(returns.x, returns.y)
     inv_r2 = inverse_square_sums(returns.r) if s.criterion == BIC else np.zeros(0)

@@ -259,8 +259,18 @@ def _without_positions(returns: Returns, a: np.ndarray, b: np.ndarray, drop: np.
 @kernel
 def cluster_scan(returns, n_beams, step, full_circle, spec):
     """:func:`~scanlines.steps.clusters.cluster_returns` by the rule of the
-    :class:`~scanlines.steps.breakpoints.RuleSpec` ``spec``, its noise from the scan."""
+    :class:`~scanlines.steps.breakpoints.RuleSpec` ``spec``, its noise from the scan.
+
+    :data:`~scanlines.steps.breakpoints.NO_RULE` makes one cluster of every return (a
+    full circle is still rotated to start after a gap or at its strongest corner).
+    """
     rule = scan_rule(spec, returns.r, beam_gaps(returns.index, n_beams))
     no_flags = np.zeros(0, dtype=np.bool_)
-    whole = spec.kind == NO_RULE
-    return cluster_returns(returns, n_beams, step, full_circle, rule, RING_WINDOW, no_flags, whole)
+    ring_window = np.int64(RING_WINDOW)  # not a literal: one compiled clustering for all
+    returns, start, end, breakpoints, ring = cluster_returns(
+        returns, n_beams, step, full_circle, rule, ring_window, no_flags
+    )
+    if spec.kind == NO_RULE:
+        last = returns.index.shape[0] - 1
+        return returns, np.zeros(1, np.int64), np.full(1, last, np.int64), breakpoints[:0], ring
+    return returns, start, end, breakpoints, ring

@@ -153,6 +153,6 @@ def finish(returns, n_beams, full_circle, moments, runs, clusters, outliers, ang
     if not clustered:
         breakpoints = jumps
     return assemble(
-        returns, TLS, moments, a, b, angle_min, output.range_sigma,
+        returns, np.int64(TLS), moments, a, b, angle_min, output.range_sigma,
         sorted_distinct(breakpoints), corners, sorted_distinct(outliers),
     )  # fmt: skip

@@ -201,7 +201,8 @@ def scan_rule(spec, r, gap):
     the rule uses it. :data:`NO_RULE` gives a rule that cuts at missing beams only.
     """
     if spec.kind == NO_RULE:
-        return make_rule(FIXED, spec.k, 0.0, 0.0, spec.abd_lambda, spec.pdbs_c0, math.inf, 0.0)
+        fixed = np.int64(FIXED)  # not a literal: one compiled make_rule for every caller
+        return make_rule(fixed, spec.k, 0.0, 0.0, spec.abd_lambda, spec.pdbs_c0, math.inf, 0.0)
     sigma = 0.0
     noisy_rule = spec.kind in (ADAPTIVE, ABD) and spec.noise_k > 0.0
     if noisy_rule or spec.line_k > 0.0:

@@ -76,13 +76,12 @@ def seam_rotation(returns, gap, n_beams, step, rule):
 
 
 @kernel
-def cluster_returns(returns, n_beams, step, full_circle, rule, ring_window, known_breaks, whole):
+def cluster_returns(returns, n_beams, step, full_circle, rule, ring_window, known_breaks):
     """Clusters of one scan's returns, the seam of a full circle joined (module docstring).
 
     ``known_breaks`` are the break flags of ``returns`` if already computed (else an
     empty array); ``ring_window`` the points fitted on each side when a ring is
-    anchored; ``whole`` makes one cluster of every return (methods that work on the
-    whole scan), after the rotation of a full circle.
+    anchored.
 
     Returns ``(returns, start, end, breakpoints, ring)``: the returns (rotated for a
     full circle), the clusters' inclusive bounds, the breakpoint beams and whether
@@ -90,7 +89,7 @@ def cluster_returns(returns, n_beams, step, full_circle, rule, ring_window, know
     """
     n = returns.index.shape[0]
     none = np.zeros(0, dtype=np.int64)
-    if n == 0 and not whole:
+    if n == 0:
         return returns, none, none.copy(), none.copy(), False
     ring = False
     at_seam = False
@@ -103,8 +102,8 @@ def cluster_returns(returns, n_beams, step, full_circle, rule, ring_window, know
         if shift:
             returns = rotated(returns, shift)
         known_breaks = np.zeros(0, dtype=np.bool_)
-    if ring or whole:
-        return returns, np.zeros(1, np.int64), np.full(1, n - 1, np.int64), none, ring
+    if ring:
+        return returns, np.zeros(1, np.int64), np.full(1, n - 1, np.int64), none, True
     breaks = known_breaks
     if breaks.shape[0] != n - 1:
         breaks = break_flags(returns, beam_gaps(returns.index, n_beams), step, rule)

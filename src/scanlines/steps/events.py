@@ -146,7 +146,7 @@ def segment_events(returns, n_beams, moments, a, b, group, clustered, wrap, boun
         count += 1
         span = a[following] - b[k]
         widest = max(widest, span + x.shape[0] if span < 0 else span)
-    rho, alpha, _ = fit_many(TLS, moments, a, b)
+    rho, alpha, _ = fit_many(np.int64(TLS), moments, a, b)
     reach = int(corner_beams)
     corners = np.empty(count, dtype=np.int64)
     jumps = np.empty(count, dtype=np.int64)

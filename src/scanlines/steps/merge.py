@@ -107,7 +107,7 @@ def merge_by_chi_square(returns, moments, a, b, group, range_sigma, threshold):
     """
     a, b, group = a.copy(), b.copy(), group.copy()
     m = a.shape[0]
-    rho, alpha, _ = fit_many(TLS, moments, a, b)
+    rho, alpha, _ = fit_many(np.int64(TLS), moments, a, b)
     covariance = run_covariances(returns, rho, alpha, a, b, range_sigma)
     while m >= 2:
         best, best_value = -1, math.inf
