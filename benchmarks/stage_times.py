@@ -53,7 +53,7 @@ def main() -> None:
     margin = settings.noise_k * math.sqrt(2.0) * sigma
     window = turn_window(returns.x, returns.y, returns.index, sigma)
     no_breaks = np.zeros(0, np.bool_)
-    clustered = cluster_returns(returns, n_beams, step, False, rule, window, no_breaks, False)
+    clustered = cluster_returns(returns, n_beams, step, False, rule, window, no_breaks)
     start, end, breakpoints = clustered[1], clustered[2], clustered[3]
     moments = fit.prefix_moments(returns.x, returns.y)
     cost = fit.RunCost(settings.fit, moments, fit.inverse_square_sums(returns.r))
@@ -82,7 +82,7 @@ def main() -> None:
         ),
         "turn window (median)": lambda: turn_window(returns.x, returns.y, returns.index, sigma),
         "clustering": lambda: cluster_returns(
-            returns, n_beams, step, False, rule, window, no_breaks, False
+            returns, n_beams, step, False, rule, window, no_breaks
         ),
         "running sums": lambda: fit.prefix_moments(returns.x, returns.y),
         "turn-angle scores": lambda: ad.corner_scores(
