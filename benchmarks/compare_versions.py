@@ -25,6 +25,7 @@ import gc
 import statistics
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -34,6 +35,7 @@ SLOW_METHODS = ("line_tracking", "line_regression", "ransac", "hough")
 
 def load_other(site_packages: str, methods: list[str]) -> tuple[dict, dict]:
     """The other version's extractors and its scans (Intel excerpt, simulated TiM571)."""
+    site_packages = str(Path(site_packages).resolve())
     sys.path.insert(0, site_packages)
     from scanlines import Extractor, Scan
     from scanlines.data import sample

@@ -29,15 +29,17 @@ METHODS = ("adaptive", "iepf", "pdbs", "split_merge", "line_tracking", "line_reg
 METHODS += ("ransac", "hough")
 
 
-def scans(n: int) -> list:
-    """``(key, scan)`` of the simulated scenes and the shipped excerpts."""
+def scans(n: int, real: int | None) -> list:
+    """``(key, scan)`` of the simulated scenes and the first ``real`` scans (all: ``None``)
+    of each shipped excerpt."""
     try:
         from scanlines.evaluation.scenes import iter_scenes
     except ImportError:  # the layout before the evaluation package
         from scanlines.evaluate import iter_scenes
     out = [(f"{case.sensor}:{case.index}", case.scan) for case in iter_scenes(None, n, 0)]
     for name in ("intel", "freiburg"):
-        out += [(f"{name}:{i}", scan) for i, scan in enumerate(open_log(sample(name)))]
+        excerpt = list(open_log(sample(name)))[:real]
+        out += [(f"{name}:{i}", scan) for i, scan in enumerate(excerpt)]
     return out
 
 
@@ -71,16 +73,17 @@ def main() -> None:
     parser.add_argument("action", choices=("record", "compare"))
     parser.add_argument("path")
     parser.add_argument("-n", type=int, default=300, help="scenes per sensor preset (record)")
+    parser.add_argument("--real", type=int, help="scans of each excerpt (record; default all)")
     args = parser.parse_args()
     if args.action == "record":
-        items = scans(args.n)
+        items = scans(args.n, args.real)
         with open(args.path, "wb") as handle:
-            pickle.dump({"n": args.n, "features": features(items)}, handle)
+            pickle.dump({"n": args.n, "real": args.real, "features": features(items)}, handle)
         print(f"recorded {len(items)} scans x {len(METHODS) + 1} configurations")
         return
     with open(args.path, "rb") as handle:
         recorded = pickle.load(handle)
-    items = scans(recorded["n"])
+    items = scans(recorded["n"], recorded.get("real"))
     found = differences(recorded["features"], features(items))
     configurations = len(recorded["features"])
     print(f"{len(found)} differences in {len(items)} scans x {configurations} configurations")

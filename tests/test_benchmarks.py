@@ -2,23 +2,22 @@
 
 from __future__ import annotations
 
+import pickle
 import subprocess
 import sys
 from pathlib import Path
 
-import pytest
-
 BENCHMARKS = Path(__file__).parent.parent / "benchmarks"
 
 
-def run(script: str, *args: str) -> str:
+def run(script: str, *args: str, code: int = 0) -> str:
     done = subprocess.run(
         [sys.executable, str(BENCHMARKS / script), *args],
         capture_output=True,
         text=True,
         timeout=600,
     )
-    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.returncode == code, done.stderr[-2000:]
     return done.stdout
 
 
@@ -33,6 +32,25 @@ def test_extract_time_runs():
     assert "us/call" in out
 
 
-@pytest.mark.parametrize("script", ["compare_versions.py", "same_features.py"])
-def test_before_and_after_checks_explain_themselves(script):
-    assert "usage:" in run(script, "--help")
+def test_same_features_finds_no_difference_and_names_one(tmp_path):
+    recorded = tmp_path / "features.pkl"
+    run("same_features.py", "record", str(recorded), "-n", "1", "--real", "2")
+    out = run("same_features.py", "compare", str(recorded))
+    assert out.startswith("0 differences in 8 scans x 9 configurations")
+    data = pickle.loads(recorded.read_bytes())
+    first, *rest = data["features"][("iepf", None)]["intel:1"]
+    data["features"][("iepf", None)]["intel:1"] = (first + 1, *rest)
+    recorded.write_bytes(pickle.dumps(data))
+    out = run("same_features.py", "compare", str(recorded), code=1)
+    assert out.splitlines()[:2] == [
+        "1 differences in 8 scans x 9 configurations",
+        "   iepf:None intel:1 first",
+    ]
+
+
+def test_compare_versions_times_two_copies_of_the_package():
+    source = Path(__file__).parent.parent / "src"
+    out = run("compare_versions.py", "--other", str(source), "-m", "iepf", "--rounds", "1")
+    rows = [line.split() for line in out.splitlines()[1:]]
+    assert [row[0] for row in rows] == ["iepf/intel", "iepf/tim571"]
+    assert all(float(value) > 0 for row in rows for value in row[1:])

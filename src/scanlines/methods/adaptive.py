@@ -313,7 +313,6 @@ class Adaptive(CompiledMethod):
     name = "adaptive"
     parameters: ClassVar[dict[str, Param]] = PARAMETERS
     presets: ClassVar[dict[str, dict[str, Any]]] = PRESETS
-    Settings = AdaptiveSettings
 
     @classmethod
     def settings_of(cls, params: Mapping[str, Any]) -> AdaptiveSettings:

@@ -8,7 +8,7 @@ it per scan.
 
 :class:`CompiledMethod`
     The whole method is one kernel (adaptive, iepf, pdbs, split_merge). Its parameters
-    become a frozen dataclass of typed settings (:attr:`CompiledMethod.Settings`),
+    become a frozen dataclass of typed settings (:meth:`CompiledMethod.settings_of`),
     passed to the kernel as a one-element numpy record whose fields the kernel reads
     by name.
 :class:`ClusteredMethod`
@@ -69,9 +69,6 @@ class Method:
     def __init__(self, params: Mapping[str, Any]) -> None:
         self.params = params
 
-    def __reduce__(self) -> tuple[Any, ...]:
-        return type(self), (dict(self.params),)
-
     def extract(
         self,
         ranges: np.ndarray,
@@ -126,13 +123,11 @@ def as_record(settings: Any) -> np.ndarray:
 class CompiledMethod(Method):
     """A method that is one kernel from a scan's arrays to the result arrays.
 
-    A subclass sets ``Settings`` (a frozen dataclass), :meth:`settings_of` (resolved
-    parameters -> settings) and ``kernel(ranges, valid, cos, sin, step, full_circle,
+    A subclass sets :meth:`settings_of` (resolved parameters -> a frozen dataclass of
+    typed settings) and ``kernel(ranges, valid, cos, sin, step, full_circle,
     angle_min, *arguments)`` as a ``staticmethod``; :meth:`kernel_arguments` returns
     the kernel's last arguments, by default the settings record.
     """
-
-    Settings: ClassVar[type]
 
     def __init__(self, params: Mapping[str, Any]) -> None:
         super().__init__(params)

@@ -143,7 +143,6 @@ class Iepf(CompiledMethod):
         ),
         **EVENT_PARAMS,
     }
-    Settings = SplitSettings
 
     @classmethod
     def settings_of(cls, params: Mapping[str, Any]) -> SplitSettings:

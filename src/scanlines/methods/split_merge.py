@@ -102,7 +102,6 @@ class SplitMerge(CompiledMethod):
         ),
         **EVENT_PARAMS,
     }
-    Settings = SplitSettings
 
     @classmethod
     def settings_of(cls, params: Mapping[str, Any]) -> SplitSettings:
