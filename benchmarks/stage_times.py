@@ -27,7 +27,7 @@ from scanlines.steps.clusters import cluster_returns
 from scanlines.steps.corners import turn_window
 from scanlines.steps.denoise import denoise
 from scanlines.steps.events import junction_events
-from scanlines.steps.noise import range_noise
+from scanlines.steps.noise import UNKNOWN_NOISE, noise_at, return_sigmas, scan_noise
 from scanlines.steps.returns import beam_gaps, valid_returns
 from scanlines.steps.split import cut_at, refine_cuts
 
@@ -48,27 +48,39 @@ def main() -> None:
     step, n_beams = abs(scan.angle_increment), len(scan)
     returns = valid_returns(scan.ranges, scan.valid, cos, sin)
     gap = beam_gaps(returns.index, n_beams)
-    sigma = range_noise(returns.r, gap)
-    rule = ad.breakpoint_rule(s, returns, gap, step, sigma)
+    noise = scan_noise(returns, gap)
+    sigma = noise_at(noise, np.median(returns.r))
+    rule = ad.breakpoint_rule(s, noise, step)
     margin = settings.noise_k * math.sqrt(2.0) * sigma
     window = turn_window(returns.x, returns.y, returns.index, sigma)
     no_breaks = np.zeros(0, np.bool_)
     clustered = cluster_returns(returns, n_beams, step, False, rule, window, no_breaks)
     start, end, breakpoints = clustered[1], clustered[2], clustered[3]
     moments = fit.prefix_moments(returns.x, returns.y)
-    cost = fit.RunCost(settings.fit, moments, fit.inverse_square_sums(returns.r))
+    cost = ad.run_cost_of(s, moments, returns, noise)
     scores = ad.corner_scores(
         returns, n_beams, step, moments, start, end, window, settings.corner_score
     )
-    corners, sigma2 = ad.choose_corners(cost, start, end, scores, sigma, s, grid)
-    a, b, owner = ad.segments(returns, cost, start, end, corners, sigma2, s)
+    corners, scale = ad.choose_corners(cost, start, end, scores, True, s, grid)
+    a, b, owner = ad.segments(returns, cost, start, end, corners, scale * scale, s)
+    sigmas = return_sigmas(returns.r, noise)
+    events, scan_shape = (breakpoints, corners, breakpoints), (n_beams, False)
     cut = cut_at(start, end, corners, False)
     rows = {
         "whole call (Extractor)": lambda: extractor(scan),
         "whole kernel": lambda: ad.adaptive_scan(
-            scan.ranges, scan.valid, cos, sin, step, False, scan.angle_min, record, grid
+            scan.ranges,
+            scan.valid,
+            cos,
+            sin,
+            step,
+            False,
+            scan.angle_min,
+            UNKNOWN_NOISE,
+            record,
+            grid,
         ),
-        "noise estimate": lambda: range_noise(returns.r, gap),
+        "noise estimate": lambda: scan_noise(returns, gap),
         "denoise (2 break passes)": lambda: denoise(
             returns,
             n_beams,
@@ -89,17 +101,17 @@ def main() -> None:
             returns, n_beams, step, moments, start, end, window, settings.corner_score
         ),
         "candidates + sweep + choice": lambda: ad.choose_corners(
-            cost, start, end, scores, sigma, s, grid
+            cost, start, end, scores, True, s, grid
         ),
         "cut, refine, merge, split": lambda: ad.segments(
-            returns, cost, start, end, corners, sigma2, s
+            returns, cost, start, end, corners, scale * scale, s
         ),
         "  of which: refine cuts": lambda: refine_cuts(cost, *cut),
         "corner beams": lambda: junction_events(
-            returns, settings.fit, moments, a, b, owner, False, False, sigma2
+            returns, settings.fit, moments, a, b, owner, False, False, scale * sigma
         ),
         "assembly (fits, covariances)": lambda: assemble(
-            returns, settings.fit, moments, a, b, 0.0, 0.01, breakpoints, corners, breakpoints
+            returns, settings.fit, moments, a, b, 0.0, sigmas, events, scan_shape
         ),
     }
     timed = time_calls(

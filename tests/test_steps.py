@@ -28,7 +28,7 @@ from scanlines.steps.fit import (
     prefix_moments,
     run_covariances,
 )
-from scanlines.steps.noise import noise_growth, range_noise
+from scanlines.steps.noise import NoiseLine, noise_at, scan_noise
 from scanlines.steps.returns import Returns, beam_gaps
 from scanlines.steps.select import BIC, SSE, best_level, level_corners, sweep_levels, threshold_grid
 from scenes import cast, returns_of, scan_of, square_room
@@ -37,7 +37,9 @@ from scenes import cast, returns_of, scan_of, square_room
 def rule_of(name="adaptive", *, k=3.0, noise_margin=0.0, abd_lambda=10.0, pdbs_c0=0.1):
     """A breakpoint rule with its margin in metres and ``abd_lambda`` in degrees."""
     lam = math.radians(abd_lambda)
-    return BreakpointRule(RULE_CODES[name], k, noise_margin, 0.0, lam, pdbs_c0, 0.3, 0.0, 0.0, 0.0)
+    sigmas = 1.0 if noise_margin else 0.0
+    noise = NoiseLine(noise_margin, 0.0)
+    return BreakpointRule(RULE_CODES[name], k, sigmas, 0.0, noise, lam, pdbs_c0, 0.3)
 
 
 def whole(n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -148,7 +150,17 @@ def test_window_mean_never_crosses_a_jump():
 def test_noise_estimate_recovers_sigma():
     scan = scan_of([((3.0, -4.0), (3.0, 4.0))], fov_deg=60, step_deg=0.25, sigma=0.02, seed=5)
     returns = returns_of(scan)
-    assert range_noise(returns.r, gaps(returns)) == pytest.approx(0.02, rel=0.15)
+    noise = scan_noise(returns, gaps(returns))
+    assert noise_at(noise, np.median(returns.r)) == pytest.approx(0.02, rel=0.15)
+
+
+def test_noise_estimate_sees_through_repeated_ranges():
+    # Drivers that repeat one reading over three beams make second differences read zero.
+    scan = scan_of([((3.0, -4.0), (3.0, 4.0))], fov_deg=60, step_deg=0.25, sigma=0.02, seed=5)
+    ranges = np.repeat(scan.ranges[::3], 3)[: len(scan)]
+    returns = returns_of(Scan(ranges, scan.angle_min, scan.angle_increment))
+    noise = scan_noise(returns, gaps(returns))
+    assert noise_at(noise, np.median(returns.r)) > 0.012
 
 
 # --- corners (eq. 12-13) -----------------------------------------------------------------------
@@ -199,7 +211,7 @@ def room_sweep_choice(seed: int, criterion: int) -> tuple[np.ndarray, float, np.
     moments = prefix_moments(returns.x, returns.y)
     score = turn_scores(returns.x, returns.y, moments, start, end, 5)
     candidates = peak_positions(score, start, end)
-    cost = RunCost(TLS, moments, np.zeros(0))
+    cost = RunCost(TLS, moments, np.zeros(0), np.zeros(0))
     ranked, accepted, sse, segments, thresholds, levels = sweep_levels(
         cost, start, end, candidates, score[candidates], np.zeros(0), False, 100, False
     )
@@ -261,7 +273,8 @@ def test_covariance_of_a_wall_facing_the_sensor():
     r = 2.0 / np.cos(angles)
     returns = Returns(np.arange(41), r, r * np.cos(angles), r * np.sin(angles))
     rho, alpha = np.array([2.0]), np.array([0.0])
-    cov = run_covariances(returns, rho, alpha, np.array([0]), np.array([40]), 0.01)[0]
+    sigma = np.full(41, 0.01)
+    cov = run_covariances(returns, rho, alpha, np.array([0]), np.array([40]), sigma, False)[0]
     weights = (2.0 / r) ** 2 * 0.01**2
     s = returns.y - returns.y.mean()
     assert cov[1, 1] == pytest.approx(np.sum(s * s * weights) / np.sum(s * s) ** 2)
@@ -291,7 +304,7 @@ def test_cast_helper_hits_a_wall():
 )
 def test_corner_removal_rule_needs_two_points_on_each_side(shared, expected):
     """Step 5: a corner whose part before or after would have fewer than 2 points is dropped."""
-    cost = RunCost(TLS, prefix_moments(np.arange(12.0), np.zeros(12)), np.zeros(0))
+    cost = RunCost(TLS, prefix_moments(np.arange(12.0), np.zeros(12)), np.zeros(0), np.zeros(0))
     candidates, scores = np.array([1, 5, 10]), np.array([3.0, 2.0, 1.0])
     _, accepted, *_ = sweep_levels(
         cost, *whole(12), candidates, scores, np.zeros(0), False, 10, shared
@@ -316,27 +329,26 @@ def test_in_between_clusters_judges_only_pairs_between_near_neighbours():
     assert not in_between_clusters(r, gap, breaks, noisy_neighbour, 0.05)[6]
 
 
-def _growth_on_scenes(sensor: str, n: int = 20) -> np.ndarray:
-    """``(sigma_far, slope, far_range)`` of :func:`noise_growth` on ``n`` simulated scans."""
+def _noise_on_scenes(sensor: str, n: int = 20) -> np.ndarray:
+    """``(sigma0, per_metre)`` of :func:`scan_noise` on ``n`` simulated scans."""
     out = []
     for index in range(n):
         scan = make_scene(sensor, index, seed=3).scan
         returns = returns_of(scan)
-        out.append(noise_growth(returns, beam_gaps(returns.index, len(scan))))
+        out.append(scan_noise(returns, beam_gaps(returns.index, len(scan))))
     return np.array(out)
 
 
-def test_noise_growth_sees_constant_noise_at_1_deg():
+def test_scan_noise_sees_constant_noise_at_1_deg():
     # lms_1deg: 1 cm noise and 1 cm quantisation at every range (sigma 1.04 cm). At 1 deg the
-    # range second differences of slanted walls far away hold their geometry; chords do not.
-    sigma_far, slope, _ = np.median(_growth_on_scenes("lms_1deg"), axis=0)
-    assert sigma_far == pytest.approx(math.hypot(0.01, 0.01 / math.sqrt(12)), rel=0.2)
-    assert slope < 0.001
+    # range second differences of slanted walls far away hold their geometry; fitted lines do not.
+    noise = np.median(_noise_on_scenes("lms_1deg"), axis=0)
+    for r in (1.0, 4.0):
+        assert noise_at(NoiseLine(*noise), r) == pytest.approx(0.0104, rel=0.2)
 
 
-def test_noise_growth_follows_noise_proportional_to_range():
-    # urg04lx: 1 cm plus 1 % of the range
-    growth = _growth_on_scenes("urg04lx")
-    assert np.all(growth[:, 1] > 0.002)
-    sigma_far, _, far_range = np.median(growth, axis=0)
-    assert sigma_far == pytest.approx(math.hypot(0.01, 0.01 * far_range), rel=0.25)
+def test_scan_noise_follows_noise_proportional_to_range():
+    # urg04lx: max(1 cm, 1 % of the range)
+    line = NoiseLine(*np.median(_noise_on_scenes("urg04lx"), axis=0))
+    assert line.per_metre > 0.004
+    assert noise_at(line, 3.0) == pytest.approx(0.03, rel=0.25)

@@ -12,11 +12,24 @@ import numpy as np
 
 from scanlines.json_values import jsonable
 
-__all__ = ["Extraction", "Segment"]
+__all__ = ["END_KINDS", "Extraction", "Segment"]
 
 # Columns of Extraction.lines, one row per segment.
 RHO, ALPHA, START_X, START_Y, END_X, END_Y, RMS = range(7)
 N_LINE_COLUMNS = 7
+
+END_KINDS = ("corner", "jump", "occluded", "gap", "edge", "open")
+"""What ends a segment (the codes of :attr:`Extraction.end_kinds`):
+
+``corner``    two surfaces meet at a corner within one beam;
+``jump``      a depth jump to a farther surface: this surface really ends here;
+``occluded``  a depth jump to a nearer surface: this one may go on behind it;
+``gap``       two or more beams without a return follow;
+``edge``      the scan's first or last return;
+``open``      none of these: the method stopped on a continuing surface (a curve,
+              clutter, a point dropped as noise).
+
+Mapping and SLAM front ends can trust ``corner`` and ``jump`` ends as real endpoints."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -39,7 +52,11 @@ class Segment:
     rms:
         Root-mean-square orthogonal distance of those points to the line.
     covariance:
-        2 x 2 covariance of ``(rho, alpha)`` propagated from ``range_sigma``.
+        2 x 2 covariance of ``(rho, alpha)``, propagated from the range noise of each
+        return (the sensor profile's noise line, or ``range_sigma``), scaled up when
+        the segment's own residuals are larger than that noise explains.
+    start_kind, end_kind:
+        What ends the segment at ``first`` and at ``last`` (:data:`END_KINDS`).
     """
 
     first: int
@@ -51,6 +68,8 @@ class Segment:
     n_points: int
     rms: float
     covariance: np.ndarray
+    start_kind: str = "open"
+    end_kind: str = "open"
 
     @property
     def length(self) -> float:
@@ -75,6 +94,9 @@ class Extraction:
         ``M x 7`` float array: rho, alpha, start x, start y, end x, end y, rms.
     covariances:
         ``M x 2 x 2`` covariances of ``(rho, alpha)``.
+    end_kinds:
+        ``M x 2`` codes of what ends each segment at its first and last beam (an index
+        into :data:`END_KINDS`).
     method:
         Name of the method that produced it.
     params:
@@ -86,6 +108,7 @@ class Extraction:
         "breakpoints",
         "corners",
         "covariances",
+        "end_kinds",
         "first",
         "last",
         "lines",
@@ -108,6 +131,7 @@ class Extraction:
         outliers: np.ndarray,
         method: str,
         params: Mapping[str, Any],
+        end_kinds: np.ndarray | None = None,
     ) -> None:
         self.first = _frozen(first, np.intp)
         self.last = _frozen(last, np.intp)
@@ -117,6 +141,9 @@ class Extraction:
         self.breakpoints = _frozen(breakpoints, np.intp)
         self.corners = _frozen(corners, np.intp)
         self.outliers = _frozen(outliers, np.intp)
+        if end_kinds is None:
+            end_kinds = np.full((len(self.first), 2), END_KINDS.index("open"))
+        self.end_kinds = _frozen(end_kinds, np.int8).reshape(-1, 2)
         self.method = method
         self.params = (
             params if isinstance(params, MappingProxyType) else MappingProxyType(dict(params))
@@ -142,6 +169,8 @@ class Extraction:
             n_points=int(self.n_points[k]),
             rms=float(row[RMS]),
             covariance=self.covariances[k],
+            start_kind=END_KINDS[self.end_kinds[k, 0]],
+            end_kind=END_KINDS[self.end_kinds[k, 1]],
         )
 
     def __len__(self) -> int:
@@ -170,6 +199,8 @@ class Extraction:
                     "rms": s.rms,
                     "length": s.length,
                     "covariance": s.covariance.tolist(),
+                    "start_kind": s.start_kind,
+                    "end_kind": s.end_kind,
                 }
                 for s in self.segments
             ],

@@ -38,13 +38,17 @@ def with_default(param: Param, default: Any, note: str = "") -> Param:
 
 
 def segment_params(
-    min_points: int, min_length: float = 0.0, range_sigma: float = 0.01
+    min_points: int, min_length: float = 0.0, range_sigma: float | str = "auto"
 ) -> dict[str, Param]:
     """The output parameters every method has, with that method's defaults."""
     return {
         "min_points": Param(min_points, int_at_least(2), "fewest points of a segment"),
         "min_length": Param(min_length, number(low=0.0), "shortest segment (m)"),
-        "range_sigma": Param(range_sigma, number(low=0.0), "range noise for the covariance (m)"),
+        "range_sigma": Param(
+            range_sigma,
+            auto_or(number(low=0.0, low_open=True)),
+            "range noise of the covariances (m), or auto: the noise model's",
+        ),
     }
 
 

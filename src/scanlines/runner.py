@@ -16,11 +16,13 @@ import numpy as np
 from scanlines.errors import ParameterError
 from scanlines.extractor import Extractor
 from scanlines.scan import Scan
+from scanlines.sensor_profile import DEFAULT_SCANS, SensorProfile, estimate_profile
 
 __all__ = [
     "LogDescription",
     "RunSummary",
     "describe_log",
+    "log_profile",
     "parse_slice",
     "run_log",
     "run_log_to_file",
@@ -57,6 +59,22 @@ def select(indexed: Iterator[tuple[int, Scan]], scans: slice) -> Iterator[tuple[
             break
         if index >= start and (index - start) % step == 0:
             yield index, scan
+
+
+def log_profile(
+    path: Any, reader_options: dict[str, Any], scans: slice = slice(None)
+) -> SensorProfile:
+    """The :class:`~scanlines.sensor_profile.SensorProfile` of a log, measured from its
+    first selected scans (at most :data:`~scanlines.sensor_profile.DEFAULT_SCANS`).
+
+    ``scanlines run`` without ``--sensor-profile`` extracts the whole log with this one
+    profile, so every chunk, job and worker sees the same noise.
+    """
+    from scanlines.io import open_log
+
+    with open_log(path, **reader_options) as reader:
+        selected = (scan for _, scan in select(reader.enumerate(), scans))
+        return estimate_profile(selected, max_scans=DEFAULT_SCANS, source=str(path))
 
 
 @dataclass
@@ -243,6 +261,9 @@ def run_log_to_file(
         "method": extractor.method,
         "params": dict(extractor.params),
         "reader": reader.options(),
+        "sensor_profile": (
+            None if extractor.sensor_profile is None else extractor.sensor_profile.to_dict()
+        ),
         "scans": ":".join(
             "" if v is None else str(v) for v in (scans.start, scans.stop, scans.step)
         ),

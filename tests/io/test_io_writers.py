@@ -75,6 +75,9 @@ class TestJsonl:
             "alpha": 0.25,
             "n_points": 10,
             "rms": 0.01,
+            "covariance": [[0.0001, 0.0], [0.0, 1e-05]],
+            "start_kind": "open",
+            "end_kind": "open",
         }
         assert first["breakpoints"] == [9, 30]
         assert first["corners"] == [10]
@@ -103,7 +106,8 @@ class TestCsv:
         assert tuple(rows[0]) == CSV_COLUMNS
         assert (
             ",".join(rows[0])
-            == "scan,timestamp,first,last,start_x,start_y,end_x,end_y,rho,alpha,n_points,rms"
+            == "scan,timestamp,first,last,start_x,start_y,end_x,end_y,rho,alpha,n_points,rms,"
+            "var_rho,cov_rho_alpha,var_alpha,start_kind,end_kind"
         )
         assert len(rows) == 1 + 2 + 0 + 1
         assert rows[1] == [
@@ -119,10 +123,15 @@ class TestCsv:
             "0.25",
             "10",
             "0.01",
+            "0.0001",
+            "0.0",
+            "1e-05",
+            "open",
+            "open",
         ]
         assert rows[2][:4] == ["0", repr(scans[0].timestamp), "10", "19"]
         assert rows[3][0] == "4"
-        assert rows[3][-1] == ""  # NaN rms
+        assert rows[3][CSV_COLUMNS.index("rms")] == ""  # NaN rms
 
 
 class TestMeta:
@@ -251,6 +260,7 @@ class TestRos2Output:
         topics = [topic for topic, _, _ in messages]
         assert sorted(topics) == sorted(
             ["/scan", "/scanlines/markers", "/tf", "/scan", "/scanlines/markers"]
+            + ["/scanlines/features"] * 2
         )
         arrays = [m for t, _, m in messages if t == "/scanlines/markers"]
         first, second = arrays

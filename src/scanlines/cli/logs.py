@@ -31,6 +31,13 @@ ParamOption = Annotated[list[str] | None, typer.Option("--param", help="NAME=VAL
 ScansOption = Annotated[
     str | None, typer.Option("--scans", help="Python slice of scan indices, e.g. 100:200.")
 ]
+ProfileOption = Annotated[
+    Path | None,
+    typer.Option(
+        "--sensor-profile",
+        help="Sensor profile from `scanlines calibrate` (default: measured from the log).",
+    ),
+]
 
 
 def register(app: typer.Typer) -> None:
@@ -38,6 +45,10 @@ def register(app: typer.Typer) -> None:
         guarded(info_command)
     )
     app.command("run", help="Extract features from every scan of a log.")(guarded(run_command))
+    app.command(
+        "calibrate",
+        help="Measure a sensor profile (noise against range, dropouts, outliers) from a log.",
+    )(guarded(calibrate_command))
     app.command("plot", help="Draw one scan, or a grid of scans, with their features.")(
         guarded(plot_command)
     )
@@ -159,6 +170,7 @@ def run_command(
     topic: TopicOption = None,
     angle_min: AngleMinOption = None,
     angle_increment: AngleStepOption = None,
+    sensor_profile: ProfileOption = None,
 ) -> None:
     from scanlines.errors import ParameterError
     from scanlines.extractor import Extractor
@@ -169,13 +181,87 @@ def run_command(
         raise ParameterError(f"--frame must be sensor or world, got {frame!r}")
     if on_error not in ("fail", "skip"):
         raise ParameterError(f"--on-error must be fail or skip, got {on_error!r}")
-    extractor = Extractor(method, preset, **parse_params(param))
-    note_first_compilation()
+    params = parse_params(param)
+    Extractor(method, preset, **params)  # bad parameters fail before the log is read
     selection = parse_slice(scans)
     options = reader_options(fov, angle_convention, topic, angle_min, angle_increment, on_error)
+    profile = _profile_for_run(log, options, selection, sensor_profile)
+    extractor = Extractor(method, preset, sensor_profile=profile, **params)
+    note_first_compilation()
     with open_log(log, **options) as reader:
         summary = _run_with_progress(reader, extractor, selection, out, frame, log)
     _print_summary(summary, out)
+
+
+def calibrate_command(
+    log: LogArgument,
+    out: Annotated[
+        Path | None, typer.Option(help="Profile file (.json); default: <log name>.profile.json.")
+    ] = None,
+    plot: Annotated[
+        Path | None, typer.Option(help="Figure of the noise curve (PNG, PDF, SVG).")
+    ] = None,
+    scans: ScansOption = None,
+    max_scans: Annotated[int, typer.Option(help="Scans measured (the first selected).")] = 500,
+    fov: FovOption = None,
+    angle_convention: ConventionOption = None,
+    topic: TopicOption = None,
+    angle_min: AngleMinOption = None,
+    angle_increment: AngleStepOption = None,
+) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    from scanlines.errors import ParameterError
+    from scanlines.io import open_log
+    from scanlines.runner import parse_slice, select
+    from scanlines.sensor_profile import describe, estimate_profile
+
+    if max_scans < 1:
+        raise ParameterError(f"--max-scans must be at least 1, got {max_scans}")
+    options = reader_options(fov, angle_convention, topic, angle_min, angle_increment)
+    with open_log(log, **options) as reader:
+        selected = (scan for _, scan in select(reader.enumerate(), parse_slice(scans)))
+        profile = estimate_profile(selected, max_scans=max_scans, source=log.name)
+    out = out or log.with_name(log.name.split(".")[0] + ".profile.json")
+    profile.save(out)
+    table = Table(title=f"sensor profile of {log.name}", show_header=False)
+    for what, value in describe(profile):
+        table.add_row(what, value)
+    table.add_row("noise bins", _bins_text(profile))
+    Console().print(table)
+    typer.echo(f"wrote {out}")
+    if plot is not None:
+        from scanlines.viz.figures import save
+        from scanlines.viz.profile import plot_noise_curve
+
+        save(plot_noise_curve(profile), plot)
+        typer.echo(f"wrote {plot}")
+
+
+def _bins_text(profile) -> str:
+    return "; ".join(
+        f"{b.range:.2f} m: {1000 * b.sigma:.1f} +- {1000 * b.error:.1f} mm"
+        for b in profile.noise_bins
+    )
+
+
+def _profile_for_run(log, options, selection, given):
+    """The sensor profile of a run: the file given, else measured from the log (said on
+    stderr)."""
+    from scanlines.runner import log_profile
+    from scanlines.sensor_profile import read_profile
+
+    if given is not None:
+        return read_profile(given)
+    profile = log_profile(log, options, selection)
+    typer.echo(
+        f"sensor profile: measured from the first {profile.scans} scans of {log.name} "
+        f"(noise {1000 * profile.noise_sigma0:.1f} mm + {100 * profile.noise_per_metre:.2f} % "
+        "of range); `scanlines calibrate` saves one for --sensor-profile",
+        err=True,
+    )
+    return profile
 
 
 def _run_with_progress(reader, extractor, selection, out, frame, log):

@@ -8,9 +8,12 @@ name              what                                                   scans
 ``"freiburg"``    University of Freiburg building 079, SICK LMS, 360     300
                   beams at 0.5 deg, with the log's ``PARAM`` and ``ODOM``
                   lines; CARMEN, gzip
+``"urg"``         Paris Mines Tech robot, Hokuyo URG-04LX, 683 beams at  150
+                  0.35 deg, more than half without a return; CoreSLAM
+                  ``.dat``, gzip
 ================  =====================================================  =======
 
-Both are consecutive excerpts with corridors, doors and room corners; see
+All are consecutive excerpts with corridors, doors and room corners; see
 ``PROVENANCE.md`` in this package for sources, citations, licences and how
 they were cut. Read them with :func:`scanlines.io.open_log`::
 
@@ -31,6 +34,7 @@ _HERE = Path(__file__).resolve().parent
 SAMPLES = {
     "intel": "intel_excerpt.clf.gz",
     "freiburg": "fr079_excerpt.log.gz",
+    "urg": "urg_excerpt.dat.gz",
 }
 
 
@@ -40,7 +44,7 @@ def sample(name: str) -> Path:
     Parameters
     ----------
     name:
-        ``"intel"`` or ``"freiburg"``.
+        ``"intel"``, ``"freiburg"`` or ``"urg"``.
 
     Raises
     ------

@@ -1,18 +1,19 @@
 """Hand labels of breakpoints and corners for frames of the shipped sample logs.
 
-``intel_labels.json`` holds ten frames of the Intel Research Lab excerpt labelled by
+One label file per sensor (:data:`LABEL_FILES`): the Intel Research Lab excerpt (SICK
+at 1 deg), Freiburg 079 (SICK at 0.5 deg) and the URG-04LX excerpt, each labelled by
 hand from plots (range against beam, and the x-y points annotated with their beam
 index), with no extraction method consulted. The labelling rule and how the frames
-were chosen are stored in the file; see also ``PROVENANCE.md``::
+were chosen are stored in each file; see also ``PROVENANCE.md``::
 
-    from scanlines.data.labels import intel_label_rule, intel_labels
-    for frame in intel_labels():
+    from scanlines.data.labels import label_set
+    labels = label_set("urg")
+    for frame in labels.frames:
         frame.scan, frame.breakpoints, frame.corners
-    print(intel_label_rule())
+    print(labels.rule)
 
-Beam indices are 0-based into the scan (beam ``k`` at bearing ``-90 + k`` degrees);
-scan indices are 0-based into the excerpt, in the order
-``scanlines.io.open_log(scanlines.data.sample("intel"))`` yields them. The
+Beam indices are 0-based into the scan; scan indices are 0-based into the excerpt, in
+the order ``scanlines.io.open_log(scanlines.data.sample(name))`` yields them. The
 ``uncertain_*`` lists hold events the labeller could not decide; a scorer should treat
 them as "don't care" (neither a miss nor a false positive).
 """
@@ -33,12 +34,15 @@ from scanlines.errors import ScanlinesError
 
 __all__ = [
     "INTEL_LABELS",
+    "LABEL_FILES",
     "LabelError",
     "LabelSet",
     "LabelledFrame",
     "intel_label_rule",
     "intel_label_set",
     "intel_labels",
+    "label_set",
+    "labelled_samples",
     "read_labels",
 ]
 
@@ -211,23 +215,50 @@ def read_labels(path: str | Path, valid: Sequence[np.ndarray] | None = None) -> 
     )
 
 
+LABEL_FILES = {
+    "intel": "intel_labels.json",
+    "freiburg": "fr079_labels.json",
+    "urg": "urg_labels.json",
+}
+"""Shipped sample (:data:`scanlines.data.SAMPLES`) -> its label file in this package."""
+
+
+def labelled_samples() -> tuple[str, ...]:
+    """The shipped samples that have hand labels installed."""
+    return tuple(name for name, file in LABEL_FILES.items() if (_HERE / file).exists())
+
+
 @cache
-def intel_label_set() -> LabelSet:
-    """The Intel excerpt's labels, validated against the shipped log (read once, cached)."""
+def label_set(name: str) -> LabelSet:
+    """The labels of shipped sample ``name``, validated against the log (read once, cached)."""
     from scanlines.data import SAMPLES, sample
     from scanlines.io import open_log
 
-    doc = json.loads(INTEL_LABELS.read_text(encoding="utf-8"))
+    if name not in LABEL_FILES:
+        known = ", ".join(repr(n) for n in LABEL_FILES)
+        raise LabelError(f"no hand labels for sample {name!r}; labelled samples: {known}")
+    path = _HERE / LABEL_FILES[name]
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise LabelError(f"{path}: cannot read label file: {exc}") from exc
     source = doc.get("source") if isinstance(doc, Mapping) else None
-    if source != SAMPLES["intel"]:
-        raise LabelError(f"{INTEL_LABELS}: source is {source!r}, expected {SAMPLES['intel']!r}")
-    convention = doc.get("angle_convention", "step")
-    valid = [scan.valid for scan in open_log(sample("intel"), angle_convention=convention)]
-    return read_labels(INTEL_LABELS, valid)
+    if source != SAMPLES[name]:
+        raise LabelError(f"{path}: source is {source!r}, expected {SAMPLES[name]!r}")
+    options = {}
+    if SAMPLES[name].endswith((".clf.gz", ".log.gz")):  # CARMEN: the labelled bearings
+        options["angle_convention"] = doc.get("angle_convention", "step")
+    valid = [scan.valid for scan in open_log(sample(name), **options)]
+    return read_labels(path, valid)
+
+
+def intel_label_set() -> LabelSet:
+    """The Intel excerpt's labels (:func:`label_set`)."""
+    return label_set("intel")
 
 
 def intel_labels() -> list[LabelledFrame]:
-    """The ten hand-labelled frames of the Intel excerpt, in file order (by scan index)."""
+    """The hand-labelled frames of the Intel excerpt, in file order (by scan index)."""
     return list(intel_label_set().frames)
 
 

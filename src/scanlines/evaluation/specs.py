@@ -22,6 +22,7 @@ from typing import Any
 
 from scanlines import Extractor, ParameterError
 from scanlines.json_values import jsonable
+from scanlines.sensor_profile import SensorProfile
 
 __all__ = ["TRUTH", "MethodSpec", "parse_spec", "parse_specs"]
 
@@ -72,8 +73,9 @@ class MethodSpec:
         """Whether this is the truth row (:data:`TRUTH`), not a method."""
         return self.method == TRUTH
 
-    def extractor(self) -> Extractor:
-        """The configured :class:`~scanlines.Extractor` (validates the spec).
+    def extractor(self, sensor_profile: SensorProfile | None = None) -> Extractor:
+        """The configured :class:`~scanlines.Extractor` (validates the spec), with
+        ``sensor_profile`` when given.
 
         Raises
         ------
@@ -82,7 +84,9 @@ class MethodSpec:
         """
         if self.is_truth:
             raise ParameterError(f"{TRUTH!r} is built from the truth and has no extractor")
-        return Extractor(self.method, self.preset, **dict(self.params))
+        return Extractor(
+            self.method, self.preset, sensor_profile=sensor_profile, **dict(self.params)
+        )
 
     def to_dict(self) -> dict[str, Any]:
         """Label, method, preset, overrides and the full resolved parameters."""

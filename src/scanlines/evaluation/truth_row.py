@@ -20,6 +20,7 @@ import numpy as np
 
 from scanlines import Extraction, Scan
 from scanlines.evaluation.specs import TRUTH
+from scanlines.scan import is_full_circle
 from scanlines.steps.assemble import assemble, to_extraction
 from scanlines.steps.fit import TLS, prefix_moments, run_labels
 from scanlines.steps.returns import Returns
@@ -61,10 +62,14 @@ def truth_extraction(scan: Scan, truth: Truth, *, range_sigma: float = 0.0) -> E
     a = np.concatenate(([0], b[:-1] + 1)).astype(np.intp)
     r, bearing = scan.ranges[beams], scan.angle_increment * beams  # beam 0 at bearing 0
     returns = Returns(beams, r, r * np.cos(bearing), r * np.sin(bearing))
-    arrays = assemble(
-        returns, TLS, prefix_moments(returns.x, returns.y), a.astype(np.int64), b,
-        scan.angle_min, float(range_sigma), truth.breakpoints.astype(np.int64),
+    events = (
+        truth.breakpoints.astype(np.int64),
         truth.corners.astype(np.int64),
         np.union1d(truth.outliers, truth.mixed_pixels).astype(np.int64),
+    )
+    sigma = np.full(r.size, float(range_sigma))
+    arrays = assemble(
+        returns, TLS, prefix_moments(returns.x, returns.y), a.astype(np.int64), b,
+        scan.angle_min, sigma, events, (n, is_full_circle(n, scan.angle_increment)),
     )  # fmt: skip
     return to_extraction(arrays, TRUTH, {"range_sigma": range_sigma})

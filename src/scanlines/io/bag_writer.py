@@ -20,8 +20,17 @@ import numpy as np
 
 from scanlines.errors import ParameterError
 from scanlines.extraction import END_X, END_Y, START_X, START_Y
-from scanlines.io.writers import UNSTAMPED_PERIOD, Frame, ResultWriter, ScanFeatures
+from scanlines.io.writers import (
+    UNSTAMPED_PERIOD,
+    Frame,
+    ResultWriter,
+    ScanFeatures,
+    json_record,
+)
 from scanlines.scan import Scan
+
+FEATURES_TOPIC = "/scanlines/features"
+"""Topic of each scan's features as its JSON Lines record (``std_msgs/msg/String``)."""
 
 __all__ = ["Ros2BagWriter"]
 
@@ -101,6 +110,7 @@ class Ros2BagWriter(ResultWriter):
                 markers_topic, "visualization_msgs/msg/MarkerArray", typestore=self._types
             )
             self._tf_conn = add("/tf", "tf2_msgs/msg/TFMessage", typestore=self._types)
+            self._features_conn = add(FEATURES_TOPIC, "std_msgs/msg/String", typestore=self._types)
         except BaseException:
             self._abort()
             raise
@@ -235,6 +245,8 @@ class Ros2BagWriter(ResultWriter):
         self._writer.write(
             self._marker_conn, bag_time, serialize(markers, "visualization_msgs/msg/MarkerArray")
         )
+        record = self._types.types["std_msgs/msg/String"](data=json_record(features))
+        self._writer.write(self._features_conn, bag_time, serialize(record, "std_msgs/msg/String"))
         if features.scan.pose is not None:
             tf = self._transform(features.scan.pose, stamp)
             self._writer.write(self._tf_conn, bag_time, serialize(tf, "tf2_msgs/msg/TFMessage"))

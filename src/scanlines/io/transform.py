@@ -79,6 +79,7 @@ def to_world(extraction: Extraction, pose: Sequence[float]) -> Extraction:
         breakpoints=extraction.breakpoints,
         corners=extraction.corners,
         outliers=extraction.outliers,
+        end_kinds=extraction.end_kinds,
         method=extraction.method,
         params=extraction.params,
     )

@@ -36,13 +36,16 @@ Do not transform beforehand as well.
 Record layouts
 --------------
 JSON Lines: ``{"scan", "timestamp", "pose", "segments": [{"first", "last",
-"start", "end", "rho", "alpha", "n_points", "rms"}], "breakpoints",
-"corners"}``, where ``scan`` is the record index in the log, breakpoints and
-corners are beam indices, and missing or non-finite numbers are ``null``.
+"start", "end", "rho", "alpha", "n_points", "rms", "covariance", "start_kind",
+"end_kind"}], "breakpoints", "corners"}``, where ``scan`` is the record index in the
+log, breakpoints and corners are beam indices, ``covariance`` is the 2 x 2
+covariance of ``(rho, alpha)`` as ``[[var_rho, cov], [cov, var_alpha]]``, the kinds
+say what ends the segment (:data:`scanlines.extraction.END_KINDS`), and missing or
+non-finite numbers are ``null``.
 
-CSV columns: ``scan,timestamp,first,last,start_x,start_y,end_x,end_y,rho,alpha,n_points,rms``;
-missing or non-finite values are empty cells. A scan without segments writes
-no row.
+CSV columns: ``scan,timestamp,first,last,start_x,start_y,end_x,end_y,rho,alpha,n_points,rms,
+var_rho,cov_rho_alpha,var_alpha,start_kind,end_kind``; missing or non-finite values
+are empty cells. A scan without segments writes no row.
 
 ROS 2 (``rosbags.rosbag2.Writer``, ``Stores.ROS2_HUMBLE`` types), per scan,
 stamped with the scan time (``index * 0.1`` s when the scan has none):
@@ -54,6 +57,8 @@ stamped with the scan time (``index * 0.1`` s when the scan has none):
   (``LINE_LIST``, green, two points per segment), ``breakpoints``
   (``SPHERE_LIST``, red) and ``corners`` (``SPHERE_LIST``, blue), in frame
   ``laser_frame`` or, with ``frame="world"``, ``world_frame`` (``"map"``);
+* the scan's JSON Lines record (above: every segment with its covariance and end
+  kinds) as ``std_msgs/msg/String`` on ``/scanlines/features``;
 * when the scan has a pose, a ``tf2_msgs/msg/TFMessage`` on ``/tf`` from
   ``world_frame`` to ``laser_frame``, so Foxglove/RViz can place the scan.
 
@@ -80,7 +85,17 @@ from typing import IO, Any, ClassVar, Literal, Self
 import numpy as np
 
 from scanlines.errors import ParameterError
-from scanlines.extraction import ALPHA, END_X, END_Y, RHO, RMS, START_X, START_Y, Extraction
+from scanlines.extraction import (
+    ALPHA,
+    END_KINDS,
+    END_X,
+    END_Y,
+    RHO,
+    RMS,
+    START_X,
+    START_Y,
+    Extraction,
+)
 from scanlines.io.transform import points_to_world, to_world
 from scanlines.json_values import jsonable
 from scanlines.scan import Scan
@@ -112,6 +127,11 @@ CSV_COLUMNS = (
     "alpha",
     "n_points",
     "rms",
+    "var_rho",
+    "cov_rho_alpha",
+    "var_alpha",
+    "start_kind",
+    "end_kind",
 )
 #: Bag time step used for scans without a timestamp (seconds per record index).
 UNSTAMPED_PERIOD = 0.1
@@ -168,6 +188,44 @@ def _features(index: int, scan: Scan, extraction: Extraction, frame: Frame) -> S
         breakpoints = points_to_world(breakpoints, scan.pose)
         corners = points_to_world(corners, scan.pose)
     return ScanFeatures(index, scan, extraction, breakpoints, corners)
+
+
+def json_record(features: ScanFeatures) -> str:
+    """The JSON Lines record of one scan (the module docstring), without the newline."""
+    scan, extraction = features.scan, features.extraction
+    covariances = _finite_rows(extraction.covariances.reshape(-1, 4))
+    record = {
+        "scan": int(features.index),
+        "timestamp": None if scan.timestamp is None else _number(scan.timestamp),
+        "pose": None if scan.pose is None else [_number(v) for v in scan.pose],
+        "segments": [
+            {
+                "first": first,
+                "last": last,
+                "start": [row[START_X], row[START_Y]],
+                "end": [row[END_X], row[END_Y]],
+                "rho": row[RHO],
+                "alpha": row[ALPHA],
+                "n_points": n_points,
+                "rms": row[RMS],
+                "covariance": [cov[:2], cov[2:]],
+                "start_kind": END_KINDS[kinds[0]],
+                "end_kind": END_KINDS[kinds[1]],
+            }
+            for first, last, n_points, row, cov, kinds in zip(
+                extraction.first.tolist(),
+                extraction.last.tolist(),
+                extraction.n_points.tolist(),
+                _finite_rows(extraction.lines),
+                covariances,
+                extraction.end_kinds.tolist(),
+                strict=True,
+            )
+        ],
+        "breakpoints": extraction.breakpoints.tolist(),
+        "corners": extraction.corners.tolist(),
+    }
+    return json.dumps(record, allow_nan=False, separators=(",", ":"))
 
 
 def _finite_rows(table: np.ndarray) -> list[list[float | None]]:
@@ -393,34 +451,7 @@ class JsonlWriter(_TextFileWriter):
     format_name = "jsonl"
 
     def _write(self, features: ScanFeatures) -> None:
-        scan, extraction = features.scan, features.extraction
-        record = {
-            "scan": int(features.index),
-            "timestamp": None if scan.timestamp is None else _number(scan.timestamp),
-            "pose": None if scan.pose is None else [_number(v) for v in scan.pose],
-            "segments": [
-                {
-                    "first": first,
-                    "last": last,
-                    "start": [row[START_X], row[START_Y]],
-                    "end": [row[END_X], row[END_Y]],
-                    "rho": row[RHO],
-                    "alpha": row[ALPHA],
-                    "n_points": n_points,
-                    "rms": row[RMS],
-                }
-                for first, last, n_points, row in zip(
-                    extraction.first.tolist(),
-                    extraction.last.tolist(),
-                    extraction.n_points.tolist(),
-                    _finite_rows(extraction.lines),
-                    strict=True,
-                )
-            ],
-            "breakpoints": extraction.breakpoints.tolist(),
-            "corners": extraction.corners.tolist(),
-        }
-        self._handle.write(json.dumps(record, allow_nan=False, separators=(",", ":")))
+        self._handle.write(json_record(features))
         self._handle.write("\n")
 
 
@@ -440,6 +471,8 @@ class CsvWriter(_TextFileWriter):
         extraction = features.extraction
         stamp = _cell(features.scan.timestamp)
         for k, row in enumerate(extraction.lines):
+            covariance = extraction.covariances[k]
+            start_kind, end_kind = extraction.end_kinds[k]
             self._csv.writerow(
                 (
                     features.index,
@@ -454,6 +487,11 @@ class CsvWriter(_TextFileWriter):
                     _cell(row[1]),
                     int(extraction.n_points[k]),
                     _cell(row[6]),
+                    _cell(covariance[0, 0]),
+                    _cell(covariance[0, 1]),
+                    _cell(covariance[1, 1]),
+                    END_KINDS[start_kind],
+                    END_KINDS[end_kind],
                 )
             )
 

@@ -123,13 +123,7 @@ from scanlines.params import (
     segment_params,
 )
 from scanlines.steps.assemble import assemble, empty_result
-from scanlines.steps.breakpoints import (
-    BREAKPOINT_PARAMS,
-    RULE_CODES,
-    auto_abd_lambda,
-    make_rule,
-    with_margin_growth,
-)
+from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, RULE_CODES, auto_abd_lambda, make_rule
 from scanlines.steps.clusters import cluster_returns
 from scanlines.steps.corners import (
     DK_SIGNED,
@@ -145,7 +139,15 @@ from scanlines.steps.denoise import DENOISE_CODES, denoise
 from scanlines.steps.events import junction_events, sorted_distinct
 from scanlines.steps.fit import FIT_CODES, FITS, PAPER, RunCost, inverse_square_sums, prefix_moments
 from scanlines.steps.merge import merge_by_criterion
-from scanlines.steps.noise import noise_growth, range_noise, residual_noise
+from scanlines.steps.noise import (
+    NoiseLine,
+    covariance_sigmas,
+    noise_at,
+    residual_noise,
+    resolve_noise,
+    return_sigmas,
+    variance_sums,
+)
 from scanlines.steps.returns import Returns, beam_gaps, valid_returns
 from scanlines.steps.select import (
     BIC,
@@ -199,9 +201,9 @@ PARAMETERS: dict[str, Param] = {
         2, int_at_least(1), "isolated denoising: smaller clusters are dropped as noise"
     ),
     "noise_model": Param(
-        "constant",
-        choice("constant", "range"),
-        "breakpoint noise margin: constant, or growing with range as the scan's noise does",
+        "range",
+        choice("range", "constant"),
+        "noise: growing with range as measured (sensor profile or scan), or one constant",
     ),
 }
 
@@ -248,7 +250,6 @@ class AdaptiveSettings:
     auto_abd_lambda: bool
     pdbs_c0: float
     jump_distance: float
-    range_noise: bool
     denoise: int
     window: int
     min_cluster_points: int
@@ -261,6 +262,7 @@ class AdaptiveSettings:
     penalty: float
     noise_sigma: float
     estimate_noise: bool
+    constant_noise: bool
     fit: int
     shared_corner: bool
     merge: bool
@@ -283,7 +285,6 @@ class AdaptiveSettings:
             auto_abd_lambda=lam == "auto",
             pdbs_c0=params["pdbs_c0"],
             jump_distance=params["jump_distance"],
-            range_noise=params["noise_model"] == "range",
             denoise=DENOISE_CODES[params["denoise"]],
             window=params["window"],
             min_cluster_points=params["min_cluster_points"],
@@ -296,6 +297,7 @@ class AdaptiveSettings:
             penalty=params["penalty"],
             noise_sigma=math.nan if sigma == "auto" else sigma,
             estimate_noise=sigma == "auto",
+            constant_noise=params["noise_model"] == "constant",
             fit=FIT_CODES[params["fit"]],
             shared_corner=params["corner_split"] == "shared",
             merge=params["merge"],
@@ -303,7 +305,7 @@ class AdaptiveSettings:
             corner_check=params["corner_check"],
             min_points=params["min_points"],
             min_length=params["min_length"],
-            range_sigma=params["range_sigma"],
+            range_sigma=math.nan if params["range_sigma"] == "auto" else params["range_sigma"],
         )
 
 
@@ -328,15 +330,17 @@ class Adaptive(CompiledMethod):
         return as_record(self.settings), grid
 
     @staticmethod
-    def kernel(ranges, valid, cos, sin, step, full_circle, angle_min, settings, grid):
-        return adaptive_scan(ranges, valid, cos, sin, step, full_circle, angle_min, settings, grid)
+    def kernel(ranges, valid, cos, sin, step, full_circle, angle_min, noise, settings, grid):
+        return adaptive_scan(
+            ranges, valid, cos, sin, step, full_circle, angle_min, noise, settings, grid
+        )
 
 
 # --------------------------------------------------------------------------- the kernel
 
 
 @kernel
-def adaptive_scan(ranges, valid, cos, sin, step, full_circle, angle_min, settings, grid):
+def adaptive_scan(ranges, valid, cos, sin, step, full_circle, angle_min, noise, settings, grid):
     """The whole method on one scan: the result arrays (see :class:`CompiledMethod`)."""
     s = settings[0]
     n_beams = ranges.shape[0]
@@ -349,9 +353,11 @@ def adaptive_scan(ranges, valid, cos, sin, step, full_circle, angle_min, setting
         returns = turned(returns, angle_min)
         angle_min = 0.0
     gap = beam_gaps(returns.index, n_beams)
-    sigma = range_noise(returns.r, gap) if s.estimate_noise else s.noise_sigma
-    rule = breakpoint_rule(s, returns, gap, step, sigma)
-    margin = s.noise_k * math.sqrt(2.0) * sigma
+    from_scan = noise.sigma0 != noise.sigma0
+    noise = scan_noise_model(s, noise, returns, gap)
+    typical = noise_at(noise, np.median(returns.r))
+    rule = breakpoint_rule(s, noise, step)
+    margin = s.noise_k * math.sqrt(2.0) * typical
     returns, outliers, breaks = denoise(
         returns, n_beams, step, full_circle, rule, s.denoise, s.window, s.min_cluster_points, margin
     )
@@ -359,24 +365,51 @@ def adaptive_scan(ranges, valid, cos, sin, step, full_circle, angle_min, setting
         return empty_result(outliers, outliers)
     window = s.slope_window
     if s.auto_slope_window:
-        window = turn_window(returns.x, returns.y, returns.index, sigma)
+        window = turn_window(returns.x, returns.y, returns.index, typical)
     returns, start, end, breakpoints, ring = cluster_returns(
         returns, n_beams, step, full_circle, rule, window, breaks
     )
     moments = prefix_moments(returns.x, returns.y)
-    inv_r2 = inverse_square_sums(returns.r) if s.criterion == BIC else np.zeros(0)
-    cost = RunCost(s.fit, moments, inv_r2)
+    cost = run_cost_of(s, moments, returns, noise)
     scores = corner_scores(returns, n_beams, step, moments, start, end, window, s.corner_score)
-    corners, sigma = choose_corners(cost, start, end, scores, sigma, s, grid)
-    a, b, owner = segments(returns, cost, start, end, corners, sigma, s)
-    check_sigma = sigma if s.corner_check else -1.0
+    rescale = from_scan and s.estimate_noise and s.criterion == BIC
+    corners, scale = choose_corners(cost, start, end, scores, rescale, s, grid)
+    unit = scale * scale if s.criterion == BIC else typical * typical
+    a, b, owner = segments(returns, cost, start, end, corners, unit, s)
+    check_sigma = scale * typical if s.corner_check else -1.0
     corner_beams, jumps = junction_events(
         returns, s.fit, moments, a, b, owner, s.shared_corner, ring, check_sigma
     )
     breakpoints = sorted_distinct(np.concatenate((breakpoints, jumps)))
+    sigmas = covariance_sigmas(s.range_sigma, noise, returns, gap)
+    events = (breakpoints, corner_beams, outliers)
     return assemble(
-        returns, s.fit, moments, a, b, angle_min, s.range_sigma, breakpoints, corner_beams, outliers
+        returns, s.fit, moments, a, b, angle_min, sigmas, events, (n_beams, full_circle)
     )
+
+
+@kernel
+def scan_noise_model(s, noise, returns, gap):
+    """The :class:`~scanlines.steps.noise.NoiseLine` the thresholds use: the
+    ``noise_sigma`` override, else the sensor profile's ``noise`` or the scan's own
+    (one constant, its value at the median range, with ``noise_model="constant"``)."""
+    if not s.estimate_noise:
+        return NoiseLine(s.noise_sigma, 0.0)
+    noise = resolve_noise(noise, returns, gap)
+    if s.constant_noise:
+        return NoiseLine(noise_at(noise, np.median(returns.r)), 0.0)
+    return noise
+
+
+@kernel
+def run_cost_of(s, moments, returns, noise):
+    """The :class:`~scanlines.steps.fit.RunCost` of the criterion: in noise units for
+    BIC (each run's error over its returns' mean noise variance and incidence), square
+    metres for SSE."""
+    if s.criterion != BIC:
+        return RunCost(s.fit, moments, np.zeros(0), np.zeros(0))
+    variances = variance_sums(return_sigmas(returns.r, noise))
+    return RunCost(s.fit, moments, inverse_square_sums(returns.r), variances)
 
 
 @kernel
@@ -388,18 +421,12 @@ def turned(returns, angle):
 
 
 @kernel
-def breakpoint_rule(s, returns, gap, step, sigma):
-    """The clustering rule of settings ``s`` with the scan's noise ``sigma`` (and, with
-    ``range_noise``, a margin that grows with range as the scan's noise does)."""
+def breakpoint_rule(s, noise, step):
+    """The clustering rule of settings ``s`` with the range noise ``noise``."""
     lam = auto_abd_lambda(step) if s.auto_abd_lambda else s.abd_lambda
-    rule = make_rule(
-        s.breakpoints, s.k, s.noise_k, s.line_k, lam, s.pdbs_c0, s.jump_distance, sigma
+    return make_rule(
+        s.breakpoints, s.k, s.noise_k, s.line_k, lam, s.pdbs_c0, s.jump_distance, noise
     )
-    if s.range_noise:
-        far_sigma, growth, far_range = noise_growth(returns, gap)
-        margin = s.noise_k * math.sqrt(2.0)
-        rule = with_margin_growth(rule, margin * far_sigma, margin * growth, far_range)
-    return rule
 
 
 @kernel
@@ -412,34 +439,38 @@ def corner_scores(returns, n_beams, step, moments, start, end, window, kind):
 
 
 @kernel
-def choose_corners(cost, start, end, scores, sigma, s, grid):
-    """Steps 5-7: corner candidates and the threshold sweep; returns corners and the noise."""
+def choose_corners(cost, start, end, scores, rescale, s, grid):
+    """Steps 5-7: corner candidates and the threshold sweep; returns the corners and the
+    scale of the noise model (1, or with ``rescale`` the scale the lines of a first
+    choice measure)."""
     candidates = peak_positions(scores, start, end)
     ranked, accepted, sse, segment_count, _, levels = sweep_levels(
         cost, start, end, candidates, scores[candidates], grid, s.use_grid,
         s.max_evaluations, s.shared_corner,
     )  # fmt: skip
     n_points = int(np.sum(end - start + 1))
-    best, _ = best_level(s.criterion, sse, segment_count, levels, n_points, sigma, s.penalty)
+    scale = 1.0
+    best, _ = best_level(s.criterion, sse, segment_count, levels, n_points, scale, s.penalty)
     corners = level_corners(ranked, accepted, levels[best])
-    if s.estimate_noise and s.criterion == BIC:
-        # Second pass with the noise measured on the lines of the first choice.
+    if rescale:
+        # Second pass with the noise scaled to the lines of the first choice.
         a, b, _ = cut_at(start, end, corners, s.shared_corner)
-        sigma = residual_noise(cost, a, b, sigma)
-        best, _ = best_level(s.criterion, sse, segment_count, levels, n_points, sigma, s.penalty)
+        scale = residual_noise(cost, a, b, scale)
+        scale = max(scale, 1e-3)
+        best, _ = best_level(s.criterion, sse, segment_count, levels, n_points, scale, s.penalty)
         corners = level_corners(ranked, accepted, levels[best])
-    return corners, sigma
+    return corners, scale
 
 
 @kernel
-def segments(returns, cost, start, end, corners, sigma, s):
+def segments(returns, cost, start, end, corners, unit, s):
     """Runs ``[a, b]`` (and cluster of each) after cutting, refining, merging and bounding."""
     x, y = returns.x, returns.y
     a, b, owner = cut_at(start, end, corners, s.shared_corner)
     if not s.shared_corner:
         a, b = refine_cuts(cost, a, b, owner)
     if s.merge:
-        segment_cost = s.penalty * math.log(max(x.shape[0], 2)) * sigma * sigma
+        segment_cost = s.penalty * math.log(max(x.shape[0], 2)) * unit
         a, b, owner = merge_by_criterion(cost, a, b, owner, segment_cost)
     if s.max_residual < math.inf:
         a, b, owner = split_by_residual(

@@ -34,6 +34,7 @@ from scanlines.steps.assemble import Output, empty_result, finish, to_extraction
 from scanlines.steps.breakpoints import NO_RULE, RULE_CODES, RuleSpec, scan_rule
 from scanlines.steps.clusters import cluster_returns
 from scanlines.steps.fit import prefix_moments
+from scanlines.steps.noise import UNKNOWN_NOISE, NoiseLine
 from scanlines.steps.returns import Returns, beam_gaps, valid_returns, without
 
 __all__ = [
@@ -66,8 +67,9 @@ class Method:
     parameters: ClassVar[Mapping[str, Param]] = {}
     presets: ClassVar[Mapping[str, Mapping[str, Any]]] = {}
 
-    def __init__(self, params: Mapping[str, Any]) -> None:
+    def __init__(self, params: Mapping[str, Any], noise: NoiseLine | None = None) -> None:
         self.params = params
+        self.noise = UNKNOWN_NOISE if noise is None else NoiseLine(*map(float, noise))
 
     def extract(
         self,
@@ -129,8 +131,8 @@ class CompiledMethod(Method):
     the kernel's last arguments, by default the settings record.
     """
 
-    def __init__(self, params: Mapping[str, Any]) -> None:
-        super().__init__(params)
+    def __init__(self, params: Mapping[str, Any], noise: NoiseLine | None = None) -> None:
+        super().__init__(params, noise)
         self.settings = self.settings_of(params)
         self.arguments = self.kernel_arguments()
 
@@ -148,16 +150,16 @@ class CompiledMethod(Method):
     def extract(self, ranges, valid, cos, sin, step, angle_min) -> Extraction:
         full_circle = is_full_circle(ranges.shape[0], step)
         arrays = self.kernel(
-            ranges, valid, cos, sin, abs(step), full_circle, angle_min, *self.arguments
+            ranges, valid, cos, sin, abs(step), full_circle, angle_min, self.noise, *self.arguments
         )
         return to_extraction(arrays, self.name, self.params)
 
     def extract_many(self, stack, valid, cos, sin, step, angle_min) -> list[Extraction]:
         full_circle = is_full_circle(stack.shape[1], step)
-        kernel, arguments, step = self.kernel, self.arguments, abs(step)
+        kernel, arguments, step, noise = self.kernel, self.arguments, abs(step), self.noise
         return [
             to_extraction(
-                kernel(row, mask, cos, sin, step, full_circle, angle_min, *arguments),
+                kernel(row, mask, cos, sin, step, full_circle, angle_min, noise, *arguments),
                 self.name,
                 self.params,
             )
@@ -185,7 +187,7 @@ def output_of(params: Mapping[str, Any]) -> Output:
     return Output(
         params["min_points"],
         params["min_length"],
-        params["range_sigma"],
+        math.nan if params["range_sigma"] == "auto" else params["range_sigma"],
         params["corner_beams"],
         params["corner_distance"],
         math.radians(params["corner_angle"]),
@@ -201,8 +203,8 @@ class ClusteredMethod(Method):
     breakpoints) between consecutive segments, lines fitted and assembled.
     """
 
-    def __init__(self, params: Mapping[str, Any]) -> None:
-        super().__init__(params)
+    def __init__(self, params: Mapping[str, Any], noise: NoiseLine | None = None) -> None:
+        super().__init__(params, noise)
         self.rule = rule_spec_of(params)
         self.output = output_of(params)
 
@@ -226,7 +228,7 @@ class ClusteredMethod(Method):
         if returns.index.shape[0] == 0:
             return to_extraction(empty_result(none, none), self.name, self.params)
         returns, start, end, breakpoints, ring = cluster_scan(
-            returns, n_beams, step, full_circle, self.rule
+            returns, n_beams, step, full_circle, self.rule, self.noise
         )
         gap = beam_gaps(returns.index, n_beams)
         a, b, group, dropped = (
@@ -239,6 +241,7 @@ class ClusteredMethod(Method):
         arrays = finish(
             returns, n_beams, full_circle, prefix_moments(returns.x, returns.y), (a, b, group),
             (self.rule.kind != NO_RULE, ring, breakpoints), outliers, angle_min, self.output,
+            self.noise,
         )  # fmt: skip
         return to_extraction(arrays, self.name, self.params)
 
@@ -252,14 +255,14 @@ def _without_positions(returns: Returns, a: np.ndarray, b: np.ndarray, drop: np.
 
 
 @kernel
-def cluster_scan(returns, n_beams, step, full_circle, spec):
+def cluster_scan(returns, n_beams, step, full_circle, spec, noise):
     """:func:`~scanlines.steps.clusters.cluster_returns` by the rule of the
     :class:`~scanlines.steps.breakpoints.RuleSpec` ``spec``, its noise from the scan.
 
     :data:`~scanlines.steps.breakpoints.NO_RULE` makes one cluster of every return (a
     full circle is still rotated to start after a gap or at its strongest corner).
     """
-    rule = scan_rule(spec, returns.r, beam_gaps(returns.index, n_beams))
+    rule = scan_rule(spec, returns, beam_gaps(returns.index, n_beams), noise)
     no_flags = np.zeros(0, dtype=np.bool_)
     ring_window = np.int64(RING_WINDOW)  # not a literal: one compiled clustering for all
     returns, start, end, breakpoints, ring = cluster_returns(

@@ -98,7 +98,7 @@ class SplitSettings:
             jump_distance=params["jump_distance"],
             min_points=params["min_points"],
             min_length=params["min_length"],
-            range_sigma=params["range_sigma"],
+            range_sigma=math.nan if params["range_sigma"] == "auto" else params["range_sigma"],
             corner_beams=params["corner_beams"],
             corner_distance=params["corner_distance"],
             corner_angle=math.radians(params["corner_angle"]),
@@ -149,12 +149,12 @@ class Iepf(CompiledMethod):
         return SplitSettings.of(params, reference="chord")
 
     @staticmethod
-    def kernel(ranges, valid, cos, sin, step, full_circle, angle_min, settings):
-        return iepf_scan(ranges, valid, cos, sin, step, full_circle, angle_min, settings)
+    def kernel(ranges, valid, cos, sin, step, full_circle, angle_min, noise, settings):
+        return iepf_scan(ranges, valid, cos, sin, step, full_circle, angle_min, noise, settings)
 
 
 @kernel
-def iepf_scan(ranges, valid, cos, sin, step, full_circle, angle_min, settings):
+def iepf_scan(ranges, valid, cos, sin, step, full_circle, angle_min, noise, settings):
     """The whole method on one scan: the result arrays (see :class:`CompiledMethod`)."""
     s = settings[0]
     n_beams = ranges.shape[0]
@@ -162,14 +162,16 @@ def iepf_scan(ranges, valid, cos, sin, step, full_circle, angle_min, settings):
     returns = valid_returns(ranges, valid, cos, sin)
     if returns.index.shape[0] == 0:
         return empty_result(none, none)
-    returns, moments, runs, clusters = cluster_and_split(returns, n_beams, step, full_circle, s)
+    returns, moments, runs, clusters = cluster_and_split(
+        returns, n_beams, step, full_circle, s, noise
+    )
     return finish(
-        returns, n_beams, full_circle, moments, runs, clusters, none, angle_min, output(s)
+        returns, n_beams, full_circle, moments, runs, clusters, none, angle_min, output(s), noise
     )
 
 
 @kernel
-def cluster_and_split(returns, n_beams, step, full_circle, s):
+def cluster_and_split(returns, n_beams, step, full_circle, s, noise):
     """Steps 1-2 of the split methods: cluster by the rule, split every cluster at the point
     farthest from its chord (or line) while it is farther than ``split_distance``.
 
@@ -178,7 +180,7 @@ def cluster_and_split(returns, n_beams, step, full_circle, s):
     takes them.
     """
     returns, start, end, breakpoints, ring = cluster_scan(
-        returns, n_beams, step, full_circle, rule_spec(s)
+        returns, n_beams, step, full_circle, rule_spec(s), noise
     )
     moments = prefix_moments(returns.x, returns.y)
     clusters = np.arange(start.shape[0])

@@ -52,6 +52,7 @@ References
 
 from __future__ import annotations
 
+import math
 from typing import ClassVar
 
 import numpy as np
@@ -62,6 +63,7 @@ from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, LITERAL_CLUSTERING
 from scanlines.steps.events import EVENT_PARAMS
 from scanlines.steps.fit import TLS, Moments, fit_many, prefix_moments, run_covariances
 from scanlines.steps.merge import pair_chi_squares
+from scanlines.steps.noise import covariance_sigmas
 from scanlines.steps.returns import Returns
 
 _EMPTY = np.zeros(0, dtype=np.int64)
@@ -90,7 +92,7 @@ class LineRegression(ClusteredMethod):
 
     def find_runs(self, returns, gap, start, end):
         moments = prefix_moments(returns.x, returns.y)
-        window, sigma = self.params["window"], self.params["range_sigma"]
+        window, sigma = self.params["window"], self._sigmas(returns, gap)
         first, group = _window_starts(start, end, window)
         good = _similar_windows(
             returns, moments, first, group, window, sigma, self.params["fidelity"]
@@ -100,6 +102,12 @@ class LineRegression(ClusteredMethod):
             returns, moments, a, b, group, sigma, self.params["merge_chi2"]
         )
         return a, b, group, _EMPTY
+
+    def _sigmas(self, returns: Returns, gap: np.ndarray) -> np.ndarray:
+        """The range noise of each return: ``range_sigma``, or the noise model's."""
+        given = self.params["range_sigma"]
+        given = math.nan if given == "auto" else float(given)
+        return covariance_sigmas(given, self.noise, returns, gap)
 
 
 def _window_starts(
@@ -113,12 +121,12 @@ def _window_starts(
 
 
 def _lines_and_covariances(
-    returns: Returns, moments: Moments, a: np.ndarray, b: np.ndarray, sigma: float
+    returns: Returns, moments: Moments, a: np.ndarray, b: np.ndarray, sigma: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     a = np.ascontiguousarray(a, dtype=np.int64)
     b = np.ascontiguousarray(b, dtype=np.int64)
     rho, alpha, _ = fit_many(TLS, moments, a, b)
-    return rho, alpha, run_covariances(returns, rho, alpha, a, b, sigma)
+    return rho, alpha, run_covariances(returns, rho, alpha, a, b, sigma, False)
 
 
 def _similar_windows(
@@ -127,7 +135,7 @@ def _similar_windows(
     start: np.ndarray,
     group: np.ndarray,
     window: int,
-    sigma: float,
+    sigma: np.ndarray,
     threshold: float,
 ) -> np.ndarray:
     """Steps 2-3: mask of windows whose fidelity is below ``threshold``."""
@@ -166,7 +174,7 @@ def _resolve_overlaps(
     a: np.ndarray,
     b: np.ndarray,
     group: np.ndarray,
-    sigma: float,
+    sigma: np.ndarray,
     merge_chi2: float,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Step 5: merge or divide overlapping neighbours, left to right."""

@@ -68,7 +68,8 @@ from scanlines.steps.assemble import drop_small, empty_result, finish
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, LITERAL_CLUSTERING
 from scanlines.steps.events import EVENT_PARAMS
 from scanlines.steps.merge import merge_by_chi_square
-from scanlines.steps.returns import valid_returns, without
+from scanlines.steps.noise import covariance_sigmas
+from scanlines.steps.returns import beam_gaps, valid_returns, without
 
 
 class SplitMerge(CompiledMethod):
@@ -108,12 +109,14 @@ class SplitMerge(CompiledMethod):
         return SplitSettings.of(params, reference="fit")
 
     @staticmethod
-    def kernel(ranges, valid, cos, sin, step, full_circle, angle_min, settings):
-        return split_merge_scan(ranges, valid, cos, sin, step, full_circle, angle_min, settings)
+    def kernel(ranges, valid, cos, sin, step, full_circle, angle_min, noise, settings):
+        return split_merge_scan(
+            ranges, valid, cos, sin, step, full_circle, angle_min, noise, settings
+        )
 
 
 @kernel
-def split_merge_scan(ranges, valid, cos, sin, step, full_circle, angle_min, settings):
+def split_merge_scan(ranges, valid, cos, sin, step, full_circle, angle_min, noise, settings):
     """The whole method on one scan: the result arrays (see :class:`CompiledMethod`)."""
     s = settings[0]
     n_beams = ranges.shape[0]
@@ -122,13 +125,14 @@ def split_merge_scan(ranges, valid, cos, sin, step, full_circle, angle_min, sett
     if returns.index.shape[0] == 0:
         return empty_result(np.zeros(0, dtype=np.int64), outliers)
     returns, moments, (a, b, group), clusters = cluster_and_split(
-        returns, n_beams, step, full_circle, s
+        returns, n_beams, step, full_circle, s, noise
     )
     a, b, group = drop_small(returns.x, returns.y, a, b, group, s.min_points, s.min_length)
-    a, b, group = merge_by_chi_square(returns, moments, a, b, group, s.range_sigma, s.merge_chi2)
+    sigma = covariance_sigmas(s.range_sigma, noise, returns, beam_gaps(returns.index, n_beams))
+    a, b, group = merge_by_chi_square(returns, moments, a, b, group, sigma, s.merge_chi2)
     return finish(
         returns, n_beams, full_circle, moments, (a, b, group), clusters, outliers, angle_min,
-        output(s),
+        output(s), noise,
     )  # fmt: skip
 
 

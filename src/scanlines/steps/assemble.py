@@ -18,8 +18,10 @@ import numpy as np
 
 from scanlines._jit import kernel
 from scanlines.extraction import N_LINE_COLUMNS, Extraction
-from scanlines.steps.events import segment_events, sorted_distinct
+from scanlines.steps.events import end_kinds, segment_events, sorted_distinct
 from scanlines.steps.fit import TLS, fit_many, run_covariances, wrap_angle
+from scanlines.steps.noise import covariance_sigmas
+from scanlines.steps.returns import beam_gaps
 
 __all__ = [
     "Output",
@@ -33,7 +35,8 @@ __all__ = [
 
 class Output(NamedTuple):
     """What a comparison method keeps and reports: the smallest segment (points,
-    metres), the range noise of the covariances (m) and the bounds of the corner rule
+    metres), the range noise of the covariances (m; NaN: the noise model's) and the
+    bounds of the corner rule
     (:func:`~scanlines.steps.events.segment_events`; beams, metres, radians)."""
 
     min_points: int
@@ -46,8 +49,9 @@ class Output(NamedTuple):
 
 def to_extraction(arrays: tuple[np.ndarray, ...], method: str, params: Mapping[str, Any]):
     """The :class:`~scanlines.Extraction` of :func:`assemble`'s (or :func:`finish`'s) output."""
-    first, last, n_points, lines, covariance, breakpoints, corners, outliers = arrays
+    first, last, n_points, lines, covariance, breakpoints, corners, outliers, ends = arrays
     return Extraction(
+        end_kinds=ends,
         first=first,
         last=last,
         n_points=n_points,
@@ -62,16 +66,26 @@ def to_extraction(arrays: tuple[np.ndarray, ...], method: str, params: Mapping[s
 
 
 @kernel
-def assemble(returns, fit, moments, a, b, angle_min, range_sigma, breakpoints, corners, outliers):
+def assemble(returns, fit, moments, a, b, angle_min, sigma, events, scan_shape):
     """The result arrays: runs ``[a, b]`` fitted, in beam order, events sorted.
+
+    ``events`` is ``(breakpoints, corners, outliers)`` (beams), ``scan_shape``
+    ``(n_beams, wrap)``: the scan's beam count and whether its last return neighbours
+    its first (a full circle), for what ends each segment
+    (:func:`~scanlines.steps.events.end_kinds`).
+
+    ``sigma`` is the range noise of each return, for the covariances (which grow where
+    a segment's own residuals are larger than that noise explains).
 
     Lines are computed in the scan's local frame (beam 0 at bearing 0), which
     makes every decision independent of ``angle_min``; here they are rotated by
     ``angle_min``.
     """
     index, _, x, y = returns
+    breakpoints, corners, outliers = np.sort(events[0]), np.sort(events[1]), np.sort(events[2])
+    n_beams, wrap = scan_shape
     rho, alpha, _ = fit_many(fit, moments, a, b)
-    covariance = run_covariances(returns, rho, alpha, a, b, range_sigma)
+    covariance = run_covariances(returns, rho, alpha, a, b, sigma, True)
     m = a.shape[0]
     lines = np.empty((m, N_LINE_COLUMNS))
     cos_t, sin_t = math.cos(angle_min), math.sin(angle_min)
@@ -97,9 +111,10 @@ def assemble(returns, fit, moments, a, b, angle_min, range_sigma, breakpoints, c
         (b - a + 1)[order],
         lines[order],
         covariance[order],
-        np.sort(breakpoints),
-        np.sort(corners),
-        np.sort(outliers),
+        breakpoints,
+        corners,
+        outliers,
+        end_kinds(returns, a, b, n_beams, wrap, breakpoints, corners)[order],
     )
 
 
@@ -116,6 +131,7 @@ def empty_result(breakpoints, outliers):
         np.sort(breakpoints),
         none.copy(),
         np.sort(outliers),
+        np.zeros((0, 2), dtype=np.int8),
     )
 
 
@@ -134,13 +150,17 @@ def drop_small(x, y, a, b, group, min_points, min_length):
 
 
 @kernel
-def finish(returns, n_beams, full_circle, moments, runs, clusters, outliers, angle_min, output):
+def finish(
+    returns, n_beams, full_circle, moments, runs, clusters, outliers, angle_min, output, noise
+):
     """Drop small runs, find corners (and breakpoints) and assemble the result arrays.
 
     ``runs`` is ``(a, b, group)``; ``clusters`` is ``(clustered, ring,
     breakpoints)``: whether the breakpoints come from the method's clustering (else
     they are derived from the jumps between segments), whether the scan is one closed
-    ring, and the clustering's breakpoint beams. ``output`` is an :class:`Output`.
+    ring, and the clustering's breakpoint beams. ``output`` is an :class:`Output`;
+    ``noise`` the sensor profile's :class:`~scanlines.steps.noise.NoiseLine` (NaN:
+    measured from the scan) for the covariances.
     """
     a, b, group = runs
     clustered, ring, breakpoints = clusters
@@ -152,7 +172,9 @@ def finish(returns, n_beams, full_circle, moments, runs, clusters, outliers, ang
     corners, jumps = segment_events(returns, n_beams, moments, a, b, group, clustered, wrap, bounds)
     if not clustered:
         breakpoints = jumps
+    gap = beam_gaps(returns.index, n_beams)
+    sigma = covariance_sigmas(output.range_sigma, noise, returns, gap)
+    events = (sorted_distinct(breakpoints), corners, sorted_distinct(outliers))
     return assemble(
-        returns, np.int64(TLS), moments, a, b, angle_min, output.range_sigma,
-        sorted_distinct(breakpoints), corners, sorted_distinct(outliers),
-    )  # fmt: skip
+        returns, np.int64(TLS), moments, a, b, angle_min, sigma, events, (n_beams, full_circle)
+    )

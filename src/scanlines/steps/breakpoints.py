@@ -46,7 +46,7 @@ import numpy as np
 
 from scanlines._jit import kernel
 from scanlines.params import Param, choice, number
-from scanlines.steps.noise import range_noise
+from scanlines.steps.noise import NoiseLine, noise_at, resolve_noise
 from scanlines.steps.returns import MAX_BRIDGED_GAP
 
 __all__ = [
@@ -68,7 +68,6 @@ __all__ = [
     "scan_rule",
     "seam_break",
     "threshold",
-    "with_margin_growth",
 ]
 
 RULES = ("adaptive", "abd", "pdbs", "fixed")
@@ -109,21 +108,19 @@ class BreakpointRule(NamedTuple):
     """A clustering rule and its constants (see the module docstring).
 
     ``kind`` is one of :data:`ADAPTIVE`, :data:`ABD`, :data:`PDBS`, :data:`FIXED`;
-    ``abd_lambda`` in radians; ``noise_margin`` and ``line_tolerance`` in metres. The
-    margin grows with range beyond ``far_range`` by ``growth`` per metre from
-    ``far_margin`` where :func:`with_margin_growth` set them (zero otherwise).
+    ``abd_lambda`` in radians. The noise margin of a pair is ``margin_sigmas`` and the
+    line tolerance ``tolerance_sigmas`` times the range noise ``noise`` (a
+    :class:`~scanlines.steps.noise.NoiseLine`) at the pair's range.
     """
 
     kind: int
     k: float
-    noise_margin: float
-    line_tolerance: float
+    margin_sigmas: float
+    tolerance_sigmas: float
+    noise: NoiseLine
     abd_lambda: float
     pdbs_c0: float
     jump_distance: float
-    far_margin: float
-    growth: float
-    far_range: float
 
 
 class RuleSpec(NamedTuple):
@@ -172,8 +169,9 @@ def auto_abd_lambda(step):
 
 
 @kernel
-def make_rule(kind, k, noise_k, line_k, abd_lambda, pdbs_c0, jump_distance, sigma):
-    """The :class:`BreakpointRule` with its noise terms in units of the range noise ``sigma``.
+def make_rule(kind, k, noise_k, line_k, abd_lambda, pdbs_c0, jump_distance, noise):
+    """The :class:`BreakpointRule` with its noise terms in units of the range noise
+    ``noise`` (a :class:`~scanlines.steps.noise.NoiseLine`).
 
     The margin is ``noise_k`` standard deviations of a difference of two ranges
     (``sqrt(2) sigma``), the line tolerance ``line_k`` standard deviations of an
@@ -182,57 +180,35 @@ def make_rule(kind, k, noise_k, line_k, abd_lambda, pdbs_c0, jump_distance, sigm
     return BreakpointRule(
         kind,
         k,
-        noise_k * math.sqrt(2.0) * sigma,
-        line_k * math.sqrt(5.0) * sigma,
+        noise_k * math.sqrt(2.0),
+        line_k * math.sqrt(5.0),
+        noise,
         abd_lambda,
         pdbs_c0,
         jump_distance,
-        0.0,
-        0.0,
-        0.0,
     )
 
 
 @kernel
-def scan_rule(spec, r, gap):
-    """The rule of the :class:`RuleSpec` ``spec``, its noise terms from the scan's ranges.
-
-    The range noise (:func:`~scanlines.steps.noise.range_noise`) is estimated only when
-    the rule uses it. :data:`NO_RULE` gives a rule that cuts at missing beams only.
+def scan_rule(spec, returns, gap, noise):
+    """The rule of the :class:`RuleSpec` ``spec``, its noise ``noise`` (a sensor
+    profile's :class:`~scanlines.steps.noise.NoiseLine`, or NaN: measured from the scan,
+    only when the rule uses it). :data:`NO_RULE` gives a rule that cuts at missing
+    beams only.
     """
     if spec.kind == NO_RULE:
         fixed = np.int64(FIXED)  # not a literal: one compiled make_rule for every caller
-        return make_rule(fixed, spec.k, 0.0, 0.0, spec.abd_lambda, spec.pdbs_c0, math.inf, 0.0)
-    sigma = 0.0
+        quiet = NoiseLine(0.0, 0.0)
+        return make_rule(fixed, spec.k, 0.0, 0.0, spec.abd_lambda, spec.pdbs_c0, math.inf, quiet)
     noisy_rule = spec.kind in (ADAPTIVE, ABD) and spec.noise_k > 0.0
     if noisy_rule or spec.line_k > 0.0:
-        sigma = range_noise(r, gap)
+        noise = resolve_noise(noise, returns, gap)
+    else:
+        noise = NoiseLine(0.0, 0.0)
     return make_rule(
         spec.kind, spec.k, spec.noise_k, spec.line_k, spec.abd_lambda, spec.pdbs_c0,
-        spec.jump_distance, sigma,
+        spec.jump_distance, noise,
     )  # fmt: skip
-
-
-@kernel
-def with_margin_growth(rule, far_margin, growth, far_range):
-    """The rule with a noise margin that grows with range where the noise does.
-
-    The margin at range ``r`` becomes ``max(noise_margin, far_margin + growth (r -
-    far_range))``: sensors whose range noise is a share of the range (the
-    URG-04LX: 1 % beyond 1 m) need a wider margin far away than near.
-    """
-    return BreakpointRule(
-        rule.kind,
-        rule.k,
-        rule.noise_margin,
-        rule.line_tolerance,
-        rule.abd_lambda,
-        rule.pdbs_c0,
-        rule.jump_distance,
-        far_margin,
-        growth,
-        far_range,
-    )
 
 
 @kernel
@@ -265,8 +241,8 @@ def scaled_threshold(rule, factor, r_from, r_to):
     """The threshold from :func:`gap_factor` and the two ranges."""
     kind = rule.kind
     if kind in (ADAPTIVE, ABD):
-        far = rule.far_margin + rule.growth * (r_from - rule.far_range)
-        return factor * r_from + max(rule.noise_margin, far)
+        margin = rule.margin_sigmas * noise_at(rule.noise, r_from) if rule.margin_sigmas else 0.0
+        return factor * r_from + margin
     if kind == PDBS:
         return rule.pdbs_c0 + factor * min(r_from, r_to)
     return rule.jump_distance
@@ -293,7 +269,8 @@ def continues_line_at(x, y, gap, d, p, tolerance):
     """Pair ``(p, p+1)`` continues the line of the pair before and of the pair after.
 
     ``P_{p+1}`` lies within ``tolerance`` of the line through ``P_{p-1}, P_p``, ``P_p``
-    within ``tolerance`` of the line through ``P_{p+1}, P_{p+2}``, both neighbouring
+    within ``tolerance`` of the line through ``P_{p+1}, P_{p+2}`` (each tolerance grown
+    by :func:`extrapolation_growth` for the step ``d_p`` beyond), both neighbouring
     steps are longer than ``tolerance`` (shorter ones give a line direction that is
     mostly noise), and ``d_p`` is at most :data:`MAX_STEP_GROWTH` times the
     shorter neighbouring step. Returns on a wall seen at grazing incidence are far
@@ -318,13 +295,21 @@ def continues_line_at(x, y, gap, d, p, tolerance):
         return False
     if has_before:
         before = distance_to_line(x[p - 1], y[p - 1], x[p], y[p], x[p + 1], y[p + 1])
-        if not before < tolerance:
+        if not before < tolerance * extrapolation_growth(d[p] / d[p - 1]):
             return False
     if has_after:
         after = distance_to_line(x[p + 2], y[p + 2], x[p + 1], y[p + 1], x[p], y[p])
-        if not after < tolerance:
+        if not after < tolerance * extrapolation_growth(d[p] / d[p + 1]):
             return False
     return True
+
+
+@kernel(inline=True)
+def extrapolation_growth(t):
+    """How much farther off a line through two points a third lies by noise alone when it
+    is ``t`` times their distance beyond them, relative to ``t = 1`` (the ``sqrt(5)`` of
+    :func:`make_rule`): ``sqrt((1 + t)^2 + t^2) / sqrt(5)``."""
+    return math.sqrt((1.0 + t) ** 2 + t * t) / math.sqrt(5.0)
 
 
 @kernel
@@ -336,13 +321,17 @@ def break_flags(returns, gap, step, rule):
     if n < 2:
         return out
     d = neighbour_steps(x, y)
-    tolerance = rule.line_tolerance
+    line_test = rule.tolerance_sigmas > 0.0
     factors = np.array([gap_factor(rule, g, step) for g in range(MAX_BRIDGED_GAP + 1)])
     for p in range(n - 1):
         if gap[p] > MAX_BRIDGED_GAP:
             out[p] = True
         elif not d[p] < scaled_threshold(rule, factors[gap[p]], r[p], r[p + 1]):
-            out[p] = not (tolerance > 0.0 and continues_line_at(x, y, gap, d, p, tolerance))
+            if line_test:
+                tolerance = rule.tolerance_sigmas * noise_at(rule.noise, r[p])
+                out[p] = not continues_line_at(x, y, gap, d, p, tolerance)
+            else:
+                out[p] = True
     return out
 
 

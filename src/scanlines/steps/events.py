@@ -44,13 +44,17 @@ import math
 import numpy as np
 
 from scanlines._jit import kernel
+from scanlines.extraction import END_KINDS
 from scanlines.params import Param, int_at_least, number
 from scanlines.steps.fit import TLS, fit_many, fit_run, hesse_difference, line_intersection
+from scanlines.steps.returns import MAX_BRIDGED_GAP
 from scanlines.steps.split import line_residual
 
 __all__ = [
     "CORNER_REACH",
+    "END_KINDS",
     "EVENT_PARAMS",
+    "end_kinds",
     "junction_events",
     "segment_events",
     "sorted_distinct",
@@ -220,3 +224,62 @@ def junction_events(returns, fit, moments, a, b, owner, shared, ring, sigma):
         corners[n_corners] = index[pick]
         n_corners += 1
     return corners[:n_corners], jumps[:n_jumps]
+
+
+END_CORNER, END_JUMP, END_OCCLUDED, END_GAP, END_EDGE, END_OPEN = (
+    END_KINDS.index(kind) for kind in ("corner", "jump", "occluded", "gap", "edge", "open")
+)
+
+
+@kernel(inline=True)
+def near_corner(corners, beam):
+    """Whether a corner beam lies within one beam of ``beam`` (``corners`` sorted)."""
+    at = np.searchsorted(corners, beam - 1)
+    return at < corners.shape[0] and corners[at] <= beam + 1
+
+
+@kernel(inline=True)
+def is_listed(sorted_beams, beam):
+    at = np.searchsorted(sorted_beams, beam)
+    return at < sorted_beams.shape[0] and sorted_beams[at] == beam
+
+
+@kernel
+def end_kinds(returns, a, b, n_beams, wrap, breakpoints, corners):
+    """What ends each run ``[a, b]`` at its start and at its end: codes of :data:`END_KINDS`.
+
+    ``corner``: a corner within one beam. ``gap``: two or more beams without a return
+    follow. ``edge``: no return follows (the scan's first or last return; never on a
+    closed ring, ``wrap``). ``jump``: a breakpoint, and the return beyond lies farther:
+    this surface really ends here. ``occluded``: a breakpoint, and the return beyond
+    is nearer: the surface may go on behind it. ``open``: none of these (the method
+    stopped the segment on a continuing surface: a curve, clutter, a dropped point).
+    ``breakpoints`` and ``corners`` are sorted beam indices.
+    """
+    index, r = returns.index, returns.r
+    n = index.shape[0]
+    out = np.empty((a.shape[0], 2), dtype=np.int8)
+    for k in range(a.shape[0]):
+        for side in range(2):
+            p = a[k] if side == 0 else b[k]
+            step = -1 if side == 0 else 1
+            q = p + step
+            if wrap:
+                q %= n
+            beam = index[p]
+            if near_corner(corners, beam):
+                out[k, side] = END_CORNER
+            elif q < 0 or q >= n or q == p:
+                out[k, side] = END_EDGE
+            else:
+                apart = (index[q] - beam) * step
+                if apart < 0:
+                    apart += n_beams
+                last_before = beam if side == 1 else index[q]
+                if apart > MAX_BRIDGED_GAP:
+                    out[k, side] = END_GAP
+                elif is_listed(breakpoints, last_before):
+                    out[k, side] = END_OCCLUDED if r[q] < r[p] else END_JUMP
+                else:
+                    out[k, side] = END_OPEN
+    return out

@@ -72,11 +72,13 @@ class Moments(NamedTuple):
 
 class RunCost(NamedTuple):
     """What the fitting error of a run needs: the fit code, the moments and, for a cost
-    in noise units, the running sums of ``1 / r^2`` (empty for the plain error)."""
+    in noise units, the running sums of ``1 / r^2`` and of each return's noise variance
+    (both empty for the plain error in square metres)."""
 
     fit: int
     moments: Moments
     inv_r2: np.ndarray
+    variances: np.ndarray
 
 
 @kernel
@@ -281,8 +283,8 @@ def run_cost(cost, a, b):
 
     Range noise moves a return along its beam; on a line at incidence ``beta``
     only ``cos(beta)`` of it shows as an orthogonal residual, so the error is
-    divided by the mean ``cos^2(beta_i) = (rho / r_i)^2`` of the run's points.
-    An empty ``inv_r2`` gives the plain error.
+    divided by the mean ``cos^2(beta_i) = (rho / r_i)^2`` of the run's points and by
+    the mean noise variance of its returns. Empty arrays give the plain error.
     """
     if cost.fit == PAPER:
         rho, _, sse = paper_run(cost.moments, a, b)
@@ -295,7 +297,8 @@ def run_cost(cost, a, b):
     weight = rho * rho * mean_inv_r2
     if weight != weight:  # NaN line: the cost stays NaN
         return sse
-    return sse / min(max(weight, MIN_INCIDENCE_WEIGHT), 1.0)
+    variance = (cost.variances[b + 1] - cost.variances[a]) / (b - a + 1)
+    return sse / (min(max(weight, MIN_INCIDENCE_WEIGHT), 1.0) * variance)
 
 
 @kernel
@@ -316,15 +319,18 @@ def run_labels(a, b, n):
 
 
 @kernel
-def run_covariances(returns, rho, alpha, a, b, range_sigma):
+def run_covariances(returns, rho, alpha, a, b, sigma, inflate):
     """Covariance of ``(rho, alpha)`` of the line of each run ``[a, b]``, shape (runs, 2, 2).
 
-    First-order propagation for the orthogonal fit: a range error ``e`` on a beam
-    at incidence ``cos(theta - alpha) = rho / r`` moves the point ``e rho / r``
-    off the line. With ``s`` the point's position along the line from the run's
-    centroid ``t0``, ``d alpha = -sum s e' / sum s^2`` and
-    ``d rho = mean(e') + t0 d alpha`` (after [2]_). Degenerate runs (two
-    points, a paper fit without slope) give inf or NaN entries, not errors.
+    First-order propagation for the orthogonal fit: a range error ``e`` (standard
+    deviation ``sigma[p]`` at return ``p``) on a beam at incidence
+    ``cos(theta - alpha) = rho / r`` moves the point ``e rho / r`` off the line. With
+    ``s`` the point's position along the line from the run's centroid ``t0``,
+    ``d alpha = -sum s e' / sum s^2`` and ``d rho = mean(e') + t0 d alpha`` (after
+    [2]_). With ``inflate``, a run whose residuals are larger than that noise explains
+    (reduced chi-square above 1: a rough or curved surface) has its covariance scaled
+    by that chi-square. Degenerate runs (two points, a paper fit without slope) give inf
+    or NaN entries, not errors.
     """
     _, r, x, y = returns
     position, run = run_labels(a, b, x.shape[0])
@@ -341,20 +347,26 @@ def run_covariances(returns, rho, alpha, a, b, range_sigma):
     s2_var = np.zeros(runs)
     s_var = np.zeros(runs)
     var_sum = np.zeros(runs)
+    chi2 = np.zeros(runs)
     for i in range(position.shape[0]):
         p, k = position[i], run[i]
         s = -x[p] * sin_a[k] + y[p] * cos_a[k] - t0[k]
-        var = (range_sigma * rho[k] / r[p]) ** 2
+        var = (sigma[p] * rho[k] / r[p]) ** 2
+        off = x[p] * cos_a[k] + y[p] * sin_a[k] - rho[k]
         s2[k] += s * s
         s2_var[k] += s * s * var
         s_var[k] += s * var
         var_sum[k] += var
+        chi2[k] += off * off / var if var > 0.0 else 0.0
     out = np.empty((runs, 2, 2))
     for k in range(runs):
+        scale = 1.0
+        if inflate and count[k] > 2.0:
+            scale = max(chi2[k] / (count[k] - 2.0), 1.0)
         var_alpha = s2_var[k] / (s2[k] * s2[k])
         var_mean = var_sum[k] / (count[k] * count[k])
         cov_mean_alpha = -s_var[k] / (count[k] * s2[k])
-        out[k, 0, 0] = var_mean + t0[k] * t0[k] * var_alpha + 2.0 * t0[k] * cov_mean_alpha
-        out[k, 0, 1] = out[k, 1, 0] = cov_mean_alpha + t0[k] * var_alpha
-        out[k, 1, 1] = var_alpha
+        out[k, 0, 0] = scale * (var_mean + t0[k] * t0[k] * var_alpha + 2.0 * t0[k] * cov_mean_alpha)
+        out[k, 0, 1] = out[k, 1, 0] = scale * (cov_mean_alpha + t0[k] * var_alpha)
+        out[k, 1, 1] = scale * var_alpha
     return out

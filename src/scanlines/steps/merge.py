@@ -98,17 +98,17 @@ def pair_chi_squares(rho, alpha, covariance, first, second):
 
 
 @kernel
-def merge_by_chi_square(returns, moments, a, b, group, range_sigma, threshold):
+def merge_by_chi_square(returns, moments, a, b, group, sigma, threshold):
     """Merge neighbouring runs of one group while their lines pass the chi-square test.
 
     The pair with the smallest chi-square below ``threshold`` is merged (the runs
-    and everything between them), refitted, and the test repeated. Returns new
-    ``a, b, group`` arrays.
+    and everything between them), refitted, and the test repeated; ``sigma`` is the
+    range noise of each return. Returns new ``a, b, group`` arrays.
     """
     a, b, group = a.copy(), b.copy(), group.copy()
     m = a.shape[0]
     rho, alpha, _ = fit_many(np.int64(TLS), moments, a, b)
-    covariance = run_covariances(returns, rho, alpha, a, b, range_sigma)
+    covariance = run_covariances(returns, rho, alpha, a, b, sigma, False)
     while m >= 2:
         best, best_value = -1, math.inf
         for k in range(m - 1):
@@ -131,7 +131,6 @@ def merge_by_chi_square(returns, moments, a, b, group, range_sigma, threshold):
         rho[best], alpha[best], _ = tls_run(moments, a[best], b[best])
         one_a, one_b = np.full(1, a[best]), np.full(1, b[best])
         one_rho, one_alpha = np.full(1, rho[best]), np.full(1, alpha[best])
-        covariance[best] = run_covariances(returns, one_rho, one_alpha, one_a, one_b, range_sigma)[
-            0
-        ]
+        one = run_covariances(returns, one_rho, one_alpha, one_a, one_b, sigma, False)
+        covariance[best] = one[0]
     return a[:m], b[:m], group[:m]

@@ -1,14 +1,19 @@
-"""Range noise measured from the scan itself.
+"""Range noise: a line ``sigma(r) = sigma0 + per_metre r`` measured from the data.
 
-``range_noise``        one sigma for the scan, from second differences of ranges.
-``noise_growth``       how the noise grows with range, from each return's distance to
-                       the chord of its neighbours.
-``residual_noise``     one sigma from the fitted lines of a first segmentation.
+``NoiseLine``          the noise model every threshold takes its sigma from.
+``noise_at``           ``sigma`` at a range.
+``local_residuals``    noise samples of a scan: each return's range against a smooth
+                       fit to its neighbours' ranges.
+``scan_noise``         the :class:`NoiseLine` of one scan, from its samples.
+``resolve_noise``      a sensor profile's line when given, else the scan's own.
+``residual_noise``     a scale of the noise from the fitted lines of a first
+                       segmentation.
 """
 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -18,10 +23,18 @@ from scanlines.steps.fit import run_cost
 __all__ = [
     "MIN_NOISE_SIGMA",
     "MIN_RUN_FOR_NOISE",
-    "chord_samples",
-    "noise_growth",
-    "range_noise",
+    "NOISE_HALF_WINDOW",
+    "UNKNOWN_NOISE",
+    "NoiseLine",
+    "covariance_sigmas",
+    "local_residuals",
+    "noise_at",
+    "noise_line_of",
     "residual_noise",
+    "resolve_noise",
+    "return_sigmas",
+    "scan_noise",
+    "variance_sums",
 ]
 
 MIN_NOISE_SIGMA = 1e-3
@@ -29,102 +42,177 @@ MIN_NOISE_SIGMA = 1e-3
 least this much quantisation noise, and a noise-free simulation must not make
 the criterion divide by zero."""
 
-MIN_CHORD_COS = 0.5
-"""Chord samples of :func:`noise_growth` come from surfaces within 60 deg of facing the beam."""
+NOISE_HALF_WINDOW = 3
+"""Neighbours on each side of a return in the fit its residual is measured from.
+Seven points average out sensors that repeat one range over two or three beams (the
+URG-04LX logs of the Mines robot), which makes the second difference of ranges, or
+the distance from the chord of the two neighbours, read zero."""
+
+MIN_SAMPLES_PER_BIN = 40
+"""Fewest samples in a range bin of :func:`noise_line_of`."""
+
+MAX_BINS = 4
+
+MIN_SAMPLES = 5
+"""Fewest samples :func:`noise_line_of` measures a noise from."""
 
 MIN_RUN_FOR_NOISE = 8
 """Fewest points of a run that :func:`residual_noise` measures (short runs fit their
 own noise)."""
 
 
-@kernel
-def range_noise(r, gap):
-    """Robust range-noise sigma of a scan, in metres.
+class NoiseLine(NamedTuple):
+    """Range noise ``sigma(r) = max(sigma0 + per_metre r, MIN_NOISE_SIGMA)``, metres.
 
-    On a smooth surface the second difference of three consecutive ranges,
-    ``r_{i+1} - 2 r_i + r_{i-1}``, is noise with standard deviation ``sigma sqrt(6)``
-    (its geometric part, ``r'' dtheta^2``, is far smaller at the resolutions of real
-    scanners); the median absolute value, robust to the few corners and edges, gives
-    ``sigma``. Triples across a missing beam are left out; ``gap`` as
-    :func:`~scanlines.steps.returns.beam_gaps`.
+    NaN fields mean "not known": measure it from the scan (:func:`resolve_noise`).
     """
-    n = r.shape[0]
-    second = np.empty(n)
-    count = 0
-    for i in range(1, n - 1):
-        if gap[i - 1] == 1 and gap[i] == 1:
-            second[count] = abs(r[i + 1] - 2.0 * r[i] + r[i - 1])
-            count += 1
-    if count < 3:
-        return MIN_NOISE_SIGMA
-    sigma = np.median(second[:count]) / (0.6745 * math.sqrt(6.0))
-    return max(sigma, MIN_NOISE_SIGMA)
+
+    sigma0: float
+    per_metre: float
+
+
+UNKNOWN_NOISE = NoiseLine(math.nan, math.nan)
+"""The noise of a method built without a sensor profile: each scan measures its own."""
+
+
+@kernel(inline=True)
+def noise_at(noise, r):
+    """The noise sigma of :class:`NoiseLine` ``noise`` at range ``r``."""
+    return max(noise.sigma0 + noise.per_metre * r, MIN_NOISE_SIGMA)
 
 
 @kernel
-def chord_samples(returns, gap):
-    """Range-noise samples from chords, and the range of each: ``(sample, at)``.
+def local_residuals(returns, gap):
+    """Range-noise samples of a scan and the range of each: ``(sample, at)``.
 
-    Each return ``P_i`` with neighbours on both sides gives one sample: its distance
-    from the chord ``P_{i-1} P_{i+1}`` over ``sqrt(1.5) cos(beta)`` (``beta`` the angle
-    between its beam and the chord's normal; only ``beta`` < 60 deg). On a straight
-    surface that distance is noise alone, at any incidence and resolution, where the
-    second difference of the ranges also holds the surface's geometry (at 1 deg, on
-    slanted walls far away, as much as the noise).
+    Each return with :data:`NOISE_HALF_WINDOW` neighbours on each side (no gap of two
+    or more missing beams among them) gives the difference between its range and a
+    parabola in the beam index fitted to the window's ranges, over the square root of
+    ``1 - h`` (``h`` the return's leverage in that fit). Along a straight surface the
+    range is smooth in the bearing, so the difference is range noise alone; only
+    surfaces within 45 deg of facing the beam give samples (the parabola follows the
+    range of steeper ones less well). Windows across corners and jumps are few, and
+    the robust statistics of :func:`noise_line_of` ignore them. Unlike an orthogonal
+    distance from a fitted line, this does not depend on the line's direction, which
+    noise larger than the spacing of the returns makes arbitrary.
     """
-    _, r, x, y = returns
+    index, r, x, y = returns
     n = r.shape[0]
+    h = NOISE_HALF_WINDOW
     sample = np.empty(n)
     at = np.empty(n)
     count = 0
-    for i in range(1, n - 1):
-        if not (gap[i - 1] == 1 and gap[i] == 1):
+    if n < 2 * h + 1:
+        return sample[:0], at[:0]
+    stretch_start = np.empty(n, dtype=np.int64)
+    stretch_start[0] = 0
+    for i in range(1, n):
+        stretch_start[i] = stretch_start[i - 1] if gap[i - 1] <= 2 else i
+    for i in range(h, n - h):
+        if stretch_start[i + h] > i - h or r[i] <= 0.0:
             continue
-        cx, cy = x[i + 1] - x[i - 1], y[i + 1] - y[i - 1]
-        length = math.hypot(cx, cy)
-        if length == 0.0 or r[i] <= 0.0:
+        residual, leverage, slope = parabola_at_centre(index, r, i - h, i + h, i)
+        if not leverage < 1.0:
             continue
-        nx, ny = -cy / length, cx / length
-        cos_beta = abs(nx * x[i] + ny * y[i]) / r[i]
-        if cos_beta < MIN_CHORD_COS:
+        a, b = i - h, i + h
+        bearing = abs(math.atan2(x[a] * y[b] - y[a] * x[b], x[a] * x[b] + y[a] * y[b]))
+        per_beam = bearing / (index[b] - index[a])
+        if not abs(slope) <= r[i] * per_beam:  # tan(incidence) <= 1
             continue
-        off = abs((x[i] - x[i - 1]) * nx + (y[i] - y[i - 1]) * ny)
-        sample[count] = off / (cos_beta * math.sqrt(1.5))
+        sample[count] = abs(residual) / math.sqrt(1.0 - leverage)
         at[count] = r[i]
         count += 1
     return sample[:count], at[:count]
 
 
-@kernel
-def noise_growth(returns, gap):
-    """How the range noise grows with range: ``(sigma_far, slope, far_range)``.
+@kernel(inline=True)
+def parabola_at_centre(index, r, a, b, i):
+    """Least-squares parabola of ``r`` over the beam offsets ``index - index[i]`` of
+    positions ``a..b``: ``(r[i] - fit at i, leverage of i, slope at i per beam)``."""
+    s = np.zeros(5)
+    t0 = t1 = t2 = 0.0
+    for p in range(a, b + 1):
+        t = float(index[p] - index[i])
+        power = 1.0
+        for k in range(5):
+            s[k] += power
+            power *= t
+        t0 += r[p]
+        t1 += r[p] * t
+        t2 += r[p] * t * t
+    # Normal equations M (c0, c1, c2) = (t0, t1, t2), M symmetric with entries s[j + k].
+    m00, m01, m02, m11, m12, m22 = s[0], s[1], s[2], s[2], s[3], s[4]
+    c00 = m11 * m22 - m12 * m12
+    c01 = m02 * m12 - m01 * m22
+    c02 = m01 * m12 - m02 * m11
+    det = m00 * c00 + m01 * c01 + m02 * c02
+    if det == 0.0:
+        return 0.0, 1.0, 0.0
+    c11 = m00 * m22 - m02 * m02
+    c12 = m01 * m02 - m00 * m12
+    value = (c00 * t0 + c01 * t1 + c02 * t2) / det
+    slope = (c01 * t0 + c11 * t1 + c12 * t2) / det
+    return r[i] - value, c00 / det, slope
 
-    The samples of :func:`chord_samples` are split at their median range; the robust
-    noise of each half and the median range of each half give a line
-    ``sigma(r) = sigma_far + slope (r - far_range)`` (``slope >= 0``, 0 when the noise does
-    not grow, as on sensors with a constant range error).
+
+@kernel
+def noise_line_of(sample, at):
+    """The :class:`NoiseLine` of noise samples ``sample`` taken at ranges ``at``.
+
+    The samples are cut into up to :data:`MAX_BINS` bins of equal count by range (at
+    least :data:`MIN_SAMPLES_PER_BIN` each, or one bin of fewer); each bin gives a
+    robust sigma (median absolute sample / 0.6745) at its median range, and a
+    least-squares line through those points gives the model (its slope not below
+    zero; one bin: a constant). Fewer than :data:`MIN_SAMPLES` samples: NaN (unknown).
     """
-    sample, at = chord_samples(returns, gap)
-    if sample.shape[0] < 6:
-        return 0.0, 0.0, 0.0
-    middle = np.median(at)
-    near, far = at <= middle, at > middle
-    if not far.any():
-        return 0.0, 0.0, 0.0
-    sigma_near, sigma_far = np.median(sample[near]) / 0.6745, np.median(sample[far]) / 0.6745
-    near_range, far_range = np.median(at[near]), np.median(at[far])
-    if far_range <= near_range:
-        return 0.0, 0.0, 0.0
-    return sigma_far, max((sigma_far - sigma_near) / (far_range - near_range), 0.0), far_range
+    n = sample.shape[0]
+    bins = min(MAX_BINS, n // MIN_SAMPLES_PER_BIN)
+    if bins == 0:
+        if n < MIN_SAMPLES:
+            return NoiseLine(math.nan, math.nan)
+        bins = 1
+    order = np.argsort(at, kind="mergesort")
+    sigma = np.empty(bins)
+    where = np.empty(bins)
+    for k in range(bins):
+        part = order[k * n // bins : (k + 1) * n // bins]
+        sigma[k] = np.median(sample[part]) / 0.6745
+        where[k] = np.median(at[part])
+    mean_r, mean_s = np.mean(where), np.mean(sigma)
+    spread = np.sum((where - mean_r) ** 2)
+    slope = 0.0
+    if bins > 1 and spread > 0.0:
+        slope = max(np.sum((where - mean_r) * (sigma - mean_s)) / spread, 0.0)
+    return NoiseLine(max(mean_s - slope * mean_r, 0.0), slope)
+
+
+@kernel
+def scan_noise(returns, gap):
+    """The :class:`NoiseLine` of one scan (:func:`local_residuals`, :func:`noise_line_of`);
+    a constant :data:`MIN_NOISE_SIGMA` when the scan has too few samples."""
+    sample, at = local_residuals(returns, gap)
+    noise = noise_line_of(sample, at)
+    if noise.sigma0 != noise.sigma0:
+        return NoiseLine(MIN_NOISE_SIGMA, 0.0)
+    return noise
+
+
+@kernel
+def resolve_noise(noise, returns, gap):
+    """``noise`` (a sensor profile's :class:`NoiseLine`) if known, else the scan's own."""
+    if noise.sigma0 == noise.sigma0:
+        return noise
+    return scan_noise(returns, gap)
 
 
 @kernel
 def residual_noise(cost, a, b, fallback):
-    """Range noise from the fits of the runs ``[a, b]``: the median of ``sqrt(cost / (n - 2))``.
+    """Noise from the fits of the runs ``[a, b]``: the median of ``sqrt(cost / (n - 2))``.
 
     Only runs of :data:`MIN_RUN_FOR_NOISE` points or more count; the median ignores
     the few runs that still hide a corner. ``cost`` is a
-    :class:`~scanlines.steps.fit.RunCost`; ``fallback`` is returned without any such run.
+    :class:`~scanlines.steps.fit.RunCost` (in noise units, the result is a scale of
+    the noise model); ``fallback`` is returned without any such run.
     """
     per_run = np.empty(a.shape[0])
     count = 0
@@ -136,4 +224,32 @@ def residual_noise(cost, a, b, fallback):
                 count += 1
     if count == 0:
         return fallback
-    return max(np.median(per_run[:count]), MIN_NOISE_SIGMA)
+    return np.median(per_run[:count])
+
+
+@kernel
+def return_sigmas(r, noise):
+    """The noise sigma of :class:`NoiseLine` ``noise`` at each range of ``r``."""
+    out = np.empty(r.shape[0])
+    for i in range(r.shape[0]):
+        out[i] = noise_at(noise, r[i])
+    return out
+
+
+@kernel
+def variance_sums(sigma):
+    """Running sums of ``sigma^2``: the ``variances`` of a
+    :class:`~scanlines.steps.fit.RunCost`."""
+    out = np.zeros(sigma.shape[0] + 1)
+    for i in range(sigma.shape[0]):
+        out[i + 1] = out[i] + sigma[i] * sigma[i]
+    return out
+
+
+@kernel
+def covariance_sigmas(range_sigma, noise, returns, gap):
+    """Per-return sigma of the segment covariances: the ``range_sigma`` override where it
+    is a number (NaN: not given), else ``noise`` as :func:`resolve_noise` resolves it."""
+    if range_sigma == range_sigma:
+        return np.full(returns.r.shape[0], range_sigma)
+    return return_sigmas(returns.r, resolve_noise(noise, returns, gap))
