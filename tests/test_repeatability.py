@@ -136,8 +136,10 @@ def test_the_distance_is_taken_where_the_segments_overlap():
     # Tilted by 1.5 deg about x = 10 m: far from the origin of i's frame (|drho| 26 cm in
     # Hesse form), but within 3 cm over the 1 m they share.
     tilt = math.radians(1.5)
-    other = segment((9.5, -0.5 * math.sin(tilt)), (10.5, 0.5 * math.sin(tilt)))
-    assert match_segments(np.array([segment((9.0, 0.0), (10.5, 0.0))]), np.array([other]))[0, 0]
+    other = np.array([segment((9.5, -0.5 * math.sin(tilt)), (10.5, 0.5 * math.sin(tilt)))])
+    mine = np.array([segment((9.0, 0.0), (10.5, 0.0))])
+    assert match_segments(mine, other)[0, 0]
+    assert not match_segments(mine, other, RepeatTolerances(distance_at="origin"))[0, 0]
 
 
 def test_view_overlap_of_a_scan_with_itself_and_turned_away():
