@@ -1,4 +1,5 @@
-"""``scanlines eval``: benchmark method specs on simulated scans with exact truth."""
+"""``scanlines eval``: benchmark method specs on simulated scans with exact truth, or
+(``--real LOG``) their scan-to-scan repeatability on real logs, without labels."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from scanlines.cli.common import guarded
 
 if TYPE_CHECKING:
     from scanlines.evaluation.evaluate import EvalResult
+    from scanlines.evaluation.repeatability import RepeatabilityResult
     from scanlines.evaluation.scenes import SceneSet
     from scanlines.evaluation.scores import Tolerances
 
@@ -27,7 +29,8 @@ def register(app: typer.Typer) -> None:
     app.command(
         "eval",
         help="Score methods (and the 'truth' ceiling row) on simulated scenes with exact ground "
-        "truth: tables, CSV/JSON, plots.",
+        "truth: tables, CSV/JSON, plots. With --real LOG: the scan-to-scan repeatability of "
+        "the methods on a real log, no labels needed.",
     )(guarded(eval_command))
 
 
@@ -68,10 +71,36 @@ def eval_command(
     workers: Annotated[int, typer.Option(help="Processes.")] = 1,
     worst: Annotated[int, typer.Option(help="Scans in worst.png.")] = 4,
     plots: Annotated[bool, typer.Option(help="Write bars.png and worst.png.")] = True,
+    real: Annotated[
+        list[Path] | None,
+        typer.Option(
+            "--real",
+            help="A real log (any format 'scanlines info' reads), repeatable: measure the "
+            "scan-to-scan repeatability of the methods instead (label-free; pairs 1-3 records "
+            "apart registered by ICP from the log's poses, or ICP alone). Writes "
+            "repeatability.csv, repeatability_pairs.csv and repeatability.json into --out.",
+        ),
+    ] = None,
+    scans: Annotated[
+        int | None,
+        typer.Option("--scans", min=2, help="With --real: the first N scans of each log."),
+    ] = None,
 ) -> None:
     from scanlines.evaluation.specs import parse_specs
 
     specs = parse_specs(method or ["adaptive"])
+    if real:
+        _check_real_options(sensor, scenes_per_sensor, seed, scenes, save_scenes, noise, specs)
+        results = [_repeatability_with_progress(log, specs, scans) for log in real]
+        from scanlines.evaluation.repeatability import write_results
+
+        for path in write_results(results, out):
+            typer.echo(f"wrote {path}")
+        return
+    if scans is not None:
+        from scanlines.errors import ParameterError
+
+        raise ParameterError("--scans limits the scans of --real logs; give --real LOG")
     tol = _tolerances(tol_beams, tol_rho, tol_alpha)
     scene_set = _scene_set(scenes, save_scenes, sensor, scenes_per_sensor, seed, noise)
     result = _evaluate_with_progress(
@@ -153,11 +182,63 @@ def _evaluate_with_progress(specs, sensors, n, seed, noise, tol, scene_set, work
         )
 
 
-class _progress:
-    """A transient rich progress bar over scenes (on stderr); gives ``advance(done, total)``."""
+def _check_real_options(sensor, n, seed, scenes, save_scenes, noise, specs) -> None:
+    """--real measures real logs: the options of simulated scenes, and 'truth', do not apply."""
+    from scanlines.errors import ParameterError
 
-    def __init__(self, description: str) -> None:
+    given = [
+        name
+        for name, value in (
+            ("--sensor", sensor),
+            ("--scenes-per-sensor", n),
+            ("--seed", seed),
+            ("--scenes", scenes),
+            ("--save-scenes", save_scenes),
+            ("--noise", noise),
+        )
+        if value is not None
+    ]
+    if given:
+        raise ParameterError(f"{', '.join(given)}: options of simulated scenes, not of --real logs")
+    if any(spec.is_truth for spec in specs):
+        raise ParameterError("'truth' needs simulated scenes; real logs have no truth")
+
+
+def _repeatability_with_progress(log: Path, specs, scans: int | None) -> RepeatabilityResult:
+    from scanlines.evaluation.repeatability import repeatability
+
+    with _progress(f"{log.name}: pairs, then scans per method", unit="steps") as advance:
+        result = repeatability(log, specs, scans, on_progress=advance)
+    _print_repeatability(result)
+    return result
+
+
+def _print_repeatability(result: RepeatabilityResult) -> None:
+    from rich.box import SIMPLE_HEAD
+    from rich.console import Console
+    from rich.table import Table
+
+    from scanlines.evaluation.repeatability import TABLE_CAPTION, TABLE_COLUMNS
+
+    console = Console()
+    if not console.is_terminal:
+        console = Console(width=TABLE_WIDTH)
+    caption = f"{result.tol.caption()}.\n{TABLE_CAPTION}"
+    table = Table(title=result.title(), caption=caption, caption_justify="left", box=SIMPLE_HEAD)
+    table.add_column("method", style="bold", no_wrap=True)
+    for header, _, _ in TABLE_COLUMNS:
+        table.add_column(header.replace(" ", "\n", 1), justify="right", no_wrap=True)
+    for row in result.table():
+        table.add_row(*row)
+    console.print(table)
+
+
+class _progress:
+    """A transient rich progress bar (on stderr); gives ``advance(done, total)``."""
+
+    def __init__(self, description: str, unit: str = "scenes") -> None:
         self.description = description
+        self.unit = unit
 
     def __enter__(self):
         from rich.console import Console
@@ -167,7 +248,7 @@ class _progress:
             "{task.description}",
             BarColumn(),
             MofNCompleteColumn(),
-            "scenes",
+            self.unit,
             TimeElapsedColumn(),
             transient=True,
             console=Console(stderr=True),

@@ -13,6 +13,8 @@ them). The truth types they score against are :mod:`scanlines.truth`::
     machine           the machine a time was measured on
     report            markdown tables, number formats, JSON values, CSV files
     cases             a scan with truth, labels or neither, and one method's score on it
+    registration      a point-to-line ICP: the relative pose of two scans
+    repeatability     scan-to-scan repeatability on real logs, no labels (eval --real)
     experiments       the paper's experiments (scanlines reproduce): what is measured
     results_page      RESULTS.md from a measured run
     bench             the speed of every method (scanlines bench)
@@ -32,6 +34,8 @@ __all__ = [
     "machine",
     "metrics",
     "performance_page",
+    "registration",
+    "repeatability",
     "report",
     "results_page",
     "scenes",

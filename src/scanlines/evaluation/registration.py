@@ -1,0 +1,292 @@
+"""Scan-to-scan registration: a short, robust point-to-line ICP (numpy only).
+
+:func:`icp` refines the relative pose of two scans from an initial guess (the relative
+pose of the log's poses, or the identity): the points of the *source* scan ``j`` are
+moved into the frame of the *target* scan ``i`` and pulled onto the local lines of
+``i``'s returns::
+
+    from scanlines.evaluation.registration import icp, line_target, relative_pose
+
+    guess = relative_pose(scan_i.pose, scan_j.pose)      # j's frame in i's frame
+    fit = icp(scan_j.points[scan_j.valid], line_target(scan_i), guess)
+    fit.pose, fit.rms, fit.inlier_fraction
+
+Conventions
+-----------
+A pose ``(x, y, theta)`` maps a point ``p`` of its frame to ``R(theta) p + (x, y)``.
+The relative pose of scans ``i`` and ``j`` maps ``j``'s sensor frame into ``i``'s:
+``inverse(pose_i) o pose_j`` (:func:`relative_pose`).
+
+The method
+----------
+* Target lines: every valid return of ``i`` with a normal from a principal-component
+  fit to itself and its neighbours (up to ``normal_window`` valid returns on each side
+  in beam order, within ``neighbour_radius`` or three beam spacings times the window,
+  whichever is larger); returns whose neighbourhood is not elongated (minor to major
+  spread above ``max_flatness``) or has fewer than 3 points get no normal and are not
+  used.
+* Correspondence: the nearest target point (brute force over all target points; the
+  source is subsampled evenly to at most ``max_points``), kept when it is within the
+  gate. The gate starts at ``max_distance`` and shrinks by ``shrink`` each time an
+  update moves less than 1 mm (and 1 mrad), down to ``min_distance`` (coarse to fine;
+  the hard gate trims the far pairs).
+* Update: Gauss-Newton on the point-to-line residuals ``n . (R p + t - q)`` with Huber
+  weights (``huber`` metres), a small ridge so a direction the scene does not constrain
+  (a corridor's axis) stays at the initial guess instead of drifting.
+* Stop when an update moves less than ``tolerance`` (metres and radians) at the final
+  gate, or after ``max_iterations``.
+
+Quality (:class:`Registration`): at the final gate, the inliers are the source points
+whose point-to-line residual is within ``inlier_residual``; ``rms`` is the RMS of
+their residuals and ``inlier_fraction`` their share of the (subsampled) source points.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from scanlines.scan import Scan
+
+__all__ = [
+    "IcpSettings",
+    "LineTarget",
+    "Pose",
+    "Registration",
+    "compose",
+    "icp",
+    "invert",
+    "line_target",
+    "relative_pose",
+    "transform_points",
+]
+
+Pose = tuple[float, float, float]
+"""``(x, y, theta)``: maps a point ``p`` of its frame to ``R(theta) p + (x, y)``."""
+
+IDENTITY: Pose = (0.0, 0.0, 0.0)
+
+
+def _wrap(angle: float) -> float:
+    return float(math.remainder(angle, 2.0 * math.pi))
+
+
+def compose(a: Sequence[float], b: Sequence[float]) -> Pose:
+    """``a o b``: the pose that maps a point by ``b``, then by ``a``."""
+    ax, ay, at = (float(v) for v in a)
+    bx, by, bt = (float(v) for v in b)
+    c, s = math.cos(at), math.sin(at)
+    return (ax + c * bx - s * by, ay + s * bx + c * by, _wrap(at + bt))
+
+
+def invert(a: Sequence[float]) -> Pose:
+    """The inverse of pose ``a``."""
+    x, y, t = (float(v) for v in a)
+    c, s = math.cos(t), math.sin(t)
+    return (-(c * x + s * y), -(-s * x + c * y), _wrap(-t))
+
+
+def relative_pose(pose_i: Sequence[float], pose_j: Sequence[float]) -> Pose:
+    """Frame ``j`` in frame ``i``: ``inverse(pose_i) o pose_j`` (both in one world frame)."""
+    return compose(invert(pose_i), pose_j)
+
+
+def transform_points(points: np.ndarray, pose: Sequence[float]) -> np.ndarray:
+    """``K x 2`` points moved by ``pose`` (``R p + t``)."""
+    x, y, t = (float(v) for v in pose)
+    c, s = math.cos(t), math.sin(t)
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    return np.column_stack((c * pts[:, 0] - s * pts[:, 1] + x, s * pts[:, 0] + c * pts[:, 1] + y))
+
+
+@dataclass(frozen=True)
+class IcpSettings:
+    """The constants of :func:`icp` and :func:`line_target` (metres, radians)."""
+
+    max_distance: float = 0.5
+    min_distance: float = 0.15
+    shrink: float = 0.6
+    huber: float = 0.02
+    inlier_residual: float = 0.05
+    max_iterations: int = 60
+    max_points: int = 400
+    tolerance: float = 1e-5
+    normal_window: int = 3
+    neighbour_radius: float = 0.15
+    max_flatness: float = 0.3
+
+    def to_dict(self) -> dict[str, Any]:
+        """The settings by name."""
+        return asdict(self)
+
+
+class LineTarget(NamedTuple):
+    """The target of a registration: points of a scan with the normal of their local line."""
+
+    points: np.ndarray
+    normals: np.ndarray
+
+
+def line_target(scan: Scan, settings: IcpSettings | None = None) -> LineTarget:
+    """The valid returns of ``scan`` that have a local line, with its unit normal."""
+    settings = settings or IcpSettings()
+    valid = np.flatnonzero(scan.valid)
+    pts = scan.points[valid]
+    n = len(pts)
+    if n < 3:
+        return LineTarget(np.zeros((0, 2)), np.zeros((0, 2)))
+    radius = np.maximum(
+        settings.neighbour_radius,
+        3.0 * settings.normal_window * scan.ranges[valid] * abs(scan.angle_increment),
+    )
+    w = settings.normal_window
+    sums = np.zeros((n, 2))
+    count = np.zeros(n)
+    members = []
+    for offset in range(-w, w + 1):
+        k = np.arange(n) + offset
+        inside = (k >= 0) & (k < n)
+        k = np.clip(k, 0, n - 1)
+        near = inside & (np.hypot(*(pts[k] - pts).T) <= radius)
+        members.append((k, near))
+        sums += np.where(near[:, None], pts[k], 0.0)
+        count += near
+    mean = sums / count[:, None]
+    sxx = np.zeros(n)
+    syy = np.zeros(n)
+    sxy = np.zeros(n)
+    for k, near in members:
+        d = np.where(near[:, None], pts[k] - mean, 0.0)
+        sxx += d[:, 0] ** 2
+        syy += d[:, 1] ** 2
+        sxy += d[:, 0] * d[:, 1]
+    # Eigenvalues and the minor eigenvector of the 2 x 2 scatter matrix, in closed form.
+    half_trace = (sxx + syy) / 2.0
+    root = np.sqrt(((sxx - syy) / 2.0) ** 2 + sxy**2)
+    major, minor = half_trace + root, np.maximum(half_trace - root, 0.0)
+    direction = 0.5 * np.arctan2(2.0 * sxy, sxx - syy)  # the major axis
+    normals = np.column_stack((-np.sin(direction), np.cos(direction)))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        flat = np.sqrt(minor / major) <= settings.max_flatness
+    keep = (count >= 3) & (major > 0.0) & flat
+    return LineTarget(pts[keep], normals[keep])
+
+
+@dataclass(frozen=True)
+class Registration:
+    """The result of :func:`icp`.
+
+    Attributes
+    ----------
+    pose:
+        Refined relative pose: maps the source scan's frame into the target's.
+    initial:
+        The initial guess it started from.
+    rms:
+        RMS point-to-line residual of the inliers, metres (NaN without inliers).
+    inlier_fraction:
+        Inliers over the source points used.
+    n_inliers, n_source:
+        Inliers and source points used.
+    iterations:
+        Gauss-Newton updates made.
+    converged:
+        Whether the last update was below the tolerance at the final gate.
+    """
+
+    pose: Pose
+    initial: Pose
+    rms: float
+    inlier_fraction: float
+    n_inliers: int
+    n_source: int
+    iterations: int
+    converged: bool
+
+
+_COARSE = 1e-3
+"""An update smaller than this (metres, radians) shrinks the gate."""
+
+
+def _subsample(points: np.ndarray, most: int) -> np.ndarray:
+    if len(points) <= most:
+        return points
+    return points[np.linspace(0, len(points) - 1, most).round().astype(np.intp)]
+
+
+def _nearest(points: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Index of and distance to the nearest target point of every point (brute force)."""
+    d2 = (
+        np.sum(points**2, axis=1)[:, None]
+        + np.sum(target**2, axis=1)[None, :]
+        - 2.0 * points @ target.T
+    )
+    index = np.argmin(d2, axis=1)
+    return index, np.sqrt(np.maximum(d2[np.arange(len(points)), index], 0.0))
+
+
+def icp(
+    source: np.ndarray,
+    target: LineTarget,
+    initial: Sequence[float] = IDENTITY,
+    settings: IcpSettings | None = None,
+) -> Registration:
+    """Refine the pose of ``source`` points (their own frame) onto ``target``'s lines.
+
+    Parameters
+    ----------
+    source:
+        ``K x 2`` points of the source scan in its sensor frame (valid returns only).
+    target:
+        :func:`line_target` of the target scan.
+    initial:
+        Initial guess of the relative pose (source frame in target frame).
+    settings:
+        :class:`IcpSettings`; the defaults when ``None``.
+
+    Returns
+    -------
+    Registration
+    """
+    settings = settings or IcpSettings()
+    initial = tuple(float(v) for v in initial)
+    pose = initial
+    src = _subsample(np.asarray(source, dtype=np.float64).reshape(-1, 2), settings.max_points)
+    if len(src) < 3 or len(target.points) < 3:
+        return Registration(pose, initial, math.nan, 0.0, 0, len(src), 0, False)
+    gate = settings.max_distance
+    iterations = 0
+    converged = False
+    while iterations < settings.max_iterations:
+        moved = transform_points(src, pose)
+        index, distance = _nearest(moved, target.points)
+        ok = distance <= gate
+        if np.count_nonzero(ok) < 3:
+            break
+        p, q, n = moved[ok], target.points[index[ok]], target.normals[index[ok]]
+        e = np.sum(n * (p - q), axis=1)
+        a = np.abs(e)
+        weight = np.where(a <= settings.huber, 1.0, settings.huber / np.maximum(a, 1e-12))
+        jac = np.column_stack((n[:, 0], n[:, 1], n[:, 1] * p[:, 0] - n[:, 0] * p[:, 1]))
+        h = jac.T @ (weight[:, None] * jac)
+        h += np.eye(3) * (1e-6 * np.trace(h) / 3.0 + 1e-12)
+        step = -np.linalg.solve(h, jac.T @ (weight * e))
+        pose = compose((step[0], step[1], step[2]), pose)
+        iterations += 1
+        size = max(abs(step[0]), abs(step[1]), abs(step[2]))
+        if gate <= settings.min_distance and size < settings.tolerance:
+            converged = True
+            break
+        if size < _COARSE:
+            gate = max(settings.min_distance, gate * settings.shrink)
+    moved = transform_points(src, pose)
+    index, distance = _nearest(moved, target.points)
+    e = np.sum(target.normals[index] * (moved - target.points[index]), axis=1)
+    inlier = (distance <= settings.min_distance) & (np.abs(e) <= settings.inlier_residual)
+    n_in = int(np.count_nonzero(inlier))
+    rms = float(np.sqrt(np.mean(e[inlier] ** 2))) if n_in else math.nan
+    return Registration(pose, initial, rms, n_in / len(src), n_in, len(src), iterations, converged)
