@@ -110,6 +110,14 @@ class Truth:
         ``C x 2``: true returns in the run before and after each corner.
     segments:
         The true segments.
+    breakpoint_dont_care, corner_dont_care:
+        Masks over :attr:`breakpoints` and :attr:`corners`: events no extractor can be
+        asked to find (a junction of touching surfaces, a depth step or a turn the
+        range noise hides; the rules: :mod:`scanlines.sim.truth`). Scoring treats them
+        like uncertain hand labels when
+        :attr:`~scanlines.evaluation.scores.Tolerances.truth_dont_care` is on: a
+        detection matched to one is neither a true nor a false positive, missing one is
+        no false negative. ``None`` (the default) means none.
     """
 
     n_beams: int
@@ -127,6 +135,32 @@ class Truth:
     corner_points: np.ndarray
     corner_runs: np.ndarray
     segments: TrueSegments
+    breakpoint_dont_care: np.ndarray | None = None
+    corner_dont_care: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        for name, events in (
+            ("breakpoint_dont_care", self.breakpoints),
+            ("corner_dont_care", self.corners),
+        ):
+            mask = getattr(self, name)
+            mask = np.zeros(len(events), bool) if mask is None else np.asarray(mask, bool)
+            if mask.shape != (len(events),):
+                raise ValueError(f"{name} must have one entry per event, got {mask.shape}")
+            if mask.flags.writeable:
+                mask = mask.copy()
+                mask.setflags(write=False)
+            object.__setattr__(self, name, mask)
+
+    @property
+    def dont_care_breakpoints(self) -> np.ndarray:
+        """Beam indices of the don't-care breakpoints (see :attr:`breakpoint_dont_care`)."""
+        return self.breakpoints[self.breakpoint_dont_care]
+
+    @property
+    def dont_care_corners(self) -> np.ndarray:
+        """Beam indices of the don't-care corners (see :attr:`corner_dont_care`)."""
+        return self.corners[self.corner_dont_care]
 
     @property
     def true_return(self) -> np.ndarray:

@@ -85,13 +85,69 @@ def eval_command(
         int | None,
         typer.Option("--scans", min=2, help="With --real: the first N scans of each log."),
     ] = None,
+    family: Annotated[
+        bool,
+        typer.Option(
+            "--family",
+            help="Evaluate on the sensor family instead of the presets: --family-count drawn "
+            "sensors and the 4 corner sensors (scanlines.sim.family), clutter scenes, the "
+            "truth's don't-care events, the truth row added; -n defaults to 300. Prints every "
+            "sensor's breakpoint F1, corner F1, TruePos / truth row, FalsePos - truth row, and "
+            "the worst sensor per figure; writes family.csv and family_worst.csv.",
+        ),
+    ] = False,
+    family_count: Annotated[
+        int, typer.Option("--family-count", help="With --family: drawn sensors (default 24).")
+    ] = 24,
+    family_seed: Annotated[
+        int, typer.Option("--family-seed", help="With --family: seed of the drawn sensors.")
+    ] = 0,
+    clutter: Annotated[
+        bool | None,
+        typer.Option(
+            "--clutter/--no-clutter",
+            help="Clutter scenes (legs, people, glass, curved walls, long corridors); "
+            "default: on with --family, off otherwise.",
+        ),
+    ] = None,
+    truth_dont_care: Annotated[
+        bool | None,
+        typer.Option(
+            "--truth-dont-care/--no-truth-dont-care",
+            help="Events the truth marks don't care (junctions, depth steps and turns the "
+            "noise hides) do not count; default: on with --family, off otherwise.",
+        ),
+    ] = None,
+    labels: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--labels",
+            help="Score on the hand-labelled frames of a shipped real log instead: intel, "
+            "freiburg, urg or all (repeatable). Writes labelled.csv into --out.",
+        ),
+    ] = None,
+    sensor_profile: Annotated[
+        Path | None,
+        typer.Option(
+            "--sensor-profile",
+            help="Sensor profile (`scanlines calibrate`) for every extraction; default: with "
+            "--real and --labels, measured from the log; on simulated scenes, each scan's own.",
+        ),
+    ] = None,
 ) -> None:
-    from scanlines.evaluation.specs import parse_specs
+    from scanlines.errors import ParameterError
+    from scanlines.evaluation.specs import TRUTH, parse_specs
+    from scanlines.sensor_profile import read_profile
 
     specs = parse_specs(method or ["adaptive"])
+    profile = None if sensor_profile is None else read_profile(sensor_profile)
+    if labels:
+        _check_real_options(sensor, scenes_per_sensor, seed, scenes, save_scenes, noise, specs)
+        _labelled(labels, specs, tol_beams, profile, out)
+        return
     if real:
         _check_real_options(sensor, scenes_per_sensor, seed, scenes, save_scenes, noise, specs)
-        results = [_repeatability_with_progress(log, specs, scans) for log in real]
+        results = [_repeatability_with_progress(log, specs, scans, profile) for log in real]
         from scanlines.evaluation.repeatability import write_results
 
         for path in write_results(results, out):
@@ -101,8 +157,23 @@ def eval_command(
         from scanlines.errors import ParameterError
 
         raise ParameterError("--scans limits the scans of --real logs; give --real LOG")
-    tol = _tolerances(tol_beams, tol_rho, tol_alpha)
-    scene_set = _scene_set(scenes, save_scenes, sensor, scenes_per_sensor, seed, noise)
+    if family:
+        if sensor:
+            raise ParameterError("--family and --sensor exclude each other")
+        if scenes is not None:
+            raise ParameterError("--family generates its scenes; it excludes --scenes")
+        sensor = list(_family_names(family_count, family_seed))
+        if scenes_per_sensor is None:
+            from scanlines.evaluation.family import DEFAULT_FAMILY_SCENES
+
+            scenes_per_sensor = DEFAULT_FAMILY_SCENES
+        if not any(s.is_truth for s in specs):
+            specs = (*specs, *parse_specs([TRUTH]))
+    use_clutter = family if clutter is None else clutter
+    tol = _tolerances(
+        tol_beams, tol_rho, tol_alpha, family if truth_dont_care is None else truth_dont_care
+    )
+    scene_set = _scene_set(scenes, save_scenes, sensor, scenes_per_sensor, seed, noise, use_clutter)
     result = _evaluate_with_progress(
         specs,
         sensor,
@@ -112,23 +183,43 @@ def eval_command(
         tol,
         scene_set,
         workers,
+        use_clutter,
     )
-    _print_tables(result)
-    paths = _write_outputs(result, out, worst if plots else None)
+    paths: list[Path] = []
+    if family:
+        paths += _print_family(result, out)
+    else:
+        _print_tables(result)
+    paths += _write_outputs(result, out, worst if plots else None)
     if save_scenes is not None:
         paths.append(save_scenes)
     for path in paths:
         typer.echo(f"wrote {path}")
 
 
-def _tolerances(beams: int, rho: float, alpha_deg: float) -> Tolerances:
+def _family_names(count: int, seed: int) -> tuple[str, ...]:
+    from scanlines.errors import ParameterError
+    from scanlines.sim.family import family_names
+
+    try:
+        return family_names(count, seed)
+    except ValueError as error:
+        raise ParameterError(f"--family-count/--family-seed: {error}") from None
+
+
+def _tolerances(beams: int, rho: float, alpha_deg: float, truth_dont_care: bool) -> Tolerances:
     import math
 
     from scanlines.errors import ParameterError
     from scanlines.evaluation.scores import Tolerances
 
     try:
-        return Tolerances(event_beams=beams, rho=rho, alpha=math.radians(alpha_deg))
+        return Tolerances(
+            event_beams=beams,
+            rho=rho,
+            alpha=math.radians(alpha_deg),
+            truth_dont_care=truth_dont_care,
+        )
     except ValueError as error:
         raise ParameterError(f"bad tolerance: {error}") from None
 
@@ -140,6 +231,7 @@ def _scene_set(
     n: int | None,
     seed: int | None,
     noise: str | None,
+    clutter: bool = False,
 ) -> SceneSet | None:
     """The scene set to evaluate on: loaded, generated and saved, or none (generate)."""
     from scanlines.errors import ParameterError
@@ -159,13 +251,16 @@ def _scene_set(
             DEFAULT_SCENES if n is None else n,
             0 if seed is None else seed,
             noise or "realistic",
+            clutter=clutter,
             on_scene=advance,
         )
     generated.save(save_scenes)
     return generated
 
 
-def _evaluate_with_progress(specs, sensors, n, seed, noise, tol, scene_set, workers) -> EvalResult:
+def _evaluate_with_progress(
+    specs, sensors, n, seed, noise, tol, scene_set, workers, clutter=False
+) -> EvalResult:
     from scanlines.evaluation.evaluate import evaluate
 
     with _progress("evaluating") as advance:
@@ -179,6 +274,7 @@ def _evaluate_with_progress(specs, sensors, n, seed, noise, tol, scene_set, work
             scenes=scene_set,
             workers=workers,
             on_scene=advance,
+            clutter=clutter,
         )
 
 
@@ -204,11 +300,50 @@ def _check_real_options(sensor, n, seed, scenes, save_scenes, noise, specs) -> N
         raise ParameterError("'truth' needs simulated scenes; real logs have no truth")
 
 
-def _repeatability_with_progress(log: Path, specs, scans: int | None) -> RepeatabilityResult:
+def _labelled(names: list[str], specs, tolerance: int, profile, out: Path) -> None:
+    from rich.box import SIMPLE_HEAD
+    from rich.console import Console
+    from rich.table import Table
+
+    from scanlines.data.labels import LABEL_FILES
+    from scanlines.errors import ParameterError
+    from scanlines.evaluation.labelled import evaluate_labelled
+
+    samples = list(LABEL_FILES) if "all" in names else names
+    unknown = sorted(set(samples) - set(LABEL_FILES))
+    if unknown:
+        raise ParameterError(
+            f"--labels: no hand labels for {', '.join(unknown)}; "
+            f"choose from {', '.join(LABEL_FILES)} or all"
+        )
+    result = evaluate_labelled(specs, samples, tolerance=tolerance, sensor_profile=profile)
+    rows = result.rows()
+    table = Table(
+        title="hand-labelled frames of the shipped real logs",
+        caption=f"events matched within +-{tolerance} beams, uncertain labels don't care; "
+        "segments, length, <5 returns and coverage over every scan of the excerpt",
+        caption_justify="left",
+        box=SIMPLE_HEAD,
+    )
+    for header in rows[0]:
+        table.add_column(header.replace("_", " "), justify="right", no_wrap=True)
+    for row in rows:
+        table.add_row(*(f"{v:.3f}" if isinstance(v, float) else str(v) for v in row.values()))
+    console = Console()
+    if not console.is_terminal:
+        console = Console(width=TABLE_WIDTH)
+    console.print(table)
+    out.mkdir(parents=True, exist_ok=True)
+    typer.echo(f"wrote {result.to_csv(out / 'labelled.csv')}")
+
+
+def _repeatability_with_progress(
+    log: Path, specs, scans: int | None, profile=None
+) -> RepeatabilityResult:
     from scanlines.evaluation.repeatability import repeatability
 
     with _progress(f"{log.name}: pairs, then scans per method", unit="steps") as advance:
-        result = repeatability(log, specs, scans, on_progress=advance)
+        result = repeatability(log, specs, scans, on_progress=advance, sensor_profile=profile)
     _print_repeatability(result)
     return result
 
@@ -292,6 +427,107 @@ def _print_tables(result: EvalResult) -> None:
         for row in result.table(sensor):
             table.add_row(*row)
         console.print(table)
+
+
+def _print_family(result: EvalResult, out: Path) -> list[Path]:
+    """The family tables: sensors, every figure per sensor and spec, the worst sensors.
+
+    Returns the CSV files written (``family.csv``, ``family_worst.csv``,
+    ``family_sensors.csv``).
+    """
+    import math
+
+    from rich.box import SIMPLE_HEAD
+    from rich.console import Console
+    from rich.table import Table
+
+    from scanlines.evaluation.evaluate import tolerance_caption
+    from scanlines.evaluation.family import FIGURES, family_rows, worst_rows
+    from scanlines.evaluation.report import number, write_csv
+    from scanlines.sim import get_sensor
+
+    console = Console()
+    if not console.is_terminal:
+        console = Console(width=TABLE_WIDTH)
+    config = result.config
+    sensors = []
+    for name in config.sensors:
+        spec = get_sensor(name)
+        n = spec.noise
+        sensors.append(
+            {
+                "sensor": name,
+                "beams": spec.n_beams,
+                "step_deg": math.degrees(abs(spec.angle_increment)),
+                "fov_deg": 360.0
+                if spec.full_circle
+                else math.degrees(abs(spec.angle_increment) * (spec.n_beams - 1)),
+                "sigma_cm": 100 * n.sigma,
+                "sigma_slope_pct": 100 * n.sigma_slope,
+                "bias_cm": 100 * n.bias,
+                "bias_rel_pct": 100 * n.bias_rel,
+                "range_max_m": spec.range_max,
+                "dropout_pct": 100 * n.dropout_prob,
+                "outlier_pct": 100 * n.outlier_prob,
+                "mixed_pct": 100 * n.mixed_pixel_prob,
+            }
+        )
+    table = Table(title="family sensors", box=SIMPLE_HEAD)
+    for key in sensors[0]:
+        table.add_column(key, justify="right" if key != "sensor" else "left")
+    for row in sensors:
+        table.add_row(
+            *(
+                v if isinstance(v, str) else number(v, "d" if isinstance(v, int) else ".2f")
+                for v in row.values()
+            )
+        )
+    console.print(table)
+
+    rows = family_rows(result)
+    labels = list(dict.fromkeys(r.label for r in rows))
+    for name, title, _, target in FIGURES:
+        table = Table(
+            title=f"{title} per sensor (target on the worst sensor: "
+            f"{'>=' if name != 'false_pos_excess' else '<='} {target:g})",
+            box=SIMPLE_HEAD,
+        )
+        table.add_column("sensor", no_wrap=True)
+        for label in labels:
+            table.add_column(label, justify="right", no_wrap=True)
+        for sensor in config.sensors:
+            values = {r.label: getattr(r, name) for r in rows if r.sensor == sensor}
+            table.add_row(sensor, *(number(values[label], ".3f") for label in labels))
+        console.print(table)
+    worst = worst_rows(rows)
+    caption = (
+        f"{len(config.sensors)} sensors x {config.n} scenes, seed {config.seed}, "
+        f"{'clutter' if config.clutter else 'default'} scenes; {tolerance_caption(config.tol)}"
+    )
+    table = Table(
+        title="worst sensor per figure", caption=caption, caption_justify="left", box=SIMPLE_HEAD
+    )
+    table.add_column("method", no_wrap=True)
+    for _, title, end, target in FIGURES:
+        table.add_column(f"{title}\n({'>=' if end == 'min' else '<='} {target:g})", justify="right")
+    for label in labels:
+        mine = {w.figure: w for w in worst if w.label == label}
+        table.add_row(
+            label,
+            *(
+                f"{number(mine[f].value, '.3f')} {'ok' if mine[f].met else 'NO'} {mine[f].sensor}"
+                if f in mine
+                else "-"
+                for f, _, _, _ in FIGURES
+            ),
+        )
+    console.print(table)
+    out.mkdir(parents=True, exist_ok=True)
+    return [
+        write_csv(out / "family_sensors.csv", sensors),
+        write_csv(out / "family.csv", [r.to_dict() for r in rows]),
+        write_csv(out / "family_worst.csv", [w.to_dict() for w in worst]),
+    ]
 
 
 TABLE_WIDTH = 180

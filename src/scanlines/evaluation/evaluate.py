@@ -97,6 +97,7 @@ def evaluate(
     scenes: SceneSet | None = None,
     workers: int = 1,
     on_scene: OnScene | None = None,
+    clutter: bool = False,
 ) -> EvalResult:
     """Run every spec on the same scans and score them against the truth.
 
@@ -106,8 +107,9 @@ def evaluate(
         Method specs (strings as in :func:`~scanlines.evaluation.specs.parse_spec`, or
         :class:`~scanlines.evaluation.specs.MethodSpec`).
     sensors:
-        Sensor preset names; all of :data:`~scanlines.sim.SENSORS` when ``None``.
-        With ``scenes``, a selection of the set's sensors.
+        Sensor names (presets, or family names such as ``"family-03"``, see
+        :mod:`scanlines.sim.family`); all of :data:`~scanlines.sim.SENSORS` when
+        ``None``. With ``scenes``, a selection of the set's sensors.
     n:
         Scenes per sensor; 100 when ``None``. With ``scenes``, at most this many of
         each sensor (all when ``None``).
@@ -124,6 +126,9 @@ def evaluate(
         Processes; each scene is generated once and all specs run on it.
     on_scene:
         Called as ``on_scene(done, total)`` after each scene.
+    clutter:
+        Generate clutter scenes (:data:`scanlines.sim.CLUTTER_KINDS`); ignored with
+        ``scenes``.
 
     Returns
     -------
@@ -151,12 +156,14 @@ def evaluate(
             scenes.noise,
             tol,
             scenes.source,
+            scenes.clutter,
         )
     else:
         chosen = check_sensors(sensors)
         n = DEFAULT_SCENES if n is None else n
-        jobs = [(s, i, seed, noise) for s, i in scene_recipe(chosen, n, seed, noise)]
-        config = EvalConfig(parsed, chosen, n, seed, noise, tol)
+        recipe = scene_recipe(chosen, n, seed, noise)
+        jobs = [(s, i, seed, noise, bool(clutter)) for s, i in recipe]
+        config = EvalConfig(parsed, chosen, n, seed, noise, tol, clutter=bool(clutter))
     records = [r for batch in _run_jobs(jobs, parsed, tol, workers, on_scene) for r in batch]
     return EvalResult(config, tuple(records), _summarise(records, config), scenes)
 
@@ -213,7 +220,10 @@ def extract_case(spec: MethodSpec, case: SceneCase) -> Extraction:
 
 
 def _run_job(
-    job: SceneCase | tuple[str, int, int, str], *, specs: tuple[MethodSpec, ...], tol: Tolerances
+    job: SceneCase | tuple[str, int, int, str, bool],
+    *,
+    specs: tuple[MethodSpec, ...],
+    tol: Tolerances,
 ) -> list[ScanRecord]:
     """Score every spec on one scene (generated here from its recipe, or given).
 
@@ -322,6 +332,8 @@ class EvalConfig:
         The tolerances every score was computed with.
     source:
         ``"generated"``, or the scene-set file.
+    clutter:
+        Whether the scenes are clutter scenes.
     """
 
     specs: tuple[MethodSpec, ...]
@@ -331,6 +343,7 @@ class EvalConfig:
     noise: str
     tol: Tolerances = field(default_factory=Tolerances)
     source: str = "generated"
+    clutter: bool = False
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form (tolerances under ``"tolerances"``)."""
@@ -341,6 +354,7 @@ class EvalConfig:
             "seed": self.seed,
             "noise": self.noise,
             "source": self.source,
+            "clutter": self.clutter,
             "scene_seed": "numpy.random.SeedSequence([seed, crc32(sensor), index])"
             ".generate_state(1, uint32)[0]",
             "tolerances": tolerances_dict(self.tol),
@@ -505,7 +519,7 @@ class EvalResult:
         """Scene ``index`` of ``sensor``: from the scene set, or generated again."""
         if self.scenes is not None:
             return self.scenes.find(sensor, index)
-        return make_scene(sensor, index, self.config.seed, self.config.noise)
+        return make_scene(sensor, index, self.config.seed, self.config.noise, self.config.clutter)
 
     def table(self, sensor: str) -> list[list[str]]:
         """Formatted :data:`TABLE_COLUMNS` rows of the summaries of ``sensor``."""
@@ -529,6 +543,11 @@ def tolerance_caption(tol: Tolerances) -> str:
         f"{tol.overlap:g}; don't care: segments < {tol.min_segment_beams} beams, events "
         f"next to runs < {tol.min_run} returns"
         + (", unmatched on curved surfaces" if tol.curved_dont_care else "")
+        + (
+            ", events the truth marks (junctions, steps and turns the noise hides)"
+            if tol.truth_dont_care
+            else ""
+        )
     )
 
 

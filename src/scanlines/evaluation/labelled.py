@@ -120,8 +120,10 @@ def evaluate_labelled(
     samples: Iterable[str] | None = None,
     *,
     tolerance: int = 2,
+    sensor_profile: SensorProfile | None = None,
 ) -> LabelledResult:
-    """Score ``specs`` on the hand-labelled frames of ``samples`` (default: every one)."""
+    """Score ``specs`` on the hand-labelled frames of ``samples`` (default: every one),
+    with ``sensor_profile`` (``None``: one measured from each excerpt)."""
     from scanlines.data import sample
     from scanlines.data.labels import label_set, labelled_samples
     from scanlines.io import open_log
@@ -132,7 +134,7 @@ def evaluate_labelled(
         labels = label_set(name)
         options = _reader_options(name, labels.angle_convention)
         scans = list(open_log(sample(name), **options))
-        profile = estimate_profile(scans, source=sample(name).name)
+        profile = sensor_profile or estimate_profile(scans, source=sample(name).name)
         for spec in specs:
             result.rows_.append(_score(name, spec, scans, labels.frames, profile, tolerance))
     return result

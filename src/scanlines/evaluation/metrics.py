@@ -31,6 +31,10 @@ Don't-care rules (all parameters of :class:`~scanlines.evaluation.scores.Toleran
   true nor a false positive, and missing it is not a false negative;
 * with ``curved_dont_care``, found events and segments on curved surfaces (round
   pillars, which have no true corners or segments) that match nothing are not false.
+* with ``truth_dont_care``, the true events the truth marks as don't care
+  (:attr:`~scanlines.truth.Truth.breakpoint_dont_care`, ``corner_dont_care``: junctions
+  of touching surfaces, depth steps and turns the range noise hides) are don't care
+  like the events next to short runs, the way uncertain hand labels are.
 
 Every result carries the :class:`~scanlines.evaluation.scores.Tolerances` it was
 computed with, and turns into a flat dict with ``to_dict()`` for CSV or JSON; the records
@@ -416,7 +420,8 @@ def score(
         tolerance=tol.event_beams,
         n_beams=n,
         circular=circular,
-        true_dont_care=event_dont_care(truth.breakpoint_runs, tol.min_run),
+        true_dont_care=event_dont_care(truth.breakpoint_runs, tol.min_run)
+        | (tol.truth_dont_care & truth.breakpoint_dont_care),
         found_ignorable=ignorable(extraction.breakpoints),
     )
     corners = score_events(
@@ -425,7 +430,8 @@ def score(
         tolerance=tol.event_beams,
         n_beams=n,
         circular=circular,
-        true_dont_care=event_dont_care(truth.corner_runs, tol.min_run),
+        true_dont_care=event_dont_care(truth.corner_runs, tol.min_run)
+        | (tol.truth_dont_care & truth.corner_dont_care),
         found_ignorable=ignorable(extraction.corners),
     )
     return ScanScore(

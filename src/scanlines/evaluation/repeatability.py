@@ -92,6 +92,7 @@ from scanlines.evaluation.report import number, write_csv
 from scanlines.evaluation.specs import MethodSpec, parse_specs
 from scanlines.extraction import END_X, END_Y, START_X, START_Y
 from scanlines.json_values import jsonable
+from scanlines.sensor_profile import SensorProfile, estimate_profile
 
 __all__ = [
     "TABLE_COLUMNS",
@@ -453,8 +454,9 @@ def _score_method(
     pairs: Sequence[PairRecord],
     tol: RepeatTolerances,
     on_scan: Callable[[], None] | None,
+    profile: SensorProfile | None,
 ) -> MethodRepeatability:
-    extractor = spec.extractor()
+    extractor = spec.extractor(sensor_profile=profile)
     counts = _Counts()
     ends: dict[int, np.ndarray] = {}
     for index, scan in scans:
@@ -647,12 +649,15 @@ def repeatability_of_scans(
     tol: RepeatTolerances | None = None,
     settings: IcpSettings | None = None,
     on_progress: OnProgress | None = None,
+    sensor_profile: SensorProfile | None = None,
 ) -> RepeatabilityResult:
-    """Repeatability of ``specs`` on ``(record, scan)`` pairs in log order."""
+    """Repeatability of ``specs`` on ``(record, scan)`` pairs in log order, every spec with
+    ``sensor_profile`` (``None``: one measured from the scans, as ``scanlines run`` does)."""
     parsed = parse_specs(specs)
     tol = tol or RepeatTolerances()
     settings = settings or IcpSettings()
     scans = list(scans)
+    profile = sensor_profile or estimate_profile((scan for _, scan in scans), source=log)
     n_candidates = sum(
         1
         for a in range(len(scans))
@@ -669,7 +674,7 @@ def repeatability_of_scans(
             on_progress(done, total)
 
     pairs, source = register_pairs(scans, tol, settings, on_pair=lambda _done, _total: tick())
-    methods = tuple(_score_method(spec, scans, pairs, tol, tick) for spec in parsed)
+    methods = tuple(_score_method(spec, scans, pairs, tol, tick, profile) for spec in parsed)
     return RepeatabilityResult(log, len(scans), source, pairs, methods, tol, settings)
 
 
@@ -681,6 +686,7 @@ def repeatability(
     tol: RepeatTolerances | None = None,
     settings: IcpSettings | None = None,
     on_progress: OnProgress | None = None,
+    sensor_profile: SensorProfile | None = None,
     **reader_options: Any,
 ) -> RepeatabilityResult:
     """Scan-to-scan repeatability of method specs on a log (any file ``open_log`` reads).
@@ -695,6 +701,8 @@ def repeatability(
         Read the first ``max_scans`` scans only (``None``: all).
     tol, settings:
         :class:`RepeatTolerances` and :class:`~.registration.IcpSettings`.
+    sensor_profile:
+        The profile every spec extracts with; ``None``: measured from the scans read.
     on_progress:
         Called with ``(done, total)`` after each pair registered and each scan extracted.
     **reader_options:
@@ -707,8 +715,9 @@ def repeatability(
     reader = open_log(log_path, **reader_options)
     scans = list(islice(reader.enumerate(), max_scans))
     return repeatability_of_scans(
-        scans, specs, log=str(log_path), tol=tol, settings=settings, on_progress=on_progress
-    )
+        scans, specs, log=str(log_path), tol=tol, settings=settings, on_progress=on_progress,
+        sensor_profile=sensor_profile,
+    )  # fmt: skip
 
 
 def write_results(results: Sequence[RepeatabilityResult], directory: str | Path) -> list[Path]:

@@ -4,7 +4,8 @@ Scenes and seeds
 ----------------
 Scene ``i`` of sensor ``s`` is ``random_scene(seed_i, s).scan(seed_i)`` with
 ``seed_i = scene_seed(seed, s, i)``: a 32-bit integer from
-``numpy.random.SeedSequence([seed, crc32(s), i])``. Every method spec sees the same
+``numpy.random.SeedSequence([seed, crc32(s), i])`` (``random_scene(seed_i, s,
+clutter=True)`` for clutter scenes). Every method spec sees the same
 scans, and the same arguments give the same numbers on every run. Noise is the preset's
 realistic model (``"realistic"``) or none (``"exact"``, ``NoiseModel()``).
 
@@ -80,7 +81,7 @@ class SceneCase:
     seed:
         Seed of the scene layout and of the scan noise.
     kind:
-        ``"room"`` or ``"corridor"``.
+        The scene kind (:data:`scanlines.sim.SCENE_KINDS` or ``CLUTTER_KINDS``).
     noise:
         ``"realistic"`` or ``"exact"``.
     scan, truth:
@@ -109,11 +110,16 @@ def _rebuild_case(fields_: tuple[Any, ...], scan_args: tuple[Any, ...], truth: T
     return SceneCase(*fields_, Scan(*limits, pose=pose), truth)
 
 
-def make_scene(sensor: str, index: int, seed: int, noise: str = "realistic") -> SceneCase:
-    """Generate scene ``index`` of ``sensor`` for base ``seed`` (see :func:`scene_seed`)."""
+def make_scene(
+    sensor: str, index: int, seed: int, noise: str = "realistic", clutter: bool = False
+) -> SceneCase:
+    """Generate scene ``index`` of ``sensor`` for base ``seed`` (see :func:`scene_seed`).
+
+    ``clutter``: a clutter scene (:data:`scanlines.sim.CLUTTER_KINDS`).
+    """
     _check_noise(noise)
     s = scene_seed(seed, sensor, index)
-    scene = random_scene(s, sensor)
+    scene = random_scene(s, sensor, clutter=clutter)
     sim = scene.scan(s, noise=NoiseModel() if noise == "exact" else None)
     return SceneCase(sensor, index, s, scene.kind, noise, sim.scan, sim.truth)
 
@@ -123,10 +129,11 @@ def iter_scenes(
     n: int = DEFAULT_SCENES,
     seed: int = 0,
     noise: str = "realistic",
+    clutter: bool = False,
 ) -> Iterator[SceneCase]:
     """Generate the scenes of a run: sensor by sensor, ``n`` each."""
     for sensor, index in scene_recipe(check_sensors(sensors), n, seed, noise):
-        yield make_scene(sensor, index, seed, noise)
+        yield make_scene(sensor, index, seed, noise, clutter)
 
 
 def scene_recipe(sensors: Sequence[str], n: int, seed: int, noise: str) -> list[tuple[str, int]]:
@@ -170,12 +177,15 @@ class SceneSet:
         ``"realistic"`` or ``"exact"``.
     source:
         ``"generated"``, or the file they were loaded from.
+    clutter:
+        Whether they are clutter scenes.
     """
 
     cases: tuple[SceneCase, ...]
     seed: int
     noise: str
     source: str = "generated"
+    clutter: bool = False
 
     def __len__(self) -> int:
         return len(self.cases)
@@ -211,7 +221,7 @@ class SceneSet:
             for s in chosen
             for c in [c for c in self.cases if c.sensor == s][: n if n is not None else None]
         ]
-        return SceneSet(tuple(keep), self.seed, self.noise, self.source)
+        return SceneSet(tuple(keep), self.seed, self.noise, self.source, self.clutter)
 
     def find(self, sensor: str, index: int) -> SceneCase:
         """The scene ``index`` of ``sensor``."""
@@ -235,22 +245,25 @@ def generate_scene_set(
     seed: int = 0,
     noise: str = "realistic",
     *,
+    clutter: bool = False,
     on_scene: OnScene | None = None,
 ) -> SceneSet:
     """Generate the scenes of a run into memory; ``on_scene(done, total)`` after each."""
     recipe = scene_recipe(check_sensors(sensors), n, seed, noise)
     cases = []
     for done, (sensor, index) in enumerate(recipe, 1):
-        cases.append(make_scene(sensor, index, seed, noise))
+        cases.append(make_scene(sensor, index, seed, noise, clutter))
         if on_scene is not None:
             on_scene(done, len(recipe))
-    return SceneSet(tuple(cases), seed, noise)
+    return SceneSet(tuple(cases), seed, noise, clutter=clutter)
 
 
 # Ragged per-scene arrays, grouped by the count that sizes them.
 _BEAM_FIELDS = ("edge", "true_ranges", "hit_points", "incidence", "on_curve", "status")
 _BREAK_FIELDS = ("breakpoints", "breakpoint_runs")
 _CORNER_FIELDS = ("corners", "corner_points", "corner_runs")
+# Stored since the truth has them; a set written before reads as "none".
+_OPTIONAL_FIELDS = {"breakpoint_dont_care": "n_breakpoints", "corner_dont_care": "n_corners"}
 _SEGMENT_FIELDS = tuple(f.name for f in fields(TrueSegments))
 _SCAN_FIELDS = ("angle_min", "angle_increment", "range_min", "range_max")
 
@@ -263,6 +276,7 @@ def _pack_cases(scenes: SceneSet) -> dict[str, np.ndarray]:
         "version": SCENE_SET_VERSION,
         "seed": scenes.seed,
         "noise": scenes.noise,
+        "clutter": scenes.clutter,
         "stores": "recipe and generated arrays: scans and their full truth",
     }
     out: dict[str, np.ndarray] = {
@@ -281,7 +295,7 @@ def _pack_cases(scenes: SceneSet) -> dict[str, np.ndarray]:
     }
     for name in _SCAN_FIELDS:
         out[f"scan_{name}"] = np.array([getattr(c.scan, name) for c in cases], np.float64)
-    for name in (*_BEAM_FIELDS, *_BREAK_FIELDS, *_CORNER_FIELDS):
+    for name in (*_BEAM_FIELDS, *_BREAK_FIELDS, *_CORNER_FIELDS, *_OPTIONAL_FIELDS):
         out[f"truth_{name}"] = _concat([getattr(t, name) for t in truths])
     for name in _SEGMENT_FIELDS:
         out[f"segment_{name}"] = _concat([getattr(t.segments, name) for t in truths])
@@ -315,7 +329,8 @@ def load_scene_set(path: str | Path) -> SceneSet:
         cases = _unpack_cases(arrays, str(meta["noise"]))
     except (KeyError, ValueError, TypeError, IndexError) as error:
         raise LogFormatError(f"damaged scene set: {error!r}", path=path) from None
-    return SceneSet(cases, int(meta["seed"]), str(meta["noise"]), str(path))
+    clutter = bool(meta.get("clutter", False))
+    return SceneSet(cases, int(meta["seed"]), str(meta["noise"]), str(path), clutter)
 
 
 def _splits(counts: np.ndarray) -> list[slice]:
@@ -343,6 +358,13 @@ def _unpack_cases(a: Mapping[str, np.ndarray], noise: str) -> tuple[SceneCase, .
             **_part(a, "truth_", _BREAK_FIELDS, bps[k]),
             **_part(a, "truth_", _CORNER_FIELDS, corners[k]),
             segments=TrueSegments(**_part(a, "segment_", _SEGMENT_FIELDS, segs[k])),
+            **{
+                name: _readonly(
+                    a[f"truth_{name}"][(bps if count == "n_breakpoints" else corners)[k]]
+                )
+                for name, count in _OPTIONAL_FIELDS.items()
+                if f"truth_{name}" in a
+            },
         )
         scan = Scan(
             a["ranges"][beams[k]],

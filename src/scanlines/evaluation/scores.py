@@ -50,6 +50,12 @@ class Tolerances:
         True events with fewer true returns than this on either side are don't care.
     curved_dont_care:
         Unmatched found events and segments on curved surfaces are not false.
+    truth_dont_care:
+        True events the truth itself marks as don't care
+        (:attr:`scanlines.truth.Truth.breakpoint_dont_care` and ``corner_dont_care``:
+        junctions of touching surfaces, depth steps and turns the range noise hides)
+        are don't care. Off by default, so that the presets' figures stay as they
+        were; ``scanlines eval --family`` turns it on.
     """
 
     event_beams: int = 2
@@ -59,6 +65,7 @@ class Tolerances:
     min_segment_beams: int = 8
     min_run: int = 3
     curved_dont_care: bool = True
+    truth_dont_care: bool = False
 
     def __post_init__(self) -> None:
         if self.event_beams < 0 or self.min_segment_beams < 0 or self.min_run < 0:

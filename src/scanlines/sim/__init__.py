@@ -19,14 +19,17 @@ Or by hand::
 
 Only numpy is needed. The truth conventions are in :mod:`scanlines.sim.truth` (the
 truth types, re-exported here, in :mod:`scanlines.truth`), the noise model in
-:mod:`scanlines.sim.noise`, the sensor numbers in :mod:`scanlines.sim.sensors`.
+:mod:`scanlines.sim.noise`, the sensor numbers in :mod:`scanlines.sim.sensors`, the
+sensor family (randomised sensors and their four corner sensors) in
+:mod:`scanlines.sim.family`.
 """
 
 from __future__ import annotations
 
+from scanlines.sim.family import corner_sensors, family_names, family_sensors, random_sensor
 from scanlines.sim.noise import NO_RETURN, NoiseModel, NoisyRanges, apply_noise
 from scanlines.sim.raycast import RayHits, cast_rays
-from scanlines.sim.scenes import SCENE_KINDS, Scene, random_scene
+from scanlines.sim.scenes import CLUTTER_KINDS, SCENE_KINDS, Scene, random_scene
 from scanlines.sim.sensors import SENSORS, SensorSpec, get_sensor
 from scanlines.sim.simulate import SimScan, depth_jumps, simulate
 from scanlines.sim.truth import compute_truth, hesse_line, sensor_to_world, world_to_sensor
@@ -43,6 +46,7 @@ from scanlines.sim.world import (
 from scanlines.truth import BeamStatus, TrueSegments, Truth
 
 __all__ = [
+    "CLUTTER_KINDS",
     "NO_RETURN",
     "SCENE_KINDS",
     "SENSORS",
@@ -61,12 +65,16 @@ __all__ = [
     "box",
     "cast_rays",
     "compute_truth",
+    "corner_sensors",
     "depth_jumps",
+    "family_names",
+    "family_sensors",
     "get_sensor",
     "hesse_line",
     "polygon",
     "polyline",
     "random_scene",
+    "random_sensor",
     "regular_polygon",
     "round_pillar",
     "sensor_to_world",

@@ -11,7 +11,9 @@ order, are:
    ``mixed_pixel_prob`` per discontinuity, one of the two beams (either, with equal
    chance) returns a range drawn uniformly between the two ranges.
 2. **Gaussian range noise** with a range-dependent standard deviation
-   ``sigma(r) = max(sigma, sigma_rel * r)``, plus a **per-scan bias**
+   ``sigma(r) = max(sigma, sigma_rel * r) + sigma_slope * r`` (the presets use the
+   ``max`` form of datasheets; the sensor family of :mod:`scanlines.sim.family` the
+   additive ``a + b r`` with ``sigma = a``, ``sigma_slope = b``), plus a **per-scan bias**
    ``u * max(bias, bias_rel * r)`` with ``u ~ U(-1, 1)`` drawn once per scan (a
    systematic error shared by all beams of a scan; datasheets state accuracy bounds
    in this ``max(constant, fraction of range)`` shape).
@@ -55,7 +57,10 @@ class NoiseModel:
         Statistical 1-sigma range noise in metres (the floor at short range).
     sigma_rel:
         Statistical 1-sigma as a fraction of the range; the noise is
-        ``max(sigma, sigma_rel * r)``.
+        ``max(sigma, sigma_rel * r) + sigma_slope * r``.
+    sigma_slope:
+        Statistical 1-sigma added in proportion to the range (``0`` in the presets):
+        with ``sigma = a`` and ``sigma_rel = 0`` the noise is ``a + sigma_slope * r``.
     bias:
         Largest per-scan bias in metres at short range.
     bias_rel:
@@ -89,9 +94,18 @@ class NoiseModel:
     outlier_far: float = 5.0
     mixed_pixel_prob: float = 0.0
     mixed_pixel_min_jump: float = 0.1
+    sigma_slope: float = 0.0
 
     def __post_init__(self) -> None:
-        for name in ("sigma", "sigma_rel", "bias", "bias_rel", "quantum", "outlier_far"):
+        for name in (
+            "sigma",
+            "sigma_rel",
+            "sigma_slope",
+            "bias",
+            "bias_rel",
+            "quantum",
+            "outlier_far",
+        ):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0):
                 raise ValueError(f"NoiseModel.{name} must be finite and >= 0, got {value!r}")
@@ -110,7 +124,17 @@ class NoiseModel:
     def sigma_at(self, ranges: np.ndarray) -> np.ndarray:
         """Statistical 1-sigma at each range."""
         r = np.asarray(ranges, dtype=np.float64)
-        return np.maximum(self.sigma, self.sigma_rel * np.where(np.isfinite(r), r, 0.0))
+        finite = np.where(np.isfinite(r), r, 0.0)
+        sigma = np.maximum(self.sigma, self.sigma_rel * finite)
+        return sigma + self.sigma_slope * finite if self.sigma_slope else sigma
+
+    def effective_sigma(self, ranges: np.ndarray) -> np.ndarray:
+        """1-sigma of a measured range about the truth: Gaussian noise and quantisation.
+
+        ``sqrt(sigma_at(r)**2 + quantum**2 / 12)`` (a rounding error is uniform over one
+        quantum); the per-scan bias is left out, it moves neighbouring returns together.
+        """
+        return np.sqrt(self.sigma_at(ranges) ** 2 + self.quantum**2 / 12.0)
 
     def bias_at(self, ranges: np.ndarray, scale: float) -> np.ndarray:
         """Per-scan bias at each range for the scan's draw ``scale`` in ``[-1, 1]``."""

@@ -8,6 +8,21 @@ checked with a noise-free scan before it is returned: the grazing wall and a sho
 wall must be visible, or the scene is drawn again. Mixed pixels and outliers come
 from the sensor's noise model when the scene is scanned (:meth:`Scene.scan`).
 
+**Clutter scenes** (``clutter=True``, or the kinds ``"cluttered room"`` and ``"long
+corridor"``) add what real buildings have on top of that: chair and table legs (groups
+of four 2-5 cm squares or round legs at the corners of a 0.38-0.5 m or 0.6-1.6 m
+rectangle), people (two ellipse-ish legs 10-15 cm across, 18-35 cm apart), a glass
+pane in the outline that stops beams and returns nothing (a no-return region: the
+room's or corridor's wall is cut and the gap closed by glass; what lies behind is not
+seen), a curved wall (one outline wall replaced by an arc bulging outwards, an
+``is_line=False`` polyline: no corners, no segments, and a junction with the straight
+walls it meets that the truth marks as don't care) and, for the corridor, a long one
+(20-40 m). A cluttered room has one door. Round legs and people are curved shapes
+(like round pillars: no true corners or segments); square legs are tiny boxes whose
+faces are true segments by the usual rules (most are shorter than the don't-care
+thresholds). The default kinds never draw any of it: their scenes are the same as
+before clutter existed.
+
 All randomness comes from ``numpy.random.default_rng(seed)``; the same seed and
 sensor give the same scene on every platform numpy supports.
 """
@@ -26,10 +41,16 @@ from scanlines.sim.sensors import SensorSpec, get_sensor
 from scanlines.sim.simulate import SimScan, as_rng, simulate
 from scanlines.sim.world import Shape, World, box, polygon, polyline, round_pillar, wall
 
-__all__ = ["SCENE_KINDS", "Scene", "random_scene"]
+__all__ = ["CLUTTER_KINDS", "SCENE_KINDS", "Scene", "random_scene"]
 
 SCENE_KINDS = ("room", "corridor")
-"""The kinds of scene :func:`random_scene` builds."""
+"""The kinds of scene :func:`random_scene` builds by default."""
+
+CLUTTER_KINDS = ("cluttered room", "long corridor")
+"""The clutter kinds (``random_scene(..., clutter=True)``)."""
+
+# Long corridors: length in metres.
+LONG_CORRIDOR = (20.0, 40.0)
 
 # Incidence range of the grazing wall, and the smallest incidence that counts as grazing.
 GRAZING_INCIDENCE = (math.radians(70.0), math.radians(84.0))
@@ -53,7 +74,7 @@ class Scene:
     pose:
         Sensor pose ``(x, y, theta)``.
     kind:
-        ``"room"`` or ``"corridor"``.
+        One of :data:`SCENE_KINDS` or :data:`CLUTTER_KINDS`.
     sensor:
         The sensor the scene was laid out for (its field of view and range).
     """
@@ -144,7 +165,9 @@ def _inset_inside(point: np.ndarray, convex_ccw: np.ndarray, margin: float) -> b
 def _transform(shape: Shape, angle: float, offset: np.ndarray) -> Shape:
     c, s = math.cos(angle), math.sin(angle)
     pts = shape.vertices @ np.array([[c, s], [-s, c]]) + offset
-    return Shape(pts, closed=shape.closed, is_line=shape.is_line, kind=shape.kind)
+    return Shape(
+        pts, closed=shape.closed, is_line=shape.is_line, kind=shape.kind, returns=shape.returns
+    )
 
 
 class _Door(NamedTuple):
@@ -171,7 +194,8 @@ def _outline_with_doors(vertices: np.ndarray, doors: Sequence[_Door], kind: str)
         a, b = vertices[e], vertices[(e + 1) % k]
         outward = np.array([b[1] - a[1], a[0] - b[0]]) / np.hypot(*(b - a))
         for door in sorted(d for d in doors if d.edge == e):
-            p0, p1 = a + door.t0 * (b - a), a + door.t1 * (b - a)
+            p0 = a if door.t0 == 0.0 else a + door.t0 * (b - a)
+            p1 = b if door.t1 == 1.0 else a + door.t1 * (b - a)
             if door.depth > 0:
                 current.extend([p0, p0 + door.depth * outward, p1 + door.depth * outward, p1])
             else:
@@ -227,6 +251,18 @@ class _Layout:
             shape = make()
             if self.fits(shape):
                 self.obstacles.append(shape)
+                return True
+        return False
+
+    def place_group(self, make: Callable[[], list[Shape]], tries: int = 40) -> bool:
+        """Like :meth:`place` for a group (chair legs, a person's legs): all or none.
+
+        The group's members are spaced by construction; each must fit the rest.
+        """
+        for _ in range(tries):
+            group = make()
+            if all(self.fits(shape) for shape in group):
+                self.obstacles.extend(group)
                 return True
         return False
 
@@ -328,10 +364,15 @@ def _room_doors(vertices: np.ndarray, rng: np.random.Generator) -> list[_Door]:
     return _with_an_opening(doors)
 
 
-def _room(rng: np.random.Generator, sensor: SensorSpec, reach: float) -> _Layout:
+def _room(
+    rng: np.random.Generator, sensor: SensorSpec, reach: float, clutter: bool = False
+) -> _Layout:
     w, h = reach * rng.uniform(0.6, 1.5), reach * rng.uniform(0.5, 1.2)
     vertices = _chamfered_rectangle(w, h, rng)
     doors = _room_doors(vertices, rng)
+    extra: list[Shape] = []
+    if clutter:
+        doors, extra = _room_glass_and_curve(vertices, doors[:1], rng)
     margin = rng.uniform(1.0, 2.5, size=4)
     outer = box(
         ((margin[1] - margin[0]) / 2, (margin[3] - margin[2]) / 2),
@@ -339,12 +380,13 @@ def _room(rng: np.random.Generator, sensor: SensorSpec, reach: float) -> _Layout
         h + margin[2] + margin[3],
         kind="outer wall",
     )
-    lay = _Layout(
-        rng, sensor, reach, vertices, [*_outline_with_doors(vertices, doors, "room wall"), outer]
-    )
+    walls = [*_outline_with_doors(vertices, doors, "room wall"), *extra, outer]
+    lay = _Layout(rng, sensor, reach, vertices, walls)
     p = lay.random_point(0.6)
     lay.pose = (float(p[0]), float(p[1]), float(rng.uniform(-math.pi, math.pi)))
     _furnish(lay, int(rng.integers(1, 4)), int(rng.integers(0, 3)), int(rng.integers(1, 3)), 1)
+    if clutter:
+        _clutter(lay, int(rng.integers(1, 4)), int(rng.integers(1, 3)))
     return lay
 
 
@@ -365,8 +407,11 @@ def _chamfered_rectangle(w: float, h: float, rng: np.random.Generator) -> np.nda
     return np.array(out)
 
 
-def _corridor(rng: np.random.Generator, sensor: SensorSpec, reach: float) -> _Layout:
-    length, width = reach * rng.uniform(1.2, 2.5), rng.uniform(1.6, 3.0)
+def _corridor(
+    rng: np.random.Generator, sensor: SensorSpec, reach: float, clutter: bool = False
+) -> _Layout:
+    length = rng.uniform(*LONG_CORRIDOR) if clutter else reach * rng.uniform(1.2, 2.5)
+    width = rng.uniform(1.6, 3.0)
     vertices = np.array(
         [(0.0, -width / 2), (length, -width / 2), (length, width / 2), (0.0, width / 2)]
     )
@@ -377,7 +422,11 @@ def _corridor(rng: np.random.Generator, sensor: SensorSpec, reach: float) -> _La
         for slot in slots:
             t0 = slot / 6 - 0.08 + rng.uniform(-0.03, 0.03)  # the door ends before 0.95
             doors.append(_Door(side, t0, t0 + rng.uniform(0.8, 1.0) / length, _door_depth(rng)))
-    walls = _outline_with_doors(vertices, _with_an_opening(doors), "corridor wall")
+    doors = _with_an_opening(doors)
+    extra: list[Shape] = []
+    if clutter:
+        doors, extra = _corridor_glass_and_curve(vertices, doors, length, width, rng)
+    walls = [*_outline_with_doors(vertices, doors, "corridor wall"), *extra]
     behind = rng.uniform(2.0, 4.0, size=2)
     outer = box(
         (length / 2, (behind[1] - behind[0]) / 2),
@@ -390,7 +439,126 @@ def _corridor(rng: np.random.Generator, sensor: SensorSpec, reach: float) -> _La
     heading = rng.uniform(-math.radians(25), math.radians(25))
     lay.pose = (float(rng.uniform(0.5, 0.25 * length)), float(y), float(heading))
     _furnish(lay, 1, int(rng.integers(0, 2)), 1, 0)
+    if clutter:
+        _clutter(lay, 1, int(rng.integers(1, 3)))
     return lay
+
+
+# --------------------------------------------------------------------------- clutter
+
+
+def _arc(a: np.ndarray, b: np.ndarray, sagitta: float, points: int) -> np.ndarray:
+    """Points of the circular arc from ``a`` to ``b`` bulging ``sagitta`` to the right.
+
+    Right of ``a -> b`` is outwards for an edge of a counter-clockwise outline.
+    """
+    chord = b - a
+    length = math.hypot(*chord)
+    right = np.array([chord[1], -chord[0]]) / length
+    radius = (length**2 / 4 + sagitta**2) / (2 * sagitta)
+    centre = (a + b) / 2 - right * (radius - sagitta)
+    start = math.atan2(*(a - centre)[::-1])
+    sweep = math.remainder(math.atan2(*(b - centre)[::-1]) - start, 2 * math.pi)
+    phi = start + sweep * np.linspace(0.0, 1.0, points)
+    pts = centre + radius * np.column_stack((np.cos(phi), np.sin(phi)))
+    pts[0], pts[-1] = a, b
+    return pts
+
+
+def _curved_wall(
+    vertices: np.ndarray, edge: int, rng: np.random.Generator, cap: float
+) -> tuple[_Door, Shape]:
+    """Outline edge ``edge`` replaced by an arc: the cut, and the arc (a curved shape)."""
+    a, b = vertices[edge], vertices[(edge + 1) % len(vertices)]
+    sagitta = min(float(rng.uniform(0.15, 0.4)) * math.hypot(*(b - a)), cap)
+    pts = _arc(a, b, sagitta, int(rng.integers(24, 41)))
+    return _Door(edge, 0.0, 1.0), polyline(pts, kind="curved wall", is_line=False)
+
+
+def _glass(vertices: np.ndarray, edge: int, t0: float, t1: float) -> tuple[_Door, Shape]:
+    """A glass pane from ``t0`` to ``t1`` of edge ``edge``: the cut, and the pane."""
+    a, b = vertices[edge], vertices[(edge + 1) % len(vertices)]
+    pane = wall(a + t0 * (b - a), a + t1 * (b - a), kind="glass", returns=False)
+    return _Door(edge, t0, t1), pane
+
+
+def _room_glass_and_curve(
+    vertices: np.ndarray, doors: list[_Door], rng: np.random.Generator
+) -> tuple[list[_Door], list[Shape]]:
+    """A curved wall and a glass pane on outline walls without a door (when there are)."""
+    doors = _with_an_opening(doors)
+    lengths = np.hypot(*(np.roll(vertices, -1, axis=0) - vertices).T)
+    free = [e for e in np.flatnonzero(lengths >= 1.8).tolist() if e not in {d.edge for d in doors}]
+    free = [free[i] for i in rng.permutation(len(free))]
+    extra = []
+    if free:
+        cut, arc = _curved_wall(vertices, free.pop(), rng, cap=0.9)
+        doors, extra = [*doors, cut], [arc]
+    if free:
+        e = free.pop()
+        length = float(lengths[e])
+        width = float(rng.uniform(0.8, min(2.5, length - 0.8)))
+        start = float(rng.uniform(0.4, length - 0.4 - width))
+        cut, pane = _glass(vertices, e, start / length, (start + width) / length)
+        doors, extra = [*doors, cut], [*extra, pane]
+    return doors, extra
+
+
+def _corridor_glass_and_curve(
+    vertices: np.ndarray,
+    doors: list[_Door],
+    length: float,
+    width: float,
+    rng: np.random.Generator,
+) -> tuple[list[_Door], list[Shape]]:
+    """The far end wall curved; a 1-2.5 m glass pane on a side between the door slots."""
+    cut, arc = _curved_wall(vertices, 1, rng, cap=min(0.45, 0.3 * width))
+    side, slot = int(rng.choice([0, 2])), int(rng.choice([2, 4]))
+    half = float(rng.uniform(1.0, 2.5)) / length / 2
+    pane_cut, pane = _glass(vertices, side, slot / 6 - half, slot / 6 + half)
+    return [*doors, cut, pane_cut], [arc, pane]
+
+
+def _rotated(points: np.ndarray, angle: float, centre: np.ndarray) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return points @ np.array([[c, s], [-s, c]]) + centre
+
+
+def _leg_group(lay: _Layout) -> list[Shape]:
+    """Four legs of a chair (0.38-0.5 m square) or a table, square or round, 2-5 cm."""
+    if lay.rng.random() < 0.6:
+        side = lay.uniform(0.38, 0.5)
+        w, h = side, side * lay.uniform(0.9, 1.1)
+    else:
+        w, h = lay.uniform(0.7, 1.6), lay.uniform(0.6, 0.9)
+    size, square = lay.uniform(0.02, 0.05), bool(lay.rng.random() < 0.5)
+    angle, centre = lay.uniform(0, math.pi), lay.random_point(0.5)
+    corners = _rotated(np.array([(-w, -h), (w, -h), (w, h), (-w, h)]) / 2, angle, centre)
+    if square:
+        return [box(p, size, size, angle, kind="leg") for p in corners]
+    return [round_pillar(p, size / 2, sides=12, kind="leg") for p in corners]
+
+
+def _person(lay: _Layout) -> list[Shape]:
+    """Two ellipse-ish legs 10-15 cm across (8-12 cm deep), 18-35 cm apart."""
+    centre, heading = lay.random_point(0.5), lay.uniform(-math.pi, math.pi)
+    gap = lay.uniform(0.18, 0.35)
+    t = 2 * math.pi * np.arange(20) / 20
+    legs = []
+    for side in (-1, 1):
+        across, deep = lay.uniform(0.10, 0.15), lay.uniform(0.08, 0.12)
+        ellipse = np.column_stack((deep / 2 * np.cos(t), across / 2 * np.sin(t)))
+        offset = _rotated(np.array([[0.0, side * gap / 2]]), heading, centre)[0]
+        pts = _rotated(ellipse, heading + lay.uniform(-0.3, 0.3), offset)
+        legs.append(Shape(pts, closed=True, is_line=False, kind="person leg"))
+    return legs
+
+
+def _clutter(lay: _Layout, leg_groups: int, people: int) -> None:
+    for _ in range(leg_groups):
+        lay.place_group(lambda: _leg_group(lay))
+    for _ in range(people):
+        lay.place_group(lambda: _person(lay))
 
 
 # --------------------------------------------------------------------------- checks
@@ -413,6 +581,8 @@ def random_scene(
     seed: int | np.random.Generator | None = None,
     sensor: str | SensorSpec = "lms_1deg",
     kind: str | None = None,
+    *,
+    clutter: bool = False,
 ) -> Scene:
     """A random room or corridor scene laid out for ``sensor``.
 
@@ -425,7 +595,11 @@ def random_scene(
         Preset name or spec; the scene's size follows its range (capped at 10 m) and
         its short walls its angular step.
     kind:
-        ``"room"`` or ``"corridor"``; ``None`` picks one at random.
+        ``"room"`` or ``"corridor"``, or a clutter kind (``"cluttered room"``, ``"long
+        corridor"``); ``None`` picks one of :data:`SCENE_KINDS` at random, or of
+        :data:`CLUTTER_KINDS` with ``clutter``.
+    clutter:
+        Pick a clutter kind when ``kind`` is ``None`` (see the module docstring).
 
     Returns
     -------
@@ -441,12 +615,15 @@ def random_scene(
     """
     rng = as_rng(seed)
     spec = get_sensor(sensor)
-    if kind is not None and kind not in SCENE_KINDS:
-        raise ValueError(f"unknown scene kind {kind!r}; known: {', '.join(SCENE_KINDS)}")
-    chosen = kind or str(rng.choice(SCENE_KINDS))
+    known = (*SCENE_KINDS, *CLUTTER_KINDS)
+    if kind is not None and kind not in known:
+        raise ValueError(f"unknown scene kind {kind!r}; known: {', '.join(known)}")
+    chosen = kind or str(rng.choice(CLUTTER_KINDS if clutter else SCENE_KINDS))
+    cluttered = chosen in CLUTTER_KINDS
+    build = _room if chosen in ("room", "cluttered room") else _corridor
     reach = min(spec.range_max, _REACH_CAP)
     for _ in range(_ATTEMPTS):
-        lay = (_room if chosen == "room" else _corridor)(rng, spec, reach)
+        lay = build(rng, spec, reach, cluttered)
         angle, offset = float(rng.uniform(-math.pi, math.pi)), rng.uniform(-20.0, 20.0, size=2)
         world = World(_transform(s, angle, offset) for s in [*lay.walls, *lay.obstacles])
         x, y, theta = lay.pose

@@ -190,15 +190,26 @@ SENSORS: MappingProxyType[str, SensorSpec] = MappingProxyType({s.name: s for s i
 def get_sensor(sensor: str | SensorSpec) -> SensorSpec:
     """The preset called ``sensor`` (a :class:`SensorSpec` is returned unchanged).
 
+    Names of the sensor family (:mod:`scanlines.sim.family`: ``"family-07"``,
+    ``"family-s3-07"``, ``"corner-fine-noisy"``) resolve to their sensors too.
+
     Raises
     ------
     ParameterError
-        For an unknown preset name; the message lists the known ones.
+        For an unknown name; the message lists the presets and the family's names.
     """
     if isinstance(sensor, SensorSpec):
         return sensor
     try:
         return SENSORS[sensor]
     except KeyError:
+        from scanlines.sim.family import family_sensor
+
+        member = family_sensor(sensor) if isinstance(sensor, str) else None
+        if member is not None:
+            return member
         known = ", ".join(sorted(SENSORS))
-        raise ParameterError(f"unknown sensor preset {sensor!r}; known: {known}") from None
+        raise ParameterError(
+            f"unknown sensor preset {sensor!r}; known: {known}; family: family-00, family-01, "
+            "..., family-s<seed>-<index>, corner-{fine,coarse}-{quiet,noisy}"
+        ) from None

@@ -92,6 +92,10 @@ def simulate(
     timestamp:
         Stored in the scan.
 
+    Beams that hit a shape with ``returns=False`` (glass) have no return and no edge
+    in the truth (:attr:`BeamStatus.NO_HIT`). The truth's don't-care events use the
+    noise model actually applied (see :mod:`scanlines.sim.truth`).
+
     Returns
     -------
     SimScan
@@ -109,10 +113,14 @@ def simulate(
     x, y, theta = (float(v) for v in pose)
     angles = spec.angles
     hits = world.cast((x, y), angles + theta)
+    edge, true_ranges = hits.edge, hits.ranges
+    if not world.edge_returns.all():  # glass: the beam stops there and nothing comes back
+        glass = (edge >= 0) & ~world.edge_returns[np.maximum(edge, 0)]
+        edge, true_ranges = np.where(glass, -1, edge), np.where(glass, np.inf, true_ranges)
     circle = spec.full_circle
     measured = apply_noise(
-        hits.ranges,
-        depth_jumps(world, hits.edge, circle),
+        true_ranges,
+        depth_jumps(world, edge, circle),
         spec.noise,
         as_rng(seed),
         range_min=spec.range_min,
@@ -131,6 +139,13 @@ def simulate(
     if not np.array_equal(scan.valid, returned):  # pragma: no cover - internal consistency
         raise AssertionError("simulated returns disagree with Scan.valid")
     truth = compute_truth(
-        world, (x, y, theta), angles, hits.edge, hits.ranges, measured.status, full_circle=circle
+        world,
+        (x, y, theta),
+        angles,
+        edge,
+        true_ranges,
+        measured.status,
+        full_circle=circle,
+        sigma=spec.noise.effective_sigma,
     )
     return SimScan(scan=scan, truth=truth, world=world, sensor=spec, bias_scale=measured.bias_scale)

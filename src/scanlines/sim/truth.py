@@ -28,6 +28,32 @@ Conventions (they follow the project's, see ``METHOD.md``):
   first/last beam.
 * Every event records the number of true returns in the run before and after it
   (``*_runs``), so that scoring can treat events next to tiny runs as "don't care".
+* **Don't-care events** (:attr:`Truth.breakpoint_dont_care`,
+  :attr:`Truth.corner_dont_care`), events that are real in the world but that no
+  extractor can be asked to find:
+
+  - a **junction**: a breakpoint between two surfaces that touch (an edge end of one
+    lies on an edge end of the other, as where a straight wall runs into a curved
+    one): there is no depth step, and a line meeting a curve has no corner;
+  - a **depth step hidden by the noise** (only when the range noise is given): a
+    breakpoint between consecutive returns ``i`` on surface ``A`` and ``j`` on
+    surface ``B`` (fewer than two missing beams between them) where each return looks
+    like the continuation of the other surface: the step
+    ``d = max(|r_j - r_A(j)|, |r_i - r_B(i)|)``, with ``r_X(k)`` the range along beam
+    ``k`` to the infinite line of the edge of ``X`` hit, is below
+    ``3 sqrt(sigma(r_i)**2 + sigma(r_j)**2)``;
+  - a **turn hidden by the noise** (only when the range noise is given): a corner
+    whose turn (angle between the two edges' directions along the outline, 0 for
+    straight on) is below ``3 sqrt(s_1**2 + s_2**2)``, where ``s_k`` is the standard
+    error of the direction of a line fitted to side ``k``'s true returns:
+    ``s_k**2 = mean(sigma_perp**2) / sum((t - mean(t))**2)``, ``t`` the positions of
+    the side's hit points along its edge and ``sigma_perp = sigma(r) cos(incidence)``
+    the range noise normal to the side (for ``n`` points evenly spread over a length
+    ``L``, ``s = sigma sqrt(12 / n) / L`` roughly).
+
+  ``sigma(r)`` is the 1-sigma of a measured range at ``r``
+  (:meth:`~scanlines.sim.noise.NoiseModel.effective_sigma`: Gaussian noise and
+  quantisation).
 
 The types (:class:`~scanlines.evaluation.truth.Truth`, its
 :class:`~scanlines.evaluation.truth.TrueSegments` and
@@ -38,6 +64,7 @@ against them; this module computes them.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -48,6 +75,10 @@ from scanlines.truth import BeamStatus, TrueSegments, Truth
 __all__ = ["compute_truth", "hesse_line", "sensor_to_world", "world_to_sensor"]
 
 _NONE, _BREAK, _CORNER = 0, 1, 2
+# Edge ends closer than this (metres) touch: a junction, not a depth step.
+_TOUCH = 1e-6
+# How many standard deviations an event must clear to count (steps and turns).
+HIDDEN_K = 3.0
 
 
 def _readonly(values: np.ndarray) -> np.ndarray:
@@ -216,6 +247,7 @@ def compute_truth(
     status: np.ndarray,
     *,
     full_circle: bool,
+    sigma: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> Truth:
     """Ground truth of one scan from its exact hits and beam statuses.
 
@@ -233,6 +265,11 @@ def compute_truth(
         :class:`BeamStatus` of each beam.
     full_circle:
         Whether the scan closes the circle.
+    sigma:
+        1-sigma of a measured range as a function of the range (the sensor's
+        :meth:`~scanlines.sim.noise.NoiseModel.effective_sigma`); with it, depth
+        steps and turns the noise hides are don't care (module docstring). ``None``:
+        only junctions are don't care.
 
     Returns
     -------
@@ -269,6 +306,21 @@ def compute_truth(
 
     bp_order = np.argsort(left[is_break], kind="stable")
     c_order = np.argsort(corner_beam, kind="stable")
+    incidence = _incidence(world, edge, theta + pose[2])
+    lines = _sensor_lines(world, pose)
+    gap = (right - left - 1) % n
+    bp_dont_care = _junction(world, edge[left[is_break]], edge[right[is_break]])
+    bp_dont_care &= gap[is_break] < 2
+    corner_dont_care = np.zeros(int(np.count_nonzero(is_corner)), bool)
+    if sigma is not None and len(returns):
+        bp_dont_care |= _hidden_step(
+            lines, edge, r, theta, left[is_break], right[is_break], gap[is_break], sigma
+        )
+        side_runs = _side_runs(len(event_pos), full_circle)[is_corner]
+        corner_dont_care = _hidden_turn(
+            world, pose, edge, hit_points, r, incidence, returns, run_starts, run_lengths,
+            side_runs, left[is_corner], right[is_corner], sigma,
+        )  # fmt: skip
     return Truth(
         n_beams=n,
         full_circle=bool(full_circle),
@@ -276,7 +328,7 @@ def compute_truth(
         edge=_readonly(edge.copy()),
         true_ranges=_readonly(r.copy()),
         hit_points=_readonly(hit_points),
-        incidence=_readonly(_incidence(world, edge, theta + pose[2])),
+        incidence=_readonly(incidence),
         on_curve=_readonly(world.surface_key(edge) >= world.n_edges),
         status=_readonly(status.copy()),
         breakpoints=_readonly(left[is_break][bp_order].astype(np.intp)),
@@ -285,4 +337,110 @@ def compute_truth(
         corner_points=_readonly(vertices[c_order]),
         corner_runs=_readonly(runs[is_corner][c_order].astype(np.intp)),
         segments=_true_segments(world, pose, returns, edge, hit_points, run_starts, run_lengths),
+        breakpoint_dont_care=_readonly(bp_dont_care[bp_order]),
+        corner_dont_care=_readonly(corner_dont_care[c_order]),
     )
+
+
+# --------------------------------------------------------------------------- don't care
+
+
+def _sensor_lines(world: World, pose: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
+    """Hesse form ``(rho, alpha)`` of every edge's line in the sensor frame."""
+    if world.n_edges == 0:
+        return np.empty(0), np.empty(0)
+    a = world_to_sensor(world.edge_start, pose)
+    b = world_to_sensor(world.edge_end, pose)
+    return hesse_line(a, b)
+
+
+def _junction(world: World, edge_a: np.ndarray, edge_b: np.ndarray) -> np.ndarray:
+    """Pairs of edges (of different shapes or surfaces) that touch end to end."""
+    out = np.zeros(len(edge_a), bool)
+    if len(edge_a) == 0:
+        return out
+    ends_a = (world.edge_start[edge_a], world.edge_end[edge_a])
+    ends_b = (world.edge_start[edge_b], world.edge_end[edge_b])
+    for p in ends_a:
+        for q in ends_b:
+            out |= np.hypot(*(p - q).T) <= _TOUCH
+    return out
+
+
+def _range_to_line(rho: np.ndarray, alpha: np.ndarray, bearing: np.ndarray) -> np.ndarray:
+    """Range along ``bearing`` to the line ``(rho, alpha)``; inf when the ray misses it."""
+    c = np.cos(bearing - alpha)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(c > 1e-9, rho / np.where(c > 1e-9, c, 1.0), np.inf)
+
+
+def _hidden_step(
+    lines: tuple[np.ndarray, np.ndarray],
+    edge: np.ndarray,
+    r: np.ndarray,
+    theta: np.ndarray,
+    left: np.ndarray,
+    right: np.ndarray,
+    gap: np.ndarray,
+    sigma: Callable[[np.ndarray], np.ndarray],
+) -> np.ndarray:
+    """Breakpoints whose depth step is below ``HIDDEN_K`` combined sigmas."""
+    if len(left) == 0:
+        return np.zeros(0, bool)
+    rho, alpha = lines
+    a, b = edge[left], edge[right]
+    a_at_right = _range_to_line(rho[a], alpha[a], theta[right])
+    b_at_left = _range_to_line(rho[b], alpha[b], theta[left])
+    with np.errstate(invalid="ignore"):
+        step = np.maximum(np.abs(r[right] - a_at_right), np.abs(r[left] - b_at_left))
+    combined = np.hypot(sigma(r[left]), sigma(r[right]))
+    return np.isfinite(step) & (gap < 2) & (step < HIDDEN_K * combined)
+
+
+def _side_runs(n_events: int, circle: bool) -> np.ndarray:
+    """``K x 2``: the run (index into the runs of :func:`_runs`) before and after each event."""
+    k = np.arange(n_events)
+    if circle:
+        return np.column_stack((k - 1, k)) % max(n_events, 1)
+    return np.column_stack((k, k + 1))
+
+
+def _direction_variance(points: np.ndarray, direction: np.ndarray, sigma_perp: np.ndarray) -> float:
+    """Variance of the direction of a line fitted to ``points`` (radians squared)."""
+    t = points @ direction
+    spread = float(((t - t.mean()) ** 2).sum()) if len(t) else 0.0
+    return float(np.mean(sigma_perp**2)) / spread if spread > 0 else math.inf
+
+
+def _hidden_turn(
+    world: World,
+    pose: tuple[float, float, float],
+    edge: np.ndarray,
+    hit_points: np.ndarray,
+    r: np.ndarray,
+    incidence: np.ndarray,
+    returns: np.ndarray,
+    run_starts: np.ndarray,
+    run_lengths: np.ndarray,
+    side_runs: np.ndarray,
+    left: np.ndarray,
+    right: np.ndarray,
+    sigma: Callable[[np.ndarray], np.ndarray],
+) -> np.ndarray:
+    """Corners whose turn is below ``HIDDEN_K`` times the sides' direction errors."""
+    out = np.zeros(len(left), bool)
+    m = len(returns)
+    d = world_to_sensor(world.edge_end, pose) - world_to_sensor(world.edge_start, pose)
+    for k in range(len(left)):
+        e_l, e_r = edge[left[k]], edge[right[k]]
+        first, second = (e_l, e_r) if world.next_edge[e_l] == e_r else (e_r, e_l)
+        u, v = d[first], d[second]
+        cos_turn = float(u @ v) / (math.hypot(*u) * math.hypot(*v))
+        turn = math.acos(min(1.0, max(-1.0, cos_turn)))
+        variance = 0.0
+        for run, e in zip(side_runs[k], (e_l, e_r), strict=True):
+            beams = returns[(run_starts[run] + np.arange(run_lengths[run])) % m]
+            perp = sigma(r[beams]) * np.cos(incidence[beams])
+            variance += _direction_variance(hit_points[beams], d[e] / math.hypot(*d[e]), perp)
+        out[k] = turn < HIDDEN_K * math.sqrt(variance)
+    return out

@@ -78,12 +78,17 @@ class Shape:
     kind:
         A free tag naming what the shape stands for (``"wall"``, ``"box"``, ...);
         the scene generator uses it to report which features a scene contains.
+    returns:
+        ``False`` for a surface that stops a beam but sends nothing back (a glass
+        pane, as the simulator models it): a beam hitting it has no return, and what
+        lies behind it is not seen.
     """
 
     vertices: np.ndarray
     closed: bool = False
     is_line: bool = True
     kind: str = "wall"
+    returns: bool = True
     _edges: tuple[np.ndarray, np.ndarray] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -118,14 +123,25 @@ class Shape:
         return self._edges[1]
 
 
-def wall(start: Sequence[float], end: Sequence[float], kind: str = "wall") -> Shape:
-    """A single straight wall of zero thickness from ``start`` to ``end``."""
-    return Shape(np.array([start, end], dtype=np.float64), closed=False, kind=kind)
+def wall(
+    start: Sequence[float], end: Sequence[float], kind: str = "wall", *, returns: bool = True
+) -> Shape:
+    """A single straight wall of zero thickness from ``start`` to ``end``.
+
+    ``returns=False`` makes it a glass pane: it stops beams and returns nothing.
+    """
+    return Shape(np.array([start, end], dtype=np.float64), closed=False, kind=kind, returns=returns)
 
 
-def polyline(points: Sequence[Sequence[float]] | np.ndarray, kind: str = "wall") -> Shape:
-    """An open chain of straight walls through ``points``."""
-    return Shape(np.asarray(points, dtype=np.float64), closed=False, kind=kind)
+def polyline(
+    points: Sequence[Sequence[float]] | np.ndarray, kind: str = "wall", *, is_line: bool = True
+) -> Shape:
+    """An open chain of straight walls through ``points``.
+
+    ``is_line=False`` for a curved wall drawn as a fine polyline (an arc): its edges are
+    not true segments and its vertices not true corners, like a round pillar's.
+    """
+    return Shape(np.asarray(points, dtype=np.float64), closed=False, is_line=is_line, kind=kind)
 
 
 def polygon(points: Sequence[Sequence[float]] | np.ndarray, kind: str = "polygon") -> Shape:
@@ -198,6 +214,8 @@ class World:
         Index of the shape each edge belongs to.
     edge_is_line:
         ``False`` for edges of curved shapes.
+    edge_returns:
+        ``False`` for edges of shapes that return nothing (glass).
     next_edge, prev_edge:
         Edge of the same shape that shares this edge's end (start) vertex, or ``-1``.
     """
@@ -205,6 +223,7 @@ class World:
     __slots__ = (
         "edge_end",
         "edge_is_line",
+        "edge_returns",
         "edge_shape",
         "edge_start",
         "next_edge",
@@ -227,6 +246,9 @@ class World:
         self.edge_shape = _readonly(np.repeat(np.arange(len(self.shapes)), counts).astype(np.intp))
         self.edge_is_line = _readonly(
             np.repeat([s.is_line for s in self.shapes], counts).astype(bool).reshape(total)
+        )
+        self.edge_returns = _readonly(
+            np.repeat([s.returns for s in self.shapes], counts).astype(bool).reshape(total)
         )
         nxt = np.full(total, -1, dtype=np.intp)
         prv = np.full(total, -1, dtype=np.intp)
