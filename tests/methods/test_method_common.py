@@ -367,7 +367,7 @@ def test_chi_square_merge_joins_two_halves_across_the_pi_wrap():
     assert alpha[0] > 3.1
     assert alpha[1] < -3.1
     sigma = np.full(returns.r.size, 0.01)
-    merged = merge_by_chi_square(returns, moments, a, b, np.zeros(2, np.int64), sigma, 3.0)
+    merged = merge_by_chi_square(returns, moments, a, b, np.zeros(2, np.int64), sigma, 3.0, False)
     assert (merged[0].tolist(), merged[1].tolist()) == ([0], [159])
 
 
@@ -375,7 +375,7 @@ def test_chi_square_merge_keeps_a_real_corner():
     x, y = l_shape()
     merged = merge_by_chi_square(
         returns_from_points(x, y), prefix_moments(x, y), np.array([0, 40]), np.array([39, 79]),
-        np.zeros(2, np.int64), np.full(x.size, 0.01), 3.0,
+        np.zeros(2, np.int64), np.full(x.size, 0.01), 3.0, False,
     )  # fmt: skip
     assert merged[0].tolist() == [0, 40]
 

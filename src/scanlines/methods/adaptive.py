@@ -138,7 +138,7 @@ from scanlines.steps.corners import (
 from scanlines.steps.denoise import DENOISE_CODES, denoise
 from scanlines.steps.events import junction_events, sorted_distinct
 from scanlines.steps.fit import FIT_CODES, FITS, PAPER, RunCost, inverse_square_sums, prefix_moments
-from scanlines.steps.merge import merge_by_criterion
+from scanlines.steps.merge import merge_by_chi_square, merge_by_criterion
 from scanlines.steps.noise import (
     NoiseLine,
     covariance_sigmas,
@@ -186,6 +186,12 @@ PARAMETERS: dict[str, Param] = {
         "refine", choice("refine", "shared"), "corner point: refine (best side) | shared"
     ),
     "merge": Param(True, choice(True, False), "merge collinear neighbours"),
+    "merge_chi2": Param(
+        9.21,
+        number(low=0.0),
+        "merge neighbours whose (rho, alpha) agree within this chi-square (2 dof; covariances "
+        "from the noise model and the residuals; 0: off)",
+    ),
     "max_residual": Param(
         0.1, optional(number(low=0.0, low_open=True)), "largest point-to-line distance (m)"
     ),
@@ -266,6 +272,7 @@ class AdaptiveSettings:
     fit: int
     shared_corner: bool
     merge: bool
+    merge_chi2: float
     max_residual: float
     corner_check: bool
     min_points: int
@@ -301,6 +308,7 @@ class AdaptiveSettings:
             fit=FIT_CODES[params["fit"]],
             shared_corner=params["corner_split"] == "shared",
             merge=params["merge"],
+            merge_chi2=params["merge_chi2"],
             max_residual=math.inf if params["max_residual"] is None else params["max_residual"],
             corner_check=params["corner_check"],
             min_points=params["min_points"],
@@ -375,7 +383,7 @@ def adaptive_scan(ranges, valid, cos, sin, step, full_circle, angle_min, noise, 
     rescale = from_scan and s.estimate_noise and s.criterion == BIC
     corners, scale = choose_corners(cost, start, end, scores, rescale, s, grid)
     unit = scale * scale if s.criterion == BIC else typical * typical
-    a, b, owner = segments(returns, cost, start, end, corners, unit, s)
+    a, b, owner = segments(returns, cost, start, end, corners, unit, s, noise)
     check_sigma = scale * typical if s.corner_check else -1.0
     corner_beams, jumps = junction_events(
         returns, s.fit, moments, a, b, owner, s.shared_corner, ring, check_sigma
@@ -463,7 +471,7 @@ def choose_corners(cost, start, end, scores, rescale, s, grid):
 
 
 @kernel
-def segments(returns, cost, start, end, corners, unit, s):
+def segments(returns, cost, start, end, corners, unit, s, noise):
     """Runs ``[a, b]`` (and cluster of each) after cutting, refining, merging and bounding."""
     x, y = returns.x, returns.y
     a, b, owner = cut_at(start, end, corners, s.shared_corner)
@@ -472,6 +480,11 @@ def segments(returns, cost, start, end, corners, unit, s):
     if s.merge:
         segment_cost = s.penalty * math.log(max(x.shape[0], 2)) * unit
         a, b, owner = merge_by_criterion(cost, a, b, owner, segment_cost)
+        if s.merge_chi2 > 0.0 and s.fit != PAPER:
+            sigma = return_sigmas(returns.r, noise)
+            a, b, owner = merge_by_chi_square(
+                returns, cost.moments, a, b, owner, sigma, s.merge_chi2, True
+            )
     if s.max_residual < math.inf:
         a, b, owner = split_by_residual(
             x, y, s.fit, cost.moments, a, b, owner, s.max_residual, s.min_points

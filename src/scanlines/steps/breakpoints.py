@@ -273,7 +273,8 @@ def continues_line_at(x, y, gap, d, p, tolerance):
     by :func:`extrapolation_growth` for the step ``d_p`` beyond), both neighbouring
     steps are longer than ``tolerance`` (shorter ones give a line direction that is
     mostly noise), and ``d_p`` is at most :data:`MAX_STEP_GROWTH` times the
-    shorter neighbouring step. Returns on a wall seen at grazing incidence are far
+    shorter neighbouring step plus ``tolerance`` (near grazing incidence, range noise
+    moves returns along the wall and makes neighbouring steps unequal). Returns on a wall seen at grazing incidence are far
     apart but collinear and evenly spaced, so a distance threshold alone cuts the
     wall; a depth jump or a spike is neither. Where one neighbouring pair does not
     exist (the scan's ends, two or more missing beams) or is itself a jump (more than
@@ -281,7 +282,7 @@ def continues_line_at(x, y, gap, d, p, tolerance):
     last returns of a wall that starts behind an edge or ends in open space.
     """
     n = x.shape[0]
-    jump = MAX_STEP_GROWTH * d[p]
+    jump = MAX_STEP_GROWTH * d[p] + tolerance
     has_before = p >= 1 and gap[p - 1] <= MAX_BRIDGED_GAP and d[p - 1] <= jump
     has_after = p + 2 < n and gap[p + 1] <= MAX_BRIDGED_GAP and d[p + 1] <= jump
     if not (has_before or has_after):
@@ -291,7 +292,7 @@ def continues_line_at(x, y, gap, d, p, tolerance):
         shorter = d[p - 1]
     if has_after:
         shorter = min(shorter, d[p + 1])
-    if not (d[p] <= MAX_STEP_GROWTH * shorter and shorter > tolerance):
+    if not (d[p] <= MAX_STEP_GROWTH * shorter + tolerance and shorter > tolerance):
         return False
     if has_before:
         before = distance_to_line(x[p - 1], y[p - 1], x[p], y[p], x[p + 1], y[p + 1])

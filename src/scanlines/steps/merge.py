@@ -98,17 +98,18 @@ def pair_chi_squares(rho, alpha, covariance, first, second):
 
 
 @kernel
-def merge_by_chi_square(returns, moments, a, b, group, sigma, threshold):
+def merge_by_chi_square(returns, moments, a, b, group, sigma, threshold, inflate):
     """Merge neighbouring runs of one group while their lines pass the chi-square test.
 
     The pair with the smallest chi-square below ``threshold`` is merged (the runs
     and everything between them), refitted, and the test repeated; ``sigma`` is the
-    range noise of each return. Returns new ``a, b, group`` arrays.
+    range noise of each return, ``inflate`` as :func:`~scanlines.steps.fit.run_covariances`
+    takes it. Returns new ``a, b, group`` arrays.
     """
     a, b, group = a.copy(), b.copy(), group.copy()
     m = a.shape[0]
     rho, alpha, _ = fit_many(np.int64(TLS), moments, a, b)
-    covariance = run_covariances(returns, rho, alpha, a, b, sigma, False)
+    covariance = run_covariances(returns, rho, alpha, a, b, sigma, inflate)
     while m >= 2:
         best, best_value = -1, math.inf
         for k in range(m - 1):
@@ -131,6 +132,6 @@ def merge_by_chi_square(returns, moments, a, b, group, sigma, threshold):
         rho[best], alpha[best], _ = tls_run(moments, a[best], b[best])
         one_a, one_b = np.full(1, a[best]), np.full(1, b[best])
         one_rho, one_alpha = np.full(1, rho[best]), np.full(1, alpha[best])
-        one = run_covariances(returns, one_rho, one_alpha, one_a, one_b, sigma, False)
+        one = run_covariances(returns, one_rho, one_alpha, one_a, one_b, sigma, inflate)
         covariance[best] = one[0]
     return a[:m], b[:m], group[:m]

@@ -53,6 +53,9 @@ MIN_SAMPLES_PER_BIN = 40
 
 MAX_BINS = 4
 
+SLOPE_SIGNIFICANCE = 2.0
+"""Standard errors a noise slope must stand above zero to count (:func:`noise_line_of`)."""
+
 MIN_SAMPLES = 5
 """Fewest samples :func:`noise_line_of` measures a noise from."""
 
@@ -162,8 +165,10 @@ def noise_line_of(sample, at):
     The samples are cut into up to :data:`MAX_BINS` bins of equal count by range (at
     least :data:`MIN_SAMPLES_PER_BIN` each, or one bin of fewer); each bin gives a
     robust sigma (median absolute sample / 0.6745) at its median range, and a
-    least-squares line through those points gives the model (its slope not below
-    zero; one bin: a constant). Fewer than :data:`MIN_SAMPLES` samples: NaN (unknown).
+    least-squares line through those points, weighted by the inverse variance of each
+    bin's sigma, gives the model. A slope less than :data:`SLOPE_SIGNIFICANCE` standard
+    errors above zero gives a constant instead (clamping a noisy slope at zero would
+    bias the noise far away upwards). Fewer than :data:`MIN_SAMPLES` samples: NaN.
     """
     n = sample.shape[0]
     bins = min(MAX_BINS, n // MIN_SAMPLES_PER_BIN)
@@ -174,15 +179,21 @@ def noise_line_of(sample, at):
     order = np.argsort(at, kind="mergesort")
     sigma = np.empty(bins)
     where = np.empty(bins)
+    weight = np.empty(bins)
     for k in range(bins):
         part = order[k * n // bins : (k + 1) * n // bins]
         sigma[k] = np.median(sample[part]) / 0.6745
         where[k] = np.median(at[part])
-    mean_r, mean_s = np.mean(where), np.mean(sigma)
-    spread = np.sum((where - mean_r) ** 2)
+        # the median's standard error is about 1.17 sigma / sqrt(count) (Gaussian samples)
+        weight[k] = part.shape[0] / max(1.17 * sigma[k], MIN_NOISE_SIGMA) ** 2
+    total = np.sum(weight)
+    mean_r, mean_s = np.sum(weight * where) / total, np.sum(weight * sigma) / total
+    spread = np.sum(weight * (where - mean_r) ** 2)
     slope = 0.0
     if bins > 1 and spread > 0.0:
-        slope = max(np.sum((where - mean_r) * (sigma - mean_s)) / spread, 0.0)
+        slope = np.sum(weight * (where - mean_r) * (sigma - mean_s)) / spread
+        if slope < SLOPE_SIGNIFICANCE / math.sqrt(spread):
+            slope = 0.0  # not told apart from constant noise: a constant, unbiased
     return NoiseLine(max(mean_s - slope * mean_r, 0.0), slope)
 
 
