@@ -81,7 +81,8 @@ def test_vertical_wall_paper_fit_has_no_slope():
     wall as one line, where the default does."""
     y = np.linspace(-3.0, 3.0, 50)
     rho, alpha, _ = paper_run(prefix_moments(np.full(50, 3.0), y), 0, 49)
-    assert math.isnan(rho) and math.isnan(alpha)
+    assert math.isnan(rho)
+    assert math.isnan(alpha)
     result = extract(vertical_wall_scan(0.0), fit="paper")
     assert len(result.segments) != 1 or math.isnan(result.segments[0].alpha)
     assert len(extract(vertical_wall_scan(0.0)).segments) == 1

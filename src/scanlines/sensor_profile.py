@@ -17,10 +17,10 @@ one profile for the whole log (given, or estimated from its first scans) and rec
 it in the output's metadata; an :class:`~scanlines.Extractor` without one measures the
 noise of each scan from that scan alone.
 
-How the noise is measured: each return with three neighbours on each side on one
-surface gives the difference between its range and a parabola fitted to the seven
-ranges over the beam index (:func:`scanlines.steps.noise.local_residuals`). The
-samples are cut into range bins of equal count; a bin's sigma is the median absolute sample over 0.6745, its
+How the noise is measured: each return with three neighbours on each side on one surface
+gives the difference between its range and a parabola fitted to the seven ranges over
+the beam index (:func:`scanlines.steps.noise.local_residuals`). The samples are cut into
+range bins of equal count; a bin's sigma is the median absolute sample over 0.6745, its
 uncertainty the standard deviation of that value over a bootstrap of whole scans. The
 noise line is a weighted least-squares fit through the bins (slope not below zero).
 """

@@ -272,14 +272,15 @@ def continues_line_at(x, y, gap, d, p, tolerance):
     within ``tolerance`` of the line through ``P_{p+1}, P_{p+2}`` (each tolerance grown
     by :func:`extrapolation_growth` for the step ``d_p`` beyond), both neighbouring
     steps are longer than ``tolerance`` (shorter ones give a line direction that is
-    mostly noise), and ``d_p`` is at most :data:`MAX_STEP_GROWTH` times the
-    shorter neighbouring step plus ``tolerance`` (near grazing incidence, range noise
-    moves returns along the wall and makes neighbouring steps unequal). Returns on a wall seen at grazing incidence are far
-    apart but collinear and evenly spaced, so a distance threshold alone cuts the
-    wall; a depth jump or a spike is neither. Where one neighbouring pair does not
-    exist (the scan's ends, two or more missing beams) or is itself a jump (more than
-    :data:`MAX_STEP_GROWTH` times ``d_p``), the other decides alone: the first and
-    last returns of a wall that starts behind an edge or ends in open space.
+    mostly noise), and ``d_p`` is at most :data:`MAX_STEP_GROWTH` times the shorter
+    neighbouring step plus ``tolerance`` (near grazing incidence, range noise moves
+    returns along the wall and makes neighbouring steps unequal). Returns on a wall seen
+    at grazing incidence are far apart but collinear and evenly spaced, so a distance
+    threshold alone cuts the wall; a depth jump or a spike is neither. Where one
+    neighbouring pair does not exist (the scan's ends, two or more missing beams) or is
+    itself a jump (more than :data:`MAX_STEP_GROWTH` times ``d_p``), the other decides
+    alone: the first and last returns of a wall that starts behind an edge or ends in
+    open space.
     """
     n = x.shape[0]
     jump = MAX_STEP_GROWTH * d[p] + tolerance
