@@ -62,7 +62,7 @@ def main() -> None:
         returns, n_beams, step, moments, start, end, window, settings.corner_score
     )
     corners, scale = ad.choose_corners(cost, start, end, scores, True, s, grid)
-    a, b, owner = ad.segments(returns, cost, start, end, corners, scale * scale, s)
+    a, b, owner = ad.segments(returns, cost, start, end, corners, scale * scale, s, noise)
     sigmas = return_sigmas(returns.r, noise)
     events, scan_shape = (breakpoints, corners, breakpoints), (n_beams, False)
     cut = cut_at(start, end, corners, False)
@@ -104,7 +104,7 @@ def main() -> None:
             cost, start, end, scores, True, s, grid
         ),
         "cut, refine, merge, split": lambda: ad.segments(
-            returns, cost, start, end, corners, scale * scale, s
+            returns, cost, start, end, corners, scale * scale, s, noise
         ),
         "  of which: refine cuts": lambda: refine_cuts(cost, *cut),
         "corner beams": lambda: junction_events(

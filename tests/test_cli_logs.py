@@ -94,8 +94,20 @@ def test_run_csv_in_world_frame(tmp_path):
         "alpha",
         "n_points",
         "rms",
+        "var_rho",
+        "cov_rho_alpha",
+        "var_alpha",
+        "start_kind",
+        "end_kind",
     ]
     assert {int(r[0]) for r in rows[1:]} == set(range(5))
+
+
+def _quiet_profile(tmp_path):
+    """A sensor profile file, so that `run` measures none (and says nothing about it)."""
+    from scanlines.sensor_profile import SensorProfile
+
+    return SensorProfile(noise_sigma0=0.01, noise_per_metre=0.0).save(tmp_path / "p.json")
 
 
 def test_world_frame_without_poses_is_an_input_error(tmp_path):
@@ -112,6 +124,8 @@ def test_world_frame_without_poses_is_an_input_error(tmp_path):
         "world",
         "--out",
         tmp_path / "x.jsonl",
+        "--sensor-profile",
+        _quiet_profile(tmp_path),
     )
     one_error_line(out, "pose")
     assert not (tmp_path / "x.jsonl").exists()

@@ -95,11 +95,11 @@ def test_every_point_of_a_segment_is_near_its_line(scan):
     points = scan.points
     for k, segment in enumerate(result.segments):
         beams = assigned_beams(result, k, len(scan))
-        beams = beams[scan.valid[beams]]
+        # the extractor sees the ranges at float32 precision (6e-8 relative; 1e-48 is 0)
+        beams = beams[scan.valid[beams] & (scan.ranges[beams].astype(np.float32) > 0)]
         x, y = points[beams, 0], points[beams, 1]
         distance = np.abs(x * math.cos(segment.alpha) + y * math.sin(segment.alpha) - segment.rho)
-        # the extractor sees the ranges at float32 precision (1e-7 relative)
-        assert np.all(distance <= bound + 1e-5)
+        assert np.all(distance <= bound + 1e-7 * scan.ranges[beams] + 1e-9)
         assert segment.rho >= 0.0
         assert -math.pi < segment.alpha <= math.pi
 
@@ -117,5 +117,5 @@ def test_rotating_the_scan_rotates_every_line(scan, turn):
     assert a.breakpoints.tolist() == b.breakpoints.tolist()
     np.testing.assert_allclose(a.lines[:, 0], b.lines[:, 0], atol=1e-9)
     turned = np.angle(np.exp(1j * (b.lines[:, 1] - a.lines[:, 1] - turn)))
-    # angle_min is taken at float32 precision: the turn seen is off by up to 1e-7 rad
-    np.testing.assert_allclose(turned, 0.0, atol=2e-7)
+    # angle_min is taken at float32 precision: the turn seen is off by up to 3e-7 rad
+    np.testing.assert_allclose(turned, 0.0, atol=1e-6)

@@ -250,11 +250,15 @@ def _profile_for_run(log, options, selection, given):
     """The sensor profile of a run: the file given, else measured from the log (said on
     stderr)."""
     from scanlines.runner import log_profile
-    from scanlines.sensor_profile import read_profile
+    from scanlines.sensor_profile import ProfileError, read_profile
 
     if given is not None:
         return read_profile(given)
-    profile = log_profile(log, options, selection)
+    try:
+        profile = log_profile(log, options, selection)
+    except ProfileError as error:
+        typer.echo(f"sensor profile: {error}; each scan's noise is measured from itself", err=True)
+        return None
     typer.echo(
         f"sensor profile: measured from the first {profile.scans} scans of {log.name} "
         f"(noise {1000 * profile.noise_sigma0:.1f} mm + {100 * profile.noise_per_metre:.2f} % "

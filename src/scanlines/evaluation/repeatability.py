@@ -92,7 +92,7 @@ from scanlines.evaluation.report import number, write_csv
 from scanlines.evaluation.specs import MethodSpec, parse_specs
 from scanlines.extraction import END_X, END_Y, START_X, START_Y
 from scanlines.json_values import jsonable
-from scanlines.sensor_profile import SensorProfile, estimate_profile
+from scanlines.sensor_profile import ProfileError, SensorProfile, estimate_profile
 
 __all__ = [
     "TABLE_COLUMNS",
@@ -657,7 +657,7 @@ def repeatability_of_scans(
     tol = tol or RepeatTolerances()
     settings = settings or IcpSettings()
     scans = list(scans)
-    profile = sensor_profile or estimate_profile((scan for _, scan in scans), source=log)
+    profile = sensor_profile or _log_profile(scans, log)
     n_candidates = sum(
         1
         for a in range(len(scans))
@@ -676,6 +676,15 @@ def repeatability_of_scans(
     pairs, source = register_pairs(scans, tol, settings, on_pair=lambda _done, _total: tick())
     methods = tuple(_score_method(spec, scans, pairs, tol, tick, profile) for spec in parsed)
     return RepeatabilityResult(log, len(scans), source, pairs, methods, tol, settings)
+
+
+def _log_profile(scans: Sequence[tuple[int, Scan]], log: str) -> SensorProfile | None:
+    """The profile ``scanlines run`` would measure; ``None`` (each scan its own) when the
+    scans hold too few returns on surfaces."""
+    try:
+        return estimate_profile((scan for _, scan in scans), source=log)
+    except ProfileError:
+        return None
 
 
 def repeatability(
