@@ -384,7 +384,6 @@ def adaptive_scan(ranges, valid, cos, sin, step, full_circle, angle_min, noise, 
         returns = turned(returns, angle_min)
         angle_min = 0.0
     gap = beam_gaps(returns.index, n_beams)
-    from_scan = noise.sigma0 != noise.sigma0
     noise = scan_noise_model(s, noise, returns, gap)
     typical = noise_at(noise, np.median(returns.r))
     rule = breakpoint_rule(s, noise, step)
@@ -403,7 +402,7 @@ def adaptive_scan(ranges, valid, cos, sin, step, full_circle, angle_min, noise, 
     moments = prefix_moments(returns.x, returns.y)
     cost = run_cost_of(s, moments, returns, noise)
     scores = corner_scores(returns, n_beams, step, moments, start, end, window, s.corner_score)
-    rescale = from_scan and s.estimate_noise and s.criterion == BIC
+    rescale = s.estimate_noise and s.criterion == BIC
     corners, scale = choose_corners(cost, start, end, scores, rescale, s, grid)
     unit = scale * scale if s.criterion == BIC else typical * typical
     a, b, owner = segments(returns, cost, start, end, corners, unit, s, noise)
