@@ -201,3 +201,19 @@ def test_segment_ends_say_what_ends_them():
     assert kinds[1] == ("gap", "occluded")
     assert kinds[2] == ("jump", "edge")
     assert set(END_KINDS) >= {k for pair in kinds for k in pair}
+
+
+def test_extractions_and_extractors_with_a_profile_pickle():
+    import pickle
+
+    scans = _scans("intel")[:5]
+    extractor = Extractor(sensor_profile=estimate_profile(scans))
+    again = pickle.loads(pickle.dumps(extractor))
+    assert again.sensor_profile == extractor.sensor_profile
+    for scan in scans:
+        a = extractor(scan)
+        b = pickle.loads(pickle.dumps(a))
+        assert np.array_equal(b.lines, a.lines)
+        assert np.array_equal(b.end_kinds, a.end_kinds)
+        assert np.array_equal(again(scan).lines, a.lines)
+        assert dict(b.params) == dict(a.params)

@@ -176,6 +176,11 @@ class Extraction:
     def __len__(self) -> int:
         return len(self.first)
 
+    def __reduce__(self) -> tuple[Any, ...]:
+        # Pickle by the constructor's arguments (process pools); Segment views are rebuilt.
+        arrays = {name: getattr(self, name) for name in _ARRAYS}
+        return _rebuild_extraction, (arrays, self.method, dict(self.params))
+
     def __repr__(self) -> str:
         return (
             f"Extraction(method={self.method!r}, segments={len(self)}, "
@@ -208,6 +213,18 @@ class Extraction:
             "corners": self.corners.tolist(),
             "outliers": self.outliers.tolist(),
         }
+
+
+_ARRAYS = (
+    *("first", "last", "n_points", "lines", "covariances"),
+    *("breakpoints", "corners", "outliers", "end_kinds"),
+)
+
+
+def _rebuild_extraction(
+    arrays: dict[str, np.ndarray], method: str, params: dict[str, Any]
+) -> Extraction:
+    return Extraction(**arrays, method=method, params=params)
 
 
 def _frozen(values: np.ndarray, dtype: type) -> np.ndarray:
