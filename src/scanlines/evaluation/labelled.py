@@ -49,8 +49,9 @@ class Fragmentation:
 
 
 def fragmentation(scans: Sequence[Scan], extractions: Sequence[Extraction]) -> Fragmentation:
-    """Segments per scan, median length (m), share under :data:`SHORT_RETURNS` returns,
-    and the share of valid returns on a segment."""
+    """Segments per scan, median length (m; segments with a line), share under
+    :data:`SHORT_RETURNS` returns, and the share of valid returns on a segment (each
+    return counted once, outliers not)."""
     lengths, counts = [], []
     covered = valid = 0
     for scan, extraction in zip(scans, extractions, strict=True):
@@ -59,15 +60,30 @@ def fragmentation(scans: Sequence[Scan], extractions: Sequence[Extraction]) -> F
             np.hypot(lines[:, END_X] - lines[:, START_X], lines[:, END_Y] - lines[:, START_Y])
         )
         counts.append(extraction.n_points)
-        covered += int(extraction.n_points.sum())
+        covered += int(np.count_nonzero(_on_segments(scan, extraction)))
         valid += int(scan.valid.sum())
     length, count = np.concatenate(lengths), np.concatenate(counts)
+    length = length[np.isfinite(length)]
     return Fragmentation(
-        segments_per_scan=length.size / max(len(scans), 1),
+        segments_per_scan=count.size / max(len(scans), 1),
         median_length=float(np.median(length)) if length.size else math.nan,
         short_share=float(np.mean(count < SHORT_RETURNS)) if count.size else math.nan,
         coverage=covered / valid if valid else math.nan,
     )
+
+
+def _on_segments(scan: Scan, extraction: Extraction) -> np.ndarray:
+    """Mask of the valid returns inside some segment's beam span (not outliers)."""
+    n = len(scan)
+    on = np.zeros(n, dtype=bool)
+    for first, last in zip(extraction.first, extraction.last, strict=True):
+        if first <= last:
+            on[first : last + 1] = True
+        else:  # across the seam of a full circle
+            on[first:] = True
+            on[: last + 1] = True
+    on[extraction.outliers] = False
+    return on & scan.valid
 
 
 @dataclass(frozen=True)
