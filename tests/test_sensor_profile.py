@@ -185,6 +185,19 @@ def test_calibrate_writes_a_profile_and_run_uses_it(tmp_path):
     assert result.exit_code == 0, result.output
     header = out.read_text().splitlines()[0].split(",")
     assert header[-5:] == ["var_rho", "cov_rho_alpha", "var_alpha", "start_kind", "end_kind"]
+    npz = tmp_path / "one.npz"
+    scan = _scans("urg")[0]
+    np.savez(
+        npz, ranges=scan.ranges, angle_min=scan.angle_min, angle_increment=scan.angle_increment
+    )
+    result = runner.invoke(
+        app, ["extract", str(npz), "--sensor-profile", str(profile_path), "--json"]
+    )
+    assert result.exit_code == 0, result.output
+    expected = Extractor(sensor_profile=profile)(
+        Scan(scan.ranges, scan.angle_min, scan.angle_increment)
+    )
+    assert [s["first"] for s in json.loads(result.output)["segments"]] == expected.first.tolist()
     result = runner.invoke(app, ["run", log, "--scans", ":5", "--out", str(tmp_path / "y.jsonl")])
     assert result.exit_code == 0
     assert "sensor profile: measured from the first 5 scans" in result.output

@@ -39,10 +39,17 @@ def extract_command(
     ] = None,
     plot: Annotated[Path | None, typer.Option(help="Write a figure (PNG, PDF, SVG).")] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of tables.")] = False,
+    sensor_profile: Annotated[
+        Path | None,
+        typer.Option(
+            "--sensor-profile",
+            help="Sensor profile from `scanlines calibrate` (default: the scan's own noise).",
+        ),
+    ] = None,
 ) -> None:
     from scanlines.extractor import Extractor
 
-    extractor = Extractor(method, preset, **parse_params(param))
+    extractor = Extractor(method, preset, sensor_profile=sensor_profile, **parse_params(param))
     note_first_compilation()
     scan = load_one_scan(file, angle_min, angle_increment, range_max)
     result = extractor(scan)
