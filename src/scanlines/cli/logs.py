@@ -378,7 +378,7 @@ def demo_command(
     from scanlines.viz.scans import plot_grid
 
     log = sample("intel")
-    extractor = Extractor()
+    extractor = Extractor(sensor_profile=_profile_for_run(log, {}, slice(None), None))
     note_first_compilation()
     output.mkdir(parents=True, exist_ok=True)
     jsonl = output / "intel.jsonl"
