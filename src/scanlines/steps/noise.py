@@ -19,6 +19,7 @@ import numpy as np
 
 from scanlines._jit import kernel
 from scanlines.steps.fit import run_cost
+from scanlines.steps.returns import MAX_BRIDGED_GAP
 
 __all__ = [
     "MIN_NOISE_SIGMA",
@@ -44,9 +45,9 @@ the criterion divide by zero."""
 
 NOISE_HALF_WINDOW = 3
 """Neighbours on each side of a return in the fit its residual is measured from.
-Seven points average out sensors that repeat one range over two or three beams (the
-URG-04LX logs of the Mines robot), which makes the second difference of ranges, or
-the distance from the chord of the two neighbours, read zero."""
+Seven points span more than one reading of sensors that repeat a range over two or
+three beams (the URG-04LX logs of the Mines robot), where the second difference of
+ranges, or the distance from the chord of the two neighbours, reads zero."""
 
 MIN_SAMPLES_PER_BIN = 40
 """Fewest samples in a range bin of :func:`noise_line_of`."""
@@ -110,7 +111,7 @@ def local_residuals(returns, gap):
     stretch_start = np.empty(n, dtype=np.int64)
     stretch_start[0] = 0
     for i in range(1, n):
-        stretch_start[i] = stretch_start[i - 1] if gap[i - 1] <= 2 else i
+        stretch_start[i] = stretch_start[i - 1] if gap[i - 1] <= MAX_BRIDGED_GAP else i
     for i in range(h, n - h):
         if stretch_start[i + h] > i - h or r[i] <= 0.0:
             continue
