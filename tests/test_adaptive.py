@@ -319,7 +319,7 @@ def test_range_noise_model_keeps_far_noisy_walls_whole():
     assert range_model < 0.8 * constant, (range_model, constant)
 
 
-def test_range_noise_model_changes_nothing_without_noise_growth():
+def test_constant_noise_model_changes_little_without_noise_growth():
     scan = scan_of(square_room(), fov_deg=270, step_deg=0.5, sigma=0.01, seed=2)
     a, b = extract(scan, noise_model="constant"), extract(scan)
     assert a.breakpoints.tolist() == b.breakpoints.tolist()

@@ -262,6 +262,11 @@ class TestRos2Output:
             ["/scan", "/scanlines/markers", "/tf", "/scan", "/scanlines/markers"]
             + ["/scanlines/features"] * 2
         )
+        features = [json.loads(m.data) for t, _, m in messages if t == "/scanlines/features"]
+        assert [f["scan"] for f in features] == [7, 25]
+        first = features[0]["segments"][0]
+        assert first["covariance"] == extraction.covariances[0].tolist()
+        assert (first["start_kind"], first["end_kind"]) == ("open", "open")
         arrays = [m for t, _, m in messages if t == "/scanlines/markers"]
         first, second = arrays
         assert [(m.ns, m.type, m.action) for m in first.markers] == [

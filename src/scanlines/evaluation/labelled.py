@@ -141,26 +141,19 @@ def evaluate_labelled(
     """Score ``specs`` on the hand-labelled frames of ``samples`` (default: every one),
     with ``sensor_profile`` (``None``: one measured from each excerpt)."""
     from scanlines.data import sample
-    from scanlines.data.labels import label_set, labelled_samples
+    from scanlines.data.labels import label_set, labelled_samples, reader_options
     from scanlines.io import open_log
 
     result = LabelledResult(tolerance=tolerance)
     specs = parse_specs(specs)
     for name in samples or labelled_samples():
         labels = label_set(name)
-        options = _reader_options(name, labels.angle_convention)
+        options = reader_options(name, labels.angle_convention)
         scans = list(open_log(sample(name), **options))
         profile = sensor_profile or estimate_profile(scans, source=sample(name).name)
         for spec in specs:
             result.rows_.append(_score(name, spec, scans, labels.frames, profile, tolerance))
     return result
-
-
-def _reader_options(name: str, convention: str) -> dict[str, Any]:
-    from scanlines.data import SAMPLES
-
-    carmen = SAMPLES[name].endswith((".clf.gz", ".log.gz"))
-    return {"angle_convention": convention} if carmen else {}
 
 
 def _score(
