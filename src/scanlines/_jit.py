@@ -8,9 +8,9 @@ sources' fingerprint; without it (or with ``NUMBA_DISABLE_JIT=1``) the same
 functions run as ordinary Python: identical results, far slower.
 
 The cache lives in a directory named by a hash of the kernels' sources: numba
-checks only the file of the function it compiles, while a kernel inlines
+checks only the file of the function it compiles, while a kernel links
 kernels of other files, so a changed step must invalidate every kernel. It is
-``$NUMBA_CACHE_DIR/scanlines-<hash>`` if that variable is set, else under
+``$NUMBA_CACHE_DIR/numba-<hash>`` if that variable is set, else under
 ``$XDG_CACHE_HOME`` (default ``~/.cache``).
 """
 
@@ -18,7 +18,10 @@ from __future__ import annotations
 
 import hashlib
 import os
+import threading
+import time
 from collections.abc import Callable
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -29,7 +32,7 @@ try:
 except ImportError:  # pragma: no cover - exercised only without numba
     numba = None
 
-__all__ = ["COMPILED", "cache_is_cold", "kernel"]
+__all__ = ["COMPILED", "kernel", "kernel_seconds", "watch_compilation"]
 
 COMPILED = numba is not None and not numba.config.DISABLE_JIT
 
@@ -55,15 +58,97 @@ def _cache_dir() -> Path:
 
 
 if numba is not None:
+    import numba.core.event
+
     numba.config.CACHE_DIR = str(_cache_dir())
 
+    class _ClockListener(numba.core.event.Listener):
+        def on_start(self, event: Any) -> None:
+            _CLOCK.on_start(event)
 
-def cache_is_cold() -> bool:
-    """True when the kernels of this version have not been compiled on this machine yet."""
-    return COMPILED and not any(Path(numba.config.CACHE_DIR).rglob("*.nbi"))
+        def on_end(self, event: Any) -> None:
+            _CLOCK.on_end(event)
+
+    class _CompileListener(numba.core.event.Listener):
+        def __init__(self, on_compile: Callable[[str], None], on_done: Callable[[], None]):
+            self.on_compile, self.on_done = on_compile, on_done
+            self.depth = 0
+
+        def on_start(self, event: Any) -> None:
+            self.depth += 1
+            self.on_compile(event.data["dispatcher"].py_func.__name__)
+
+        def on_end(self, event: Any) -> None:
+            self.depth -= 1
+            if self.depth == 0:
+                self.on_done()
+
+    numba.core.event.register("numba:compiler_lock", _ClockListener())
 
 
-def kernel(function: F | None = None, *, inline: bool = False) -> Any:
+class _KernelClock:
+    """Seconds this process spent compiling kernels or loading them from the cache.
+
+    Numba takes its compiler lock around both (nested, per thread); the outermost
+    acquisition of each thread is timed, waiting for the lock included, so that a
+    thread whose call waited on another thread's compilation counts it too.
+    """
+
+    def __init__(self) -> None:
+        self.seconds = 0.0  # summed over threads
+        self.wall_seconds = 0.0  # while any thread compiles or waits
+        self._threads = 0
+        self._wall_started = 0.0
+        self._lock = threading.Lock()
+        self._local = threading.local()
+
+    def on_start(self, _event: Any) -> None:
+        depth = getattr(self._local, "depth", 0)
+        if depth == 0:
+            now = self._local.started = time.perf_counter()
+            with self._lock:
+                if self._threads == 0:
+                    self._wall_started = now
+                self._threads += 1
+        self._local.depth = depth + 1
+
+    def on_end(self, _event: Any) -> None:
+        self._local.depth -= 1
+        if self._local.depth == 0:
+            now = time.perf_counter()
+            with self._lock:
+                self.seconds += now - self._local.started
+                self._threads -= 1
+                if self._threads == 0:
+                    self.wall_seconds += now - self._wall_started
+
+
+_CLOCK = _KernelClock()
+
+
+def kernel_seconds(wall: bool = False) -> float:
+    """Seconds this process has spent compiling kernels or loading them from the cache:
+    summed over threads, or with ``wall`` the wall time during which any thread did.
+    Take the difference around a call to leave them out of its timing."""
+    return _CLOCK.wall_seconds if wall else _CLOCK.seconds
+
+
+@contextmanager
+def watch_compilation(on_compile: Callable[[str], None], on_done: Callable[[], None]):
+    """Call ``on_compile(name)`` whenever a kernel starts compiling (not on cache loads),
+    and ``on_done()`` when the outermost compilation in progress ends."""
+    if numba is None or not COMPILED:
+        yield
+        return
+    listener = _CompileListener(on_compile, on_done)
+    numba.core.event.register("numba:compile", listener)
+    try:
+        yield
+    finally:
+        numba.core.event.unregister("numba:compile", listener)
+
+
+def kernel(function: F) -> F:
     """Compile ``function`` with numba (cached, no Python objects), if available.
 
     Every function so decorated is a *kernel*: it takes arrays, scalars and the
@@ -75,14 +160,11 @@ def kernel(function: F | None = None, *, inline: bool = False) -> Any:
     ``np.int64(CONSTANT)`` where other callers pass a variable, or the kernel (and all
     it calls) is compiled twice.
 
-    ``inline=True`` (as ``@kernel(inline=True)``) is for the small scalar helpers of
-    the inner loops (a line fit from running sums, a threshold): numba calls
-    between separately compiled functions are not inlined by LLVM, and such a
-    call costs more than the helper's arithmetic.
+    Small scalar helpers are kernels like any other, not inlined by numba
+    (``inline="always"`` types a helper again inside every caller: 20 % more compile
+    time for the adaptive method, 104 s against 84 s cold, and no measurable speed-up,
+    since LLVM inlines the linked helpers anyway).
     """
-    if function is None:
-        return lambda f: kernel(f, inline=inline)
     if numba is None:  # pragma: no cover
         return function
-    options = {"inline": "always"} if inline else {}
-    return numba.njit(cache=True, nogil=True, error_model="numpy", **options)(function)
+    return numba.njit(cache=True, nogil=True, error_model="numpy")(function)

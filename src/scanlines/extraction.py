@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any
@@ -12,7 +12,7 @@ import numpy as np
 
 from scanlines.json_values import jsonable
 
-__all__ = ["END_KINDS", "Extraction", "Segment"]
+__all__ = ["END_KINDS", "Extraction", "ExtractionTable", "Segment"]
 
 # Columns of Extraction.lines, one row per segment.
 RHO, ALPHA, START_X, START_Y, END_X, END_Y, RMS = range(7)
@@ -150,6 +150,16 @@ class Extraction:
         )
         self._segments: tuple[Segment, ...] | None = None
 
+    @classmethod
+    def _of_frozen(cls, arrays: Sequence[np.ndarray], method: str, params: MappingProxyType):
+        """An extraction of arrays already read-only and of the right dtypes and shapes
+        (in the order of ``_ARRAYS``): no copies, no checks (:class:`ExtractionTable`)."""
+        self = cls.__new__(cls)
+        for name, values in zip(_ARRAYS, arrays, strict=True):
+            object.__setattr__(self, name, values)
+        self.method, self.params, self._segments = method, params, None
+        return self
+
     @property
     def segments(self) -> tuple[Segment, ...]:
         """Segments in beam-index order (``segments[k].last <= segments[k+1].first``)."""
@@ -232,3 +242,126 @@ def _frozen(values: np.ndarray, dtype: type) -> np.ndarray:
     if arr.flags.writeable:
         arr.setflags(write=False)
     return arr
+
+
+SEGMENT_COLUMNS = ("first", "last", "n_points", "lines", "covariances", "end_kinds")
+"""The per-segment arrays of :class:`Extraction` and :class:`ExtractionTable`."""
+EVENT_COLUMNS = ("breakpoints", "corners", "outliers")
+"""The per-scan event arrays (beam indices)."""
+_DTYPES = {
+    "first": np.intp, "last": np.intp, "n_points": np.intp, "lines": np.float64,
+    "covariances": np.float64, "end_kinds": np.int8,
+    "breakpoints": np.intp, "corners": np.intp, "outliers": np.intp,
+}  # fmt: skip
+_ROW_SHAPES = {"lines": (N_LINE_COLUMNS,), "covariances": (2, 2), "end_kinds": (2,)}
+
+
+class ExtractionTable(Sequence[Extraction]):
+    """Features of a stack of scans as one flat table; ``table[i]`` is scan ``i``'s
+    :class:`Extraction` (a view, built on access).
+
+    Attributes
+    ----------
+    first, last, n_points, lines, covariances, end_kinds:
+        The segments of every scan, scan after scan (the columns of :class:`Extraction`).
+    segment_offsets:
+        ``scans + 1`` indices: scan ``i``'s segments are rows
+        ``segment_offsets[i]:segment_offsets[i + 1]``.
+    breakpoints, corners, outliers:
+        Beam indices of every scan, scan after scan, with ``breakpoint_offsets``,
+        ``corner_offsets`` and ``outlier_offsets`` the same way.
+    method, params:
+        As in :class:`Extraction`.
+    """
+
+    def __init__(self, columns: Mapping[str, np.ndarray], offsets: Mapping[str, np.ndarray],
+                 method: str, params: Mapping[str, Any]) -> None:  # fmt: skip
+        self.columns = {name: _frozen(columns[name], _DTYPES[name]) for name in _ARRAYS}
+        for name, shape in _ROW_SHAPES.items():
+            self.columns[name] = self.columns[name].reshape(-1, *shape)
+        self.offsets = {
+            name: _frozen(offsets[name], np.intp) for name in ("segments", *EVENT_COLUMNS)
+        }
+        self.method = method
+        self.params = (
+            params if isinstance(params, MappingProxyType) else MappingProxyType(dict(params))
+        )
+
+    @classmethod
+    def concatenate(cls, rows: Sequence[Sequence[np.ndarray] | Extraction], method: str,
+                    params: Mapping[str, Any]) -> ExtractionTable:  # fmt: skip
+        """The table of per-scan results: extractions, or tuples of their arrays in the
+        order of a kernel's result (``first, last, n_points, lines, covariances,
+        breakpoints, corners, outliers, end_kinds``)."""
+        rows = [
+            tuple(getattr(row, name) for name in _ARRAYS) if isinstance(row, Extraction) else row
+            for row in rows
+        ]
+        columns, offsets = {}, {}
+        for column, name in enumerate(_ARRAYS):
+            parts = [row[column] for row in rows]
+            empty = np.zeros((0, *_ROW_SHAPES.get(name, ())), _DTYPES[name])
+            columns[name] = np.concatenate(parts) if parts else empty
+            if name == "first" or name in EVENT_COLUMNS:
+                key = "segments" if name == "first" else name
+                offsets[key] = _offsets([len(part) for part in parts])
+        return cls(columns, offsets, method, params)
+
+    @classmethod
+    def join(cls, tables: Sequence[ExtractionTable]) -> ExtractionTable:
+        """One table of the scans of ``tables``, in order (all of one method)."""
+        columns = {name: np.concatenate([t.columns[name] for t in tables]) for name in _ARRAYS}
+        offsets = {}
+        for key in tables[0].offsets:
+            starts = np.cumsum([0] + [t.offsets[key][-1] for t in tables[:-1]])
+            parts = [t.offsets[key][1:] + start for t, start in zip(tables, starts, strict=True)]
+            offsets[key] = np.concatenate([[0], *parts])
+        return cls(columns, offsets, tables[0].method, tables[0].params)
+
+    def __len__(self) -> int:
+        return len(self.offsets["segments"]) - 1
+
+    def __getitem__(self, index: int) -> Extraction:  # type: ignore[override]
+        if isinstance(index, slice):
+            raise TypeError("ExtractionTable takes one scan index, not a slice")
+        n = len(self)
+        if not -n <= index < n:
+            raise IndexError(f"scan {index} out of range for a table of {n} scans")
+        index %= n
+        arrays = []
+        for name in _ARRAYS:
+            key = "segments" if name in SEGMENT_COLUMNS else name
+            start, stop = self.offsets[key][index], self.offsets[key][index + 1]
+            arrays.append(self.columns[name][start:stop])
+        return Extraction._of_frozen(arrays, self.method, self.params)
+
+    def __iter__(self) -> Iterator[Extraction]:
+        return (self[i] for i in range(len(self)))
+
+    def __getattr__(self, name: str) -> np.ndarray:
+        try:
+            return self.__dict__["columns"][name]
+        except KeyError:
+            raise AttributeError(name) from None
+
+    @property
+    def segment_scan(self) -> np.ndarray:
+        """The stack row (scan) of each segment."""
+        return np.repeat(np.arange(len(self)), np.diff(self.offsets["segments"]))
+
+    def counts(self, name: str = "segments") -> np.ndarray:
+        """Per scan: how many ``segments`` (or ``breakpoints``, ``corners``, ``outliers``)."""
+        return np.diff(self.offsets[name])
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return ExtractionTable, (self.columns, self.offsets, self.method, dict(self.params))
+
+    def __repr__(self) -> str:
+        segments = len(self.first)
+        return f"ExtractionTable(method={self.method!r}, scans={len(self)}, segments={segments})"
+
+
+def _offsets(counts: list[int]) -> np.ndarray:
+    offsets = np.zeros(len(counts) + 1, dtype=np.intp)
+    np.cumsum(counts, out=offsets[1:])
+    return offsets

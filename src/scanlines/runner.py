@@ -6,14 +6,19 @@ Both stream: one scan is in memory at a time, whatever the size of the log.
 from __future__ import annotations
 
 import math
+import os
 import time
+from collections import deque
 from collections.abc import Callable, Iterator
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
 
+from scanlines._jit import kernel_seconds
 from scanlines.errors import ParameterError
+from scanlines.extraction import ExtractionTable
 from scanlines.extractor import Extractor
 from scanlines.scan import Scan
 from scanlines.sensor_profile import DEFAULT_SCANS, SensorProfile, estimate_profile
@@ -21,6 +26,7 @@ from scanlines.sensor_profile import DEFAULT_SCANS, SensorProfile, estimate_prof
 __all__ = [
     "LogDescription",
     "RunSummary",
+    "default_jobs",
     "describe_log",
     "log_profile",
     "parse_slice",
@@ -149,7 +155,13 @@ def _add_unique(values: list[float], value: float, limit: int = 8) -> None:
 
 @dataclass
 class RunSummary:
-    """Counts and timings of :func:`run_log`."""
+    """Counts and timings of :func:`run_log`.
+
+    ``compile_seconds`` is the time spent compiling kernels, or loading them from the
+    cache, on their first use in this process (summed over jobs); ``extract_seconds``
+    (the time in the extraction kernels, summed over jobs) and ``total_seconds`` (wall
+    time, end to end) leave it out.
+    """
 
     scans: int = 0
     segments: int = 0
@@ -157,7 +169,9 @@ class RunSummary:
     corners: int = 0
     skipped_records: int = 0
     extract_seconds: float = 0.0
+    compile_seconds: float = 0.0
     total_seconds: float = 0.0
+    jobs: int = 1
     method: str = ""
     params: dict[str, Any] = field(default_factory=dict)
 
@@ -177,6 +191,25 @@ CHUNK_SCANS = 256
 """Scans extracted together by :meth:`Extractor.batch` in :func:`run_log` (memory is O(chunk))."""
 
 
+@dataclass
+class _Chunk:
+    """Consecutive selected scans of one sensor geometry, and what became of them."""
+
+    indices: list[int]
+    scans: list[Scan]
+    table: ExtractionTable | None = None
+    encoded: Any = None
+    seconds: float = 0.0
+
+
+def default_jobs() -> int:
+    """Every core this process may use."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
 def run_log(
     reader: Any,
     extractor: Extractor,
@@ -185,59 +218,112 @@ def run_log(
     scans: slice = slice(None),
     on_scan: Callable[[int], None] | None = None,
     chunk: int = CHUNK_SCANS,
+    jobs: int = 1,
 ) -> RunSummary:
     """Extract features from every selected scan of ``reader``; write them if ``writer`` is given.
 
-    Consecutive scans of one sensor geometry are stacked in chunks of ``chunk`` and
-    go through :meth:`Extractor.batch` (the same results as one call per scan).
-    ``on_scan`` is called with each log index after it is processed (progress bars).
+    Consecutive scans of one sensor geometry are stacked in chunks of ``chunk`` and go
+    through :meth:`Extractor.batch` (the same results as one call per scan), then the
+    writer encodes the chunk at once. With ``jobs > 1`` that work runs on a pool of
+    threads (the kernels release the GIL) while this thread reads the log and writes;
+    chunks are written in log order, so the output is the same bytes for any ``jobs``.
+    ``on_scan`` is called with each log index after it is written (progress bars).
     """
-    summary = RunSummary(method=extractor.method, params=dict(extractor.params))
+    if jobs < 1:
+        raise ParameterError(f"jobs must be at least 1, got {jobs}")
+    summary = RunSummary(method=extractor.method, params=dict(extractor.params), jobs=jobs)
     started = time.perf_counter()
-    pending: list[tuple[int, Scan]] = []
-    for index, scan in select(reader.enumerate(), scans):
-        if pending and (len(pending) >= chunk or _geometry(scan) != _geometry(pending[0][1])):
-            _flush(pending, extractor, writer, summary, on_scan)
-        pending.append((index, scan))
-    if pending:
-        _flush(pending, extractor, writer, summary, on_scan)
+    compiled_before, compiled_wall_before = kernel_seconds(), kernel_seconds(wall=True)
+    chunks = _chunks(select(reader.enumerate(), scans), chunk)
+
+    def process(piece: _Chunk) -> _Chunk:
+        return _process(piece, extractor, writer)
+
+    if jobs == 1:
+        done = map(process, chunks)
+        for piece in done:
+            _write(piece, writer, summary, on_scan)
+    else:
+        with ThreadPoolExecutor(jobs, thread_name_prefix="scanlines-run") as pool:
+            for piece in _ordered(pool, process, chunks, ahead=2 * jobs):
+                _write(piece, writer, summary, on_scan)
     summary.skipped_records = int(getattr(reader, "error_count", 0))
-    summary.total_seconds = time.perf_counter() - started
+    summary.compile_seconds = kernel_seconds() - compiled_before
+    summary.extract_seconds = max(0.0, summary.extract_seconds - summary.compile_seconds)
+    compiled_wall = kernel_seconds(wall=True) - compiled_wall_before
+    summary.total_seconds = time.perf_counter() - started - compiled_wall
     return summary
+
+
+def _chunks(indexed: Iterator[tuple[int, Scan]], size: int) -> Iterator[_Chunk]:
+    """Consecutive scans in chunks of at most ``size`` of one sensor geometry."""
+    piece = _Chunk([], [])
+    for index, scan in indexed:
+        if piece.scans and (
+            len(piece.scans) >= size or _geometry(scan) != _geometry(piece.scans[0])
+        ):
+            yield piece
+            piece = _Chunk([], [])
+        piece.indices.append(index)
+        piece.scans.append(scan)
+    if piece.scans:
+        yield piece
+
+
+def _ordered(pool: ThreadPoolExecutor, work: Callable, items: Iterator, ahead: int) -> Iterator:
+    """``work`` of each item on ``pool``, results in the items' order, at most ``ahead``
+    items in flight (memory stays bounded whatever the log's length)."""
+    pending: deque[Future] = deque()
+    for item in items:
+        pending.append(pool.submit(work, item))
+        if len(pending) >= ahead:
+            yield pending.popleft().result()
+    while pending:
+        yield pending.popleft().result()
 
 
 def _geometry(scan: Scan) -> tuple[int, float, float, float, float]:
     return (len(scan), scan.angle_min, scan.angle_increment, scan.range_min, scan.range_max)
 
 
-def _flush(
-    pending: list[tuple[int, Scan]],
-    extractor: Extractor,
-    writer: Any | None,
-    summary: RunSummary,
-    on_scan: Callable[[int], None] | None,
-) -> None:
-    """Extract a chunk of same-geometry scans at once, then write and count them in order."""
-    first = pending[0][1]
+def _process(piece: _Chunk, extractor: Extractor, writer: Any | None) -> _Chunk:
+    """Extract a chunk of same-geometry scans at once, and encode it for the writer."""
+    first = piece.scans[0]
     before = time.perf_counter()
-    results = extractor.batch(
-        np.stack([scan.ranges for _, scan in pending]),
+    piece.table = extractor.batch(
+        np.stack([scan.ranges for scan in piece.scans]),
         first.angle_min,
         first.angle_increment,
         first.range_min,
         first.range_max,
     )
-    summary.extract_seconds += time.perf_counter() - before
-    for (index, scan), result in zip(pending, results, strict=True):
-        summary.scans += 1
-        summary.segments += len(result)
-        summary.breakpoints += int(result.breakpoints.size)
-        summary.corners += int(result.corners.size)
-        if writer is not None:
-            writer.write(index, scan, result)
-        if on_scan is not None:
+    piece.seconds = time.perf_counter() - before
+    if hasattr(writer, "encode_chunk"):
+        piece.encoded = writer.encode_chunk(piece.indices, piece.scans, piece.table)
+    return piece
+
+
+def _write(
+    piece: _Chunk,
+    writer: Any | None,
+    summary: RunSummary,
+    on_scan: Callable[[int], None] | None,
+) -> None:
+    """Write and count a processed chunk."""
+    table = piece.table
+    summary.extract_seconds += piece.seconds
+    summary.scans += len(table)
+    summary.segments += len(table.first)
+    summary.breakpoints += len(table.breakpoints)
+    summary.corners += len(table.corners)
+    if hasattr(writer, "write_chunk"):
+        writer.write_chunk(piece.indices, piece.scans, table, piece.encoded)
+    elif writer is not None:  # any object with write(index, scan, extraction)
+        for index, scan, extraction in zip(piece.indices, piece.scans, table, strict=True):
+            writer.write(index, scan, extraction)
+    if on_scan is not None:
+        for index in piece.indices:
             on_scan(index)
-    pending.clear()
 
 
 def run_log_to_file(
@@ -249,6 +335,7 @@ def run_log_to_file(
     scans: slice = slice(None),
     on_scan: Callable[[int], None] | None = None,
     input_name: str | None = None,
+    jobs: int = 1,
 ) -> RunSummary:
     """:func:`run_log`, writing to ``out`` (format by extension: :func:`scanlines.io.open_writer`).
 
@@ -269,7 +356,7 @@ def run_log_to_file(
         ),
     }
     with open_writer(out, meta=meta, frame=frame) as writer:
-        summary = run_log(reader, extractor, writer=writer, scans=scans, on_scan=on_scan)
+        summary = run_log(reader, extractor, writer=writer, scans=scans, on_scan=on_scan, jobs=jobs)
         writer.update_meta(
             counts={"scans": summary.scans, "skipped_records": summary.skipped_records}
         )

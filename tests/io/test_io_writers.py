@@ -125,7 +125,7 @@ class TestCsv:
             "0.01",
             "0.0001",
             "0.0",
-            "1e-05",
+            "0.00001",  # numbers as in JSON Lines (orjson: shortest round trip, no exponent)
             "open",
             "open",
         ]

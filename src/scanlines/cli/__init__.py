@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import typer
 
-from scanlines.cli import bench, evaluate, extract, logs, reproduce
+from scanlines.cli import bench, compile, evaluate, extract, logs, reproduce
 
 app = typer.Typer(
     name="scanlines",
@@ -30,6 +30,7 @@ logs.register(app)
 evaluate.register(app)
 bench.register(app)
 reproduce.register(app)
+compile.register(app)
 
 
 def main() -> None:

@@ -72,6 +72,22 @@ def bench_command(
         bool, typer.Option("--no-batch", help="Skip Extractor.batch vs the loop.")
     ] = False,
     seed: Annotated[int, typer.Option(help="Base seed of the simulated scenes.")] = 0,
+    jobs: Annotated[
+        int,
+        typer.Option(
+            "--jobs", "-j", help="Most jobs in the run-by-jobs section (default 1: clean timings)."
+        ),
+    ] = 1,
+    no_pipeline: Annotated[
+        bool, typer.Option("--no-pipeline", help="Skip the run stages, jobs and cold start.")
+    ] = False,
+    cold_start: Annotated[
+        bool | None,
+        typer.Option(
+            "--cold-start/--no-cold-start",
+            help="Time a first run with an empty kernel cache (default: on, off with --quick).",
+        ),
+    ] = None,
     profile: Annotated[
         bool,
         typer.Option(
@@ -109,7 +125,11 @@ def bench_command(
         seed=seed,
         batch=not no_batch,
         profile=profile or write_docs,
+        pipeline=not no_pipeline,
+        jobs=jobs,
     )
+    if cold_start is not None:
+        changes["cold_start"] = cold_start
     if beams:
         changes["beam_counts"] = tuple(beams)
     if no_scaling:

@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import sys
+import threading
+import time
 from collections.abc import Callable
 from typing import Any, TypeVar
 
@@ -16,13 +19,15 @@ F = TypeVar("F", bound=Callable[..., Any])
 INPUT_ERROR = 2
 
 
-def guarded(command: F) -> F:
-    """Turn an input error raised by ``command`` into one line on stderr and exit code 2."""
+def guarded(command: F, *, show_compilation: bool = True) -> F:
+    """Turn an input error raised by ``command`` into one line on stderr and exit code 2;
+    show kernel compilation on stderr while it runs (:class:`CompileProgress`)."""
 
     @functools.wraps(command)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
         try:
-            return command(*args, **kwargs)
+            with compile_progress() if show_compilation else contextlib.nullcontext():
+                return command(*args, **kwargs)
         except (ScanlinesError, OSError, EOFError) as error:
             print(f"scanlines: error: {error}", file=sys.stderr)
             raise typer.Exit(INPUT_ERROR) from None
@@ -30,16 +35,95 @@ def guarded(command: F) -> F:
     return wrapper  # type: ignore[return-value]
 
 
-def note_first_compilation() -> None:
-    """Say on stderr why the first run after an install or upgrade waits (numba compiling)."""
-    from scanlines._jit import cache_is_cold
+class CompileProgress:
+    """What the user sees on stderr while kernels compile (first use after an install).
 
-    if cache_is_cold():
-        print(
-            "scanlines: first run: compiling the extraction kernels (about a minute at most, "
-            "once; cached for later runs)",
-            file=sys.stderr,
-        )
+    Once compiling has gone on for :attr:`DELAY` seconds: on a terminal, a spinner naming
+    the kernel being compiled and the time so far; elsewhere (logs, CI) one line. When it
+    ends, a line says how long it took. Cache loads and short compilations say nothing.
+    """
+
+    DELAY = 1.0
+
+    def __init__(self) -> None:
+        self.started: float | None = None
+        self.kernels = 0
+        self.current = ""
+        self.shown = False
+        self._display: Any = None
+        self._task: Any = None
+        self._timer: threading.Timer | None = None
+        self._lock = threading.Lock()
+
+    def on_compile(self, name: str) -> None:
+        with self._lock:
+            self.kernels += 1
+            self.current = name
+            if self.started is None:
+                self.started = time.perf_counter()
+                self._timer = threading.Timer(self.DELAY, self._show)
+                self._timer.daemon = True
+                self._timer.start()
+            elif self._display is not None:
+                self._display.update(self._task, description=self._text())
+
+    def on_done(self) -> None:
+        with self._lock:
+            if self._timer is not None:
+                self._timer.cancel()
+            if self._display is not None:
+                self._display.stop()
+            if self.shown and self.started is not None:
+                seconds = time.perf_counter() - self.started
+                print(
+                    f"scanlines: compiled {self.kernels} kernels in {seconds:.0f} s "
+                    "(cached: later runs start at once)",
+                    file=sys.stderr,
+                )
+            self.__init__()
+
+    def _text(self) -> str:
+        return f"compiling kernels for first use (once per install): {self.current}"
+
+    def _show(self) -> None:
+        with self._lock:
+            if self.started is None or self.shown:
+                return
+            self.shown = True
+            if not sys.stderr.isatty():
+                print(
+                    "scanlines: compiling kernels for first use (once per install; "
+                    "`scanlines compile` does it ahead of time)",
+                    file=sys.stderr,
+                    flush=True,
+                )
+                return
+            from rich.console import Console
+            from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+
+            columns = (SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn())
+            self._display = Progress(*columns, console=Console(stderr=True), transient=True)
+            self._task = self._display.add_task(self._text(), total=None)
+            self._display.start()
+
+
+def compile_progress() -> Any:
+    """A context in which kernel compilation is shown on stderr (:class:`CompileProgress`)."""
+    from scanlines._jit import watch_compilation
+
+    progress = CompileProgress()
+    return watch_compilation(progress.on_compile, progress.on_done)
+
+
+def jobs_option(jobs: int | None) -> int:
+    """``--jobs``: at least 1; ``None`` is every core this process may use."""
+    from scanlines.runner import default_jobs
+
+    if jobs is None:
+        return default_jobs()
+    if jobs < 1:
+        raise ParameterError(f"--jobs must be at least 1, got {jobs}")
+    return jobs
 
 
 def parse_params(pairs: list[str] | None) -> dict[str, Any]:

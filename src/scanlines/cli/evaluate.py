@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from scanlines.cli.common import guarded
+from scanlines.cli.common import guarded, jobs_option
 
 if TYPE_CHECKING:
     from scanlines.evaluation.evaluate import EvalResult
@@ -68,7 +68,13 @@ def eval_command(
     tol_alpha: Annotated[
         float, typer.Option("--tol-alpha", help="Segment match |dalpha| tolerance, degrees.")
     ] = 4.0,
-    workers: Annotated[int, typer.Option(help="Processes.")] = 1,
+    jobs: Annotated[
+        int | None,
+        typer.Option("--jobs", "-j", help="Processes scoring scenes (default: every core)."),
+    ] = None,
+    workers: Annotated[
+        int | None, typer.Option(hidden=True, help="Deprecated alias of --jobs.")
+    ] = None,
     worst: Annotated[int, typer.Option(help="Scans in worst.png.")] = 4,
     plots: Annotated[bool, typer.Option(help="Write bars.png and worst.png.")] = True,
     real: Annotated[
@@ -182,7 +188,7 @@ def eval_command(
         noise or "realistic",
         tol,
         scene_set,
-        workers,
+        _jobs(jobs, workers),
         use_clutter,
     )
     paths: list[Path] = []
@@ -195,6 +201,15 @@ def eval_command(
         paths.append(save_scenes)
     for path in paths:
         typer.echo(f"wrote {path}")
+
+
+def _jobs(jobs: int | None, workers: int | None) -> int:
+    """``--jobs``, or the deprecated ``--workers`` (said on stderr)."""
+    if workers is not None:
+        typer.echo("scanlines: --workers is deprecated; use --jobs", err=True)
+        if jobs is None:
+            jobs = workers
+    return jobs_option(jobs)
 
 
 def _family_names(count: int, seed: int) -> tuple[str, ...]:

@@ -9,7 +9,7 @@ from typing import Annotated
 
 import typer
 
-from scanlines.cli.common import guarded, note_first_compilation, parse_params
+from scanlines.cli.common import guarded, parse_params
 from scanlines.errors import LogFormatError
 
 FILE_HELP = "One scan: CSV (one row of ranges) or NPZ (ranges, angle_min, angle_increment)."
@@ -50,7 +50,6 @@ def extract_command(
     from scanlines.extractor import Extractor
 
     extractor = Extractor(method, preset, sensor_profile=sensor_profile, **parse_params(param))
-    note_first_compilation()
     scan = load_one_scan(file, angle_min, angle_increment, range_max)
     result = extractor(scan)
     if plot is not None:

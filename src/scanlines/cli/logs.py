@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import math
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
 
-from scanlines.cli.common import guarded, note_first_compilation, parse_params
+from scanlines.cli.common import guarded, jobs_option, parse_params
 
 LogArgument = Annotated[Path, typer.Argument(help="CARMEN log, ROS bag, .dat, .csv or .npz.")]
 FovOption = Annotated[
@@ -30,6 +31,10 @@ PresetOption = Annotated[str | None, typer.Option(help="Named parameter set, e.g
 ParamOption = Annotated[list[str] | None, typer.Option("--param", help="NAME=VALUE, repeatable.")]
 ScansOption = Annotated[
     str | None, typer.Option("--scans", help="Python slice of scan indices, e.g. 100:200.")
+]
+JobsOption = Annotated[
+    int | None,
+    typer.Option("--jobs", "-j", help="Threads extracting chunks of scans (default: every core)."),
 ]
 ProfileOption = Annotated[
     Path | None,
@@ -171,6 +176,7 @@ def run_command(
     angle_min: AngleMinOption = None,
     angle_increment: AngleStepOption = None,
     sensor_profile: ProfileOption = None,
+    jobs: JobsOption = None,
 ) -> None:
     from scanlines.errors import ParameterError
     from scanlines.extractor import Extractor
@@ -185,11 +191,14 @@ def run_command(
     Extractor(method, preset, **params)  # bad parameters fail before the log is read
     selection = parse_slice(scans)
     options = reader_options(fov, angle_convention, topic, angle_min, angle_increment, on_error)
-    profile = _profile_for_run(log, options, selection, sensor_profile)
-    extractor = Extractor(method, preset, sensor_profile=profile, **params)
-    note_first_compilation()
+    jobs = jobs_option(jobs)
+    with compiled_for(method) as compiled:
+        profile = _profile_for_run(log, options, selection, sensor_profile)
+        extractor = Extractor(method, preset, sensor_profile=profile, **params)
+        extractor.warm_up()  # before the progress bar: the displays do not overlap
     with open_log(log, **options) as reader:
-        summary = _run_with_progress(reader, extractor, selection, out, frame, log)
+        summary = _run_with_progress(reader, extractor, selection, out, frame, log, jobs)
+    summary.compile_seconds += compiled.seconds
     _print_summary(summary, out)
 
 
@@ -268,7 +277,7 @@ def _profile_for_run(log, options, selection, given):
     return profile
 
 
-def _run_with_progress(reader, extractor, selection, out, frame, log):
+def _run_with_progress(reader, extractor, selection, out, frame, log, jobs):
     from rich.progress import BarColumn, Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
     from scanlines.runner import run_log, run_log_to_file
@@ -287,16 +296,31 @@ def _run_with_progress(reader, extractor, selection, out, frame, log):
             progress.advance(task)
 
         if out is None:
-            return run_log(reader, extractor, scans=selection, on_scan=advance)
-        return run_log_to_file(
-            reader,
-            extractor,
-            out,
-            frame=frame,
-            scans=selection,
-            on_scan=advance,
-            input_name=str(log),
-        )
+            summary = run_log(reader, extractor, scans=selection, on_scan=advance, jobs=jobs)
+        else:
+            summary = run_log_to_file(
+                reader, extractor, out, frame=frame, scans=selection, on_scan=advance,
+                input_name=str(log), jobs=jobs,
+            )  # fmt: skip
+    return summary
+
+
+class _Clock:
+    seconds = 0.0
+
+
+@contextmanager
+def compiled_for(method: str):
+    """A block that compiles (or loads) ``method``'s kernels, a second core helping
+    (:func:`scanlines.warm.compiling_from_both_ends`); ``.seconds`` says how long the
+    kernels took."""
+    from scanlines._jit import kernel_seconds
+    from scanlines.warm import compiling_from_both_ends
+
+    clock, before = _Clock(), kernel_seconds()
+    with compiling_from_both_ends(method):
+        yield clock
+    clock.seconds = kernel_seconds() - before
 
 
 def _print_summary(summary, out) -> None:
@@ -310,7 +334,8 @@ def _print_summary(summary, out) -> None:
     table.add_row("breakpoints / scan", f"{summary.per_scan(summary.breakpoints):.2f}")
     table.add_row("corners / scan", f"{summary.per_scan(summary.corners):.2f}")
     table.add_row("extraction, us / scan", f"{summary.microseconds_per_scan:.0f}")
-    table.add_row("end to end, scans / s", f"{summary.scans_per_second:.0f}")
+    table.add_row(f"end to end, scans / s ({summary.jobs} jobs)", f"{summary.scans_per_second:.0f}")
+    table.add_row("kernels compiled or loaded, s", f"{summary.compile_seconds:.1f}")
     table.add_row("skipped records", str(summary.skipped_records))
     if out is not None:
         table.add_row("output", str(out))
@@ -373,17 +398,21 @@ def demo_command(
     from scanlines.data import sample
     from scanlines.extractor import Extractor
     from scanlines.io import open_log
-    from scanlines.runner import run_log_to_file, select
+    from scanlines.runner import default_jobs, run_log_to_file, select
     from scanlines.viz.figures import save
     from scanlines.viz.scans import plot_grid
 
     log = sample("intel")
-    extractor = Extractor(sensor_profile=_profile_for_run(log, {}, slice(None), None))
-    note_first_compilation()
+    with compiled_for("adaptive") as compiled:
+        extractor = Extractor(sensor_profile=_profile_for_run(log, {}, slice(None), None))
+        extractor.warm_up()
     output.mkdir(parents=True, exist_ok=True)
     jsonl = output / "intel.jsonl"
     with open_log(log) as reader:
-        summary = run_log_to_file(reader, extractor, jsonl, input_name=log.name)
+        summary = run_log_to_file(
+            reader, extractor, jsonl, input_name=log.name, jobs=default_jobs()
+        )
+        summary.compile_seconds += compiled.seconds
         panels = [
             (s, extractor(s), f"Intel #{i}")
             for i, s in select(reader.enumerate(), slice(0, None, 50))

@@ -9,7 +9,7 @@ from typing import Annotated
 
 import typer
 
-from scanlines.cli.common import guarded
+from scanlines.cli.common import guarded, jobs_option
 
 
 def register(app: typer.Typer) -> None:
@@ -44,6 +44,12 @@ def reproduce_command(
         ),
     ] = None,
     seed: Annotated[int, typer.Option(help="Base seed of the simulated scenes.")] = 0,
+    jobs: Annotated[
+        int | None,
+        typer.Option(
+            "--jobs", "-j", help="Processes scoring simulated scenes (default: every core)."
+        ),
+    ] = None,
 ) -> None:
     from scanlines.evaluation.experiments import ReproduceConfig
     from scanlines.evaluation.report import command_line
@@ -52,6 +58,7 @@ def reproduce_command(
     config = ReproduceConfig.quick_config(seed=seed) if quick else ReproduceConfig(seed=seed)
     if scenes_per_sensor is not None:
         config = replace(config, scenes_per_sensor=scenes_per_sensor)
+    config = replace(config, jobs=jobs_option(jobs))
 
     def stage(text: str) -> None:
         print(f"scanlines reproduce: {text}", file=sys.stderr, flush=True)

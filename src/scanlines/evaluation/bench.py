@@ -13,6 +13,8 @@ Every selected method on the same scans, in one process:
   the cost is linear in the number of beams;
 * :meth:`Extractor.batch <scanlines.Extractor.batch>` against the single-call loop on the
   real excerpts (scans of one sensor, equal beam count, stacked);
+* the pipeline of ``scanlines run`` on the intel excerpt, cold start in a fresh process,
+  scaling with jobs and the floor (:mod:`scanlines.evaluation.bench_pipeline`);
 * optionally a :mod:`cProfile` run of the default extractor (``adaptive``) over the intel
   excerpt: the functions within scanlines by cumulative time.
 
@@ -353,6 +355,18 @@ def run(
         scans = _real_dataset("intel", config.profile_scans).scans
         profile = profile_extractor(scans, config.profile_top)
         tick("profiling adaptive")()
+    pipeline = None
+    if config.pipeline:
+        from scanlines.data import sample
+        from scanlines.evaluation.bench_pipeline import measure_pipeline
+
+        pipeline = measure_pipeline(
+            sample("intel"),
+            repeats=config.repeats,
+            max_jobs=config.jobs,
+            with_cold_start=config.cold_start,
+            tick=lambda stage: tick(stage)(),
+        )
     return BenchResult(
         config=config,
         command=command,
@@ -366,6 +380,7 @@ def run(
         started=started,
         elapsed_s=round(time.perf_counter() - t0, 1),
         load_after=load_average(),
+        pipeline=pipeline,
     )
 
 
@@ -393,6 +408,7 @@ class _Ticks:
             + len(config.beam_counts) * (1 + passes)
             + (len(SAMPLE_NAMES) * passes * len(BATCH_VARIANTS) if config.batch else 0)
             + (1 if config.profile else 0)
+            + ((3 + config.cold_start) if config.pipeline else 0)
         )
         self.done = 0
         self.progress = progress

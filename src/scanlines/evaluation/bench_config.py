@@ -62,6 +62,9 @@ class BenchConfig:
     profile: bool = False
     profile_scans: int | None = None
     profile_top: int = 15
+    pipeline: bool = True
+    jobs: int = 1
+    cold_start: bool = True
     quick: bool = False
 
     @classmethod
@@ -74,6 +77,7 @@ class BenchConfig:
             beam_counts=QUICK_BEAMS,
             scaling_scans=2,
             profile_scans=5,
+            cold_start=False,
             quick=True,
         )
         return dataclasses.replace(base, **changes)
@@ -100,6 +104,7 @@ class BenchConfig:
             ("repeats", self.repeats, 1),
             ("scaling scans", self.scaling_scans, 1),
             ("profile functions", self.profile_top, 1),
+            ("jobs", self.jobs, 1),
         ):
             if value < low:
                 raise ParameterError(f"{label} must be >= {low}, got {value}")
@@ -125,6 +130,9 @@ class BenchConfig:
             "batch": self.batch,
             "profile": self.profile,
             "profile_scans": self.profile_scans,
+            "pipeline": self.pipeline,
+            "jobs": self.jobs,
+            "cold_start": self.cold_start,
             "quick": self.quick,
         }
 

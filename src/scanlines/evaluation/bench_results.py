@@ -189,6 +189,7 @@ class BenchResult:
     started: str
     elapsed_s: float
     load_after: list[float] | None = None
+    pipeline: Any = None  # bench_pipeline.PipelineResult
 
     @property
     def methods(self) -> tuple[str, ...]:
@@ -208,6 +209,7 @@ class BenchResult:
             "scaling": self.scaling.to_dict() if self.scaling else None,
             "batch": [b.to_dict() for b in self.batch],
             "profile": self.profile,
+            "pipeline": self.pipeline.to_dict() if self.pipeline else None,
         }
 
     def to_json(self, path: str | Path) -> Path:
@@ -410,4 +412,6 @@ class BenchResult:
         batch = self.batch_table()
         if batch is not None:
             out.append(batch)
+        if self.pipeline is not None:
+            out += self.pipeline.tables()
         return out

@@ -130,6 +130,8 @@ class ReproduceConfig:
         Base seed of the simulated scenes (:func:`scanlines.evaluation.scenes.scene_seed`).
     tol:
         Matching tolerances.
+    jobs:
+        Processes scoring the simulated scenes (the timed passes always run in one).
     quick:
         Recorded in the output (set by :meth:`quick_config`).
     """
@@ -141,6 +143,7 @@ class ReproduceConfig:
     repeats: int = 5
     seed: int = 0
     tol: Tolerances = field(default_factory=Tolerances)
+    jobs: int = 1
     quick: bool = False
 
     @classmethod
@@ -157,7 +160,7 @@ class ReproduceConfig:
         ParameterError
             For a count below 1 or a negative seed.
         """
-        for name in ("scenes_per_sensor", "table_scenes", "repeats"):
+        for name in ("scenes_per_sensor", "table_scenes", "repeats", "jobs"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ParameterError(f"{name.replace('_', ' ')} must be an integer >= 1")
@@ -527,7 +530,9 @@ def run(
         cases = [Case(f"{name} #{i}", s) for i, s in enumerate(scans)]
         real.append(dataset(name, REAL_EXCERPTS[name], cases))
     stage(f"Ground truth: {config.scenes_per_sensor} scenes x {len(SENSORS)} sensor presets")
-    ground_truth = evaluate(parsed, None, config.scenes_per_sensor, config.seed, tol=tol)
+    ground_truth = evaluate(
+        parsed, None, config.scenes_per_sensor, config.seed, tol=tol, workers=config.jobs
+    )
     machine["loadavg_after"] = load_average()
     return ReproduceResult(
         config=config,

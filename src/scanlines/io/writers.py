@@ -70,19 +70,18 @@ less the umask); so do the text outputs and the ``.meta.json``.
 
 from __future__ import annotations
 
-import csv
 import json
-import math
 import os
 import tempfile
 from abc import ABC, abstractmethod
-from collections.abc import Mapping
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from functools import cached_property
 from pathlib import Path
 from types import TracebackType
 from typing import IO, Any, ClassVar, Literal, Self
 
 import numpy as np
+import orjson
 
 from scanlines.errors import ParameterError
 from scanlines.extraction import (
@@ -95,6 +94,7 @@ from scanlines.extraction import (
     START_X,
     START_Y,
     Extraction,
+    ExtractionTable,
 )
 from scanlines.io.transform import points_to_world, to_world
 from scanlines.json_values import jsonable
@@ -143,7 +143,6 @@ def meta_path_for(path: str | Path) -> Path:
     return path.with_name(path.name + ".meta.json")
 
 
-@dataclass(frozen=True)
 class ScanFeatures:
     """What a writer needs from one scan, in the output frame.
 
@@ -154,14 +153,30 @@ class ScanFeatures:
     extraction:
         Features, transformed to the output frame.
     breakpoint_points, corner_points:
-        ``K x 2`` positions of the breakpoint and corner beams in the output frame.
+        ``K x 2`` positions of the breakpoint and corner beams in the output frame
+        (computed on first access: only the bag writer draws them).
     """
 
-    index: int
-    scan: Scan
-    extraction: Extraction
-    breakpoint_points: np.ndarray
-    corner_points: np.ndarray
+    def __init__(self, index: int, scan: Scan, extraction: Extraction, frame: Frame) -> None:
+        if frame == "world" and scan.pose is None:
+            raise ParameterError(
+                f"frame='world' needs scan poses, but scan {index} has none; use frame='sensor'"
+            )
+        self.index, self.scan, self.frame = index, scan, frame
+        self.extraction = extraction if frame == "sensor" else to_world(extraction, scan.pose)
+        self._sensor_extraction = extraction
+
+    @cached_property
+    def breakpoint_points(self) -> np.ndarray:
+        return self._points(self._sensor_extraction.breakpoints)
+
+    @cached_property
+    def corner_points(self) -> np.ndarray:
+        return self._points(self._sensor_extraction.corners)
+
+    def _points(self, beams: np.ndarray) -> np.ndarray:
+        points = _beam_points(self.scan, beams)
+        return points if self.frame == "sensor" else points_to_world(points, self.scan.pose)
 
 
 def _beam_points(scan: Scan, indices: np.ndarray) -> np.ndarray:
@@ -176,68 +191,86 @@ def _beam_points(scan: Scan, indices: np.ndarray) -> np.ndarray:
     return points[np.isfinite(points).all(axis=1)]
 
 
-def _features(index: int, scan: Scan, extraction: Extraction, frame: Frame) -> ScanFeatures:
-    breakpoints = _beam_points(scan, extraction.breakpoints)
-    corners = _beam_points(scan, extraction.corners)
-    if frame == "world":
-        if scan.pose is None:
-            raise ParameterError(
-                f"frame='world' needs scan poses, but scan {index} has none; use frame='sensor'"
-            )
-        extraction = to_world(extraction, scan.pose)
-        breakpoints = points_to_world(breakpoints, scan.pose)
-        corners = points_to_world(corners, scan.pose)
-    return ScanFeatures(index, scan, extraction, breakpoints, corners)
+def json_records(
+    indices: Sequence[int], scans: Sequence[Scan], table: ExtractionTable
+) -> list[dict[str, Any]]:
+    """The JSON Lines records (the module docstring) of a chunk of scans and their
+    features (in the output frame); non-finite numbers are left to the encoder (null)."""
+    first, last, n_points = table.first.tolist(), table.last.tolist(), table.n_points.tolist()
+    lines, covariances = table.lines.tolist(), table.covariances.reshape(-1, 4).tolist()
+    kinds = [(END_KINDS[a], END_KINDS[b]) for a, b in table.end_kinds.tolist()]
+    segment_offsets = table.offsets["segments"].tolist()
+    breakpoints, breakpoint_offsets = table.breakpoints.tolist(), table.offsets["breakpoints"]
+    corners, corner_offsets = table.corners.tolist(), table.offsets["corners"]
+    records = []
+    for k, (index, scan) in enumerate(zip(indices, scans, strict=True)):
+        segments = [
+            {
+                "first": first[j],
+                "last": last[j],
+                "start": lines[j][START_X : START_Y + 1],
+                "end": lines[j][END_X : END_Y + 1],
+                "rho": lines[j][RHO],
+                "alpha": lines[j][ALPHA],
+                "n_points": n_points[j],
+                "rms": lines[j][RMS],
+                "covariance": [covariances[j][:2], covariances[j][2:]],
+                "start_kind": kinds[j][0],
+                "end_kind": kinds[j][1],
+            }
+            for j in range(segment_offsets[k], segment_offsets[k + 1])
+        ]
+        records.append(
+            {
+                "scan": int(index),
+                "timestamp": scan.timestamp,
+                "pose": None if scan.pose is None else [float(v) for v in scan.pose],
+                "segments": segments,
+                "breakpoints": breakpoints[breakpoint_offsets[k] : breakpoint_offsets[k + 1]],
+                "corners": corners[corner_offsets[k] : corner_offsets[k + 1]],
+            }
+        )
+    return records
+
+
+def encode_json_lines(
+    indices: Sequence[int], scans: Sequence[Scan], table: ExtractionTable
+) -> bytes:
+    """The JSON Lines text of a chunk (:func:`json_records`), UTF-8, one line per scan.
+
+    orjson writes NaN and infinities as ``null`` and each float in its shortest
+    round-trip form."""
+    return b"".join(orjson.dumps(r) + b"\n" for r in json_records(indices, scans, table))
 
 
 def json_record(features: ScanFeatures) -> str:
     """The JSON Lines record of one scan (the module docstring), without the newline."""
-    scan, extraction = features.scan, features.extraction
-    covariances = _finite_rows(extraction.covariances.reshape(-1, 4))
-    record = {
-        "scan": int(features.index),
-        "timestamp": None if scan.timestamp is None else _number(scan.timestamp),
-        "pose": None if scan.pose is None else [_number(v) for v in scan.pose],
-        "segments": [
-            {
-                "first": first,
-                "last": last,
-                "start": [row[START_X], row[START_Y]],
-                "end": [row[END_X], row[END_Y]],
-                "rho": row[RHO],
-                "alpha": row[ALPHA],
-                "n_points": n_points,
-                "rms": row[RMS],
-                "covariance": [cov[:2], cov[2:]],
-                "start_kind": END_KINDS[kinds[0]],
-                "end_kind": END_KINDS[kinds[1]],
-            }
-            for first, last, n_points, row, cov, kinds in zip(
-                extraction.first.tolist(),
-                extraction.last.tolist(),
-                extraction.n_points.tolist(),
-                _finite_rows(extraction.lines),
-                covariances,
-                extraction.end_kinds.tolist(),
-                strict=True,
-            )
-        ],
-        "breakpoints": extraction.breakpoints.tolist(),
-        "corners": extraction.corners.tolist(),
-    }
-    return json.dumps(record, allow_nan=False, separators=(",", ":"))
+    extraction = features.extraction
+    table = ExtractionTable.concatenate([extraction], extraction.method, extraction.params)
+    return orjson.dumps(json_records([features.index], [features.scan], table)[0]).decode()
 
 
-def _finite_rows(table: np.ndarray) -> list[list[float | None]]:
-    """Rows of a float table as lists, NaN and infinities as None."""
-    if np.isfinite(table).all():
-        return table.tolist()
-    return [[_number(v) for v in row] for row in table.tolist()]
-
-
-def _number(value: float) -> float | None:
-    value = float(value)
-    return value if math.isfinite(value) else None
+def encode_csv_rows(indices: Sequence[int], scans: Sequence[Scan], table: ExtractionTable) -> bytes:
+    """The CSV rows (:data:`CSV_COLUMNS`) of a chunk, UTF-8: one per segment, numbers as
+    in JSON Lines, empty cells for missing or non-finite values."""
+    numbers = np.column_stack(
+        (
+            table.lines[:, [START_X, START_Y, END_X, END_Y, RHO, ALPHA]],
+            table.n_points,
+            table.lines[:, RMS],
+            table.covariances.reshape(-1, 4)[:, [0, 1, 3]],
+        )
+    ).tolist()
+    stamps = [scan.timestamp for scan in scans]
+    first, last, n_points = table.first.tolist(), table.last.tolist(), table.n_points.tolist()
+    kinds = [f"{END_KINDS[a]},{END_KINDS[b]}\n".encode() for a, b in table.end_kinds.tolist()]
+    rows = []
+    for j, k in enumerate(table.segment_scan.tolist()):
+        values = numbers[j]
+        values[6] = n_points[j]
+        cells = orjson.dumps([indices[k], stamps[k], first[j], last[j], *values])[1:-1]
+        rows.append(cells + b"," + kinds[j])
+    return b"".join(rows).replace(b"null", b"")
 
 
 def _atomic_temp_file(target: Path, mode: str) -> IO[Any]:
@@ -331,16 +364,47 @@ class ResultWriter(ABC):
         extraction:
             The features, in the sensor frame.
         """
+        self._check_open()
+        self._write(ScanFeatures(index, scan, extraction, self.frame))
+        self._count(extraction, 1, len(extraction), extraction.breakpoints, extraction.corners)
+
+    def encode_chunk(
+        self, indices: Sequence[int], scans: Sequence[Scan], table: ExtractionTable
+    ) -> Any:
+        """The output of a chunk of scans, ready for :meth:`write_chunk` (or ``None``: the
+        format writes scan by scan). Safe to call from several threads at once: it reads
+        the writer's settings and changes nothing."""
+        return None
+
+    def write_chunk(
+        self,
+        indices: Sequence[int],
+        scans: Sequence[Scan],
+        table: ExtractionTable,
+        encoded: Any = None,
+    ) -> None:
+        """Write the features of a chunk of scans (``table[k]`` those of ``scans[k]``), in
+        order, from :meth:`encode_chunk`'s result when given."""
+        self._check_open()
+        if encoded is None:
+            for index, scan, extraction in zip(indices, scans, table, strict=True):
+                self.write(index, scan, extraction)
+            return
+        self._write_encoded(encoded)
+        first = table[0] if len(table) else None
+        self._count(first, len(table), len(table.first), table.breakpoints, table.corners)
+
+    def _check_open(self) -> None:
         if self._closed:
             raise ValueError(f"{self.path}: writer is closed")
-        features = _features(index, scan, extraction, self.frame)
-        self._write(features)
+
+    def _count(self, first: Extraction | None, scans: int, segments: int, breakpoints, corners):
         if self._first_extraction is None:
-            self._first_extraction = extraction
-        self.counts["scans"] += 1
-        self.counts["segments"] += len(extraction)
-        self.counts["breakpoints"] += len(extraction.breakpoints)
-        self.counts["corners"] += len(extraction.corners)
+            self._first_extraction = first
+        self.counts["scans"] += scans
+        self.counts["segments"] += segments
+        self.counts["breakpoints"] += len(breakpoints)
+        self.counts["corners"] += len(corners)
 
     def update_meta(self, **fields: Any) -> None:
         """Add or replace ``.meta.json`` fields before closing; ``counts`` are merged."""
@@ -393,6 +457,10 @@ class ResultWriter(ABC):
     def _write(self, features: ScanFeatures) -> None:
         """Write one scan's features to the temporary output."""
 
+    def _write_encoded(self, encoded: Any) -> None:
+        """Write what :meth:`encode_chunk` returned."""
+        raise NotImplementedError
+
     @abstractmethod
     def _commit(self) -> None:
         """Move the temporary output into place."""
@@ -428,7 +496,10 @@ class ResultWriter(ABC):
 
 
 class _TextFileWriter(ResultWriter):
-    """Shared atomic temp-file handling of the text writers."""
+    """Shared atomic temp-file handling of the text writers; a chunk is encoded at once
+    (``_encode``: indices, scans, table in the output frame -> text or bytes)."""
+
+    mode: ClassVar[str] = "w"
 
     def __init__(
         self, path: str | Path, *, meta: Mapping[str, Any] | None = None, frame: Frame = "sensor"
@@ -436,7 +507,30 @@ class _TextFileWriter(ResultWriter):
         super().__init__(path, meta=meta, frame=frame)
         if self.path.is_dir():
             raise ParameterError(f"{self.path} is a directory")
-        self._handle = _atomic_temp_file(self.path, "w")
+        self._handle = _atomic_temp_file(self.path, self.mode)
+
+    def _write(self, features: ScanFeatures) -> None:
+        extraction = features.extraction
+        table = ExtractionTable.concatenate([extraction], extraction.method, extraction.params)
+        self._handle.write(self._encode([features.index], [features.scan], table))
+
+    def encode_chunk(self, indices, scans, table) -> str | bytes:
+        if self.frame == "world":
+            features = [
+                ScanFeatures(i, s, e, "world")
+                for i, s, e in zip(indices, scans, table, strict=False)
+            ]
+            table = ExtractionTable.concatenate(
+                [f.extraction for f in features], table.method, table.params
+            )
+        return self._encode(indices, scans, table)
+
+    def _write_encoded(self, encoded: str | bytes) -> None:
+        self._handle.write(encoded)
+
+    @staticmethod
+    def _encode(indices, scans, table) -> str | bytes:
+        raise NotImplementedError
 
     def _commit(self) -> None:
         _commit_file(self._handle, self.path)
@@ -449,57 +543,22 @@ class JsonlWriter(_TextFileWriter):
     """One JSON object per written scan (see the module docstring)."""
 
     format_name = "jsonl"
-
-    def _write(self, features: ScanFeatures) -> None:
-        self._handle.write(json_record(features))
-        self._handle.write("\n")
+    mode = "wb"
+    _encode = staticmethod(encode_json_lines)
 
 
 class CsvWriter(_TextFileWriter):
     """One CSV row per segment (see the module docstring)."""
 
     format_name = "csv"
+    mode = "wb"
+    _encode = staticmethod(encode_csv_rows)
 
     def __init__(
         self, path: str | Path, *, meta: Mapping[str, Any] | None = None, frame: Frame = "sensor"
     ) -> None:
         super().__init__(path, meta=meta, frame=frame)
-        self._csv = csv.writer(self._handle, lineterminator="\n")
-        self._csv.writerow(CSV_COLUMNS)
-
-    def _write(self, features: ScanFeatures) -> None:
-        extraction = features.extraction
-        stamp = _cell(features.scan.timestamp)
-        for k, row in enumerate(extraction.lines):
-            covariance = extraction.covariances[k]
-            start_kind, end_kind = extraction.end_kinds[k]
-            self._csv.writerow(
-                (
-                    features.index,
-                    stamp,
-                    int(extraction.first[k]),
-                    int(extraction.last[k]),
-                    _cell(row[START_X]),
-                    _cell(row[START_Y]),
-                    _cell(row[END_X]),
-                    _cell(row[END_Y]),
-                    _cell(row[0]),
-                    _cell(row[1]),
-                    int(extraction.n_points[k]),
-                    _cell(row[6]),
-                    _cell(covariance[0, 0]),
-                    _cell(covariance[0, 1]),
-                    _cell(covariance[1, 1]),
-                    END_KINDS[start_kind],
-                    END_KINDS[end_kind],
-                )
-            )
-
-
-def _cell(value: float | None) -> str:
-    if value is None or not math.isfinite(value):
-        return ""
-    return repr(float(value))
+        self._handle.write((",".join(CSV_COLUMNS) + "\n").encode())
 
 
 # -- ROS 2 ---------------------------------------------------------------------------------

@@ -346,6 +346,11 @@ class Adaptive(CompiledMethod):
     name = "adaptive"
     parameters: ClassVar[dict[str, Param]] = PARAMETERS
     presets: ClassVar[dict[str, dict[str, Any]]] = PRESETS
+    stages = (
+        *("scan_noise_model", "breakpoint_rule", "denoise", "cluster_returns", "run_cost_of"),
+        *("corner_scores", "choose_corners", "segments", "junction_events"),
+        *("covariance_sigmas", "assemble"),
+    )
 
     @classmethod
     def settings_of(cls, params: Mapping[str, Any]) -> AdaptiveSettings:

@@ -27,7 +27,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from scanlines._jit import COMPILED, kernel
-from scanlines.extraction import Extraction
+from scanlines.extraction import Extraction, ExtractionTable
 from scanlines.params import Param
 from scanlines.scan import is_full_circle
 from scanlines.steps.assemble import Output, empty_result, finish, to_extraction
@@ -97,12 +97,13 @@ class Method:
         sin: np.ndarray,
         step: float,
         angle_min: float,
-    ) -> list[Extraction]:
-        """:meth:`extract` of each row of a stack of scans of one sensor."""
-        return [
+    ) -> ExtractionTable:
+        """:meth:`extract` of each row of a stack of scans of one sensor, as one table."""
+        rows = [
             self.extract(row, mask, cos, sin, step, angle_min)
             for row, mask in zip(stack, valid, strict=True)
         ]
+        return ExtractionTable.concatenate(rows, self.name, self.params)
 
 
 _FIELD_TYPES = {"bool": np.bool_, "int": np.int64, "float": np.float64}
@@ -128,8 +129,12 @@ class CompiledMethod(Method):
     A subclass sets :meth:`settings_of` (resolved parameters -> a frozen dataclass of
     typed settings) and ``kernel(ranges, valid, cos, sin, step, full_circle,
     angle_min, *arguments)`` as a ``staticmethod``; :meth:`kernel_arguments` returns
-    the kernel's last arguments, by default the settings record.
+    the kernel's last arguments, by default the settings record. ``stages`` may name
+    the kernels of the method's module that its kernel calls, in order, so that a
+    second core can compile them (:mod:`scanlines.warm`).
     """
+
+    stages: ClassVar[tuple[str, ...]] = ()
 
     def __init__(self, params: Mapping[str, Any], noise: NoiseLine | None = None) -> None:
         super().__init__(params, noise)
@@ -154,17 +159,14 @@ class CompiledMethod(Method):
         )
         return to_extraction(arrays, self.name, self.params)
 
-    def extract_many(self, stack, valid, cos, sin, step, angle_min) -> list[Extraction]:
+    def extract_many(self, stack, valid, cos, sin, step, angle_min) -> ExtractionTable:
         full_circle = is_full_circle(stack.shape[1], step)
         kernel, arguments, step, noise = self.kernel, self.arguments, abs(step), self.noise
-        return [
-            to_extraction(
-                kernel(row, mask, cos, sin, step, full_circle, angle_min, noise, *arguments),
-                self.name,
-                self.params,
-            )
+        rows = [
+            kernel(row, mask, cos, sin, step, full_circle, angle_min, noise, *arguments)
             for row, mask in zip(stack, valid, strict=True)
         ]
+        return ExtractionTable.concatenate(rows, self.name, self.params)
 
 
 def rule_spec_of(params: Mapping[str, Any]) -> RuleSpec:

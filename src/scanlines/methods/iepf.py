@@ -109,7 +109,7 @@ class SplitSettings:
         )
 
 
-@kernel(inline=True)
+@kernel
 def rule_spec(s):
     """The clustering rule of a :class:`SplitSettings` record."""
     return RuleSpec(
@@ -117,7 +117,7 @@ def rule_spec(s):
     )
 
 
-@kernel(inline=True)
+@kernel
 def output(s):
     """The :class:`~scanlines.steps.assemble.Output` of a :class:`SplitSettings` record."""
     return Output(

@@ -152,7 +152,7 @@ MAX_STEP_GROWTH = 2.5
 grow their spacing smoothly; a jump does not)."""
 
 
-@kernel(inline=True)
+@kernel
 def auto_abd_lambda(step):
     """ABD's ``lambda`` (radians) for beams ``step`` apart.
 
@@ -221,7 +221,7 @@ def neighbour_steps(x, y):
     return d
 
 
-@kernel(inline=True)
+@kernel
 def gap_factor(rule, gap, step):
     """The part of the threshold that depends on the beam gap only (see :func:`threshold`)."""
     kind = rule.kind
@@ -236,7 +236,7 @@ def gap_factor(rule, gap, step):
     return 0.0
 
 
-@kernel(inline=True)
+@kernel
 def scaled_threshold(rule, factor, r_from, r_to):
     """The threshold from :func:`gap_factor` and the two ranges."""
     kind = rule.kind
@@ -248,13 +248,13 @@ def scaled_threshold(rule, factor, r_from, r_to):
     return rule.jump_distance
 
 
-@kernel(inline=True)
+@kernel
 def threshold(rule, r_from, r_to, gap, step):
     """Largest distance ``D`` between returns ``r_from`` and ``r_to``, ``gap`` beams apart."""
     return scaled_threshold(rule, gap_factor(rule, gap, step), r_from, r_to)
 
 
-@kernel(inline=True)
+@kernel
 def distance_to_line(ax, ay, bx, by, px, py):
     """Distance of ``P`` from the line through ``A`` and ``B`` (inf when ``A == B``)."""
     ux, uy = bx - ax, by - ay
@@ -264,7 +264,7 @@ def distance_to_line(ax, ay, bx, by, px, py):
     return abs(ux * (py - ay) - uy * (px - ax)) / length
 
 
-@kernel(inline=True)
+@kernel
 def continues_line_at(x, y, gap, d, p, tolerance):
     """Pair ``(p, p+1)`` continues the line of the pair before and of the pair after.
 
@@ -306,7 +306,7 @@ def continues_line_at(x, y, gap, d, p, tolerance):
     return True
 
 
-@kernel(inline=True)
+@kernel
 def extrapolation_growth(t):
     """How much farther off a line through two points a third lies by noise alone when it
     is ``t`` times their distance beyond them, relative to ``t = 1`` (the ``sqrt(5)`` of

@@ -84,7 +84,7 @@ def slope_scores(r, gap, step, start, end, signed):
     return score
 
 
-@kernel(inline=True)
+@kernel
 def heading(x, y, moments, a, b):
     """Unit direction of the fitted line of run ``[a, b]``, oriented from ``a`` towards ``b``."""
     nx, ny = tls_axis(moments, a, b)[:2]

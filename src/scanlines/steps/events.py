@@ -92,7 +92,7 @@ def sorted_distinct(values):
     return ordered[:count]
 
 
-@kernel(inline=True)
+@kernel
 def nearest_return(x, y, cx, cy, low, end, start, high, reach, widest):
     """Position nearest ``(cx, cy)`` among ``end - reach .. start + reach`` (within ``low..high``).
 
@@ -231,14 +231,14 @@ END_CORNER, END_JUMP, END_OCCLUDED, END_GAP, END_EDGE, END_OPEN = (
 )
 
 
-@kernel(inline=True)
+@kernel
 def near_corner(corners, beam):
     """Whether a corner beam lies within one beam of ``beam`` (``corners`` sorted)."""
     at = np.searchsorted(corners, beam - 1)
     return at < corners.shape[0] and corners[at] <= beam + 1
 
 
-@kernel(inline=True)
+@kernel
 def is_listed(sorted_beams, beam):
     at = np.searchsorted(sorted_beams, beam)
     return at < sorted_beams.shape[0] and sorted_beams[at] == beam

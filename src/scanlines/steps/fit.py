@@ -104,13 +104,13 @@ def prefix_moments(x, y):
     return Moments(table, ox, oy)
 
 
-@kernel(inline=True)
+@kernel
 def wrap_angle(angle):
     """``angle`` wrapped to ``(-pi, pi]``."""
     return math.pi - (math.pi - angle) % (2.0 * math.pi)
 
 
-@kernel(inline=True)
+@kernel
 def hesse(alpha, rho):
     """Normalise to ``rho >= 0`` and ``alpha`` in ``(-pi, pi]``."""
     if rho < 0.0:
@@ -119,7 +119,7 @@ def hesse(alpha, rho):
     return wrap_angle(alpha), rho
 
 
-@kernel(inline=True)
+@kernel
 def hesse_difference(rho_1, alpha_1, rho_2, alpha_2):
     """``(rho_1 - rho_2, alpha_1 - alpha_2)`` of two Hesse lines, the angle wrapped.
 
@@ -134,7 +134,7 @@ def hesse_difference(rho_1, alpha_1, rho_2, alpha_2):
     return rho_1 - rho_2, direct
 
 
-@kernel(inline=True)
+@kernel
 def line_intersection(rho_i, alpha_i, rho_j, alpha_j):
     """Intersection ``(x, y)`` of two Hesse lines; NaN for parallel lines."""
     det = math.sin(alpha_j - alpha_i)
@@ -145,7 +145,7 @@ def line_intersection(rho_i, alpha_i, rho_j, alpha_j):
     return x, y
 
 
-@kernel(inline=True)
+@kernel
 def tls_axis(moments, a, b):
     """Normal of the total-least-squares line of run ``[a, b]``, up to its sign.
 
@@ -173,7 +173,7 @@ def tls_axis(moments, a, b):
     return nx, ny, sse, mx, my
 
 
-@kernel(inline=True)
+@kernel
 def tls_normal(moments, a, b):
     """Total-least-squares line of run ``[a, b]`` as ``(cos alpha, sin alpha, rho, sse)``.
 
@@ -188,7 +188,7 @@ def tls_normal(moments, a, b):
     return nx, ny, rho, sse
 
 
-@kernel(inline=True)
+@kernel
 def tls_run(moments, a, b):
     """Total-least-squares line ``(rho, alpha, sse)`` of run ``[a, b]``; NaN for an empty run."""
     nx, ny, rho, sse = tls_normal(moments, a, b)
@@ -242,7 +242,7 @@ def paper_run(moments, a, b):
     return rho, alpha, sse
 
 
-@kernel(inline=True)
+@kernel
 def fit_run(fit, moments, a, b):
     """Line ``(rho, alpha, sse)`` of run ``[a, b]`` by fit code (:data:`TLS` or :data:`PAPER`)."""
     if fit == PAPER:
@@ -277,7 +277,7 @@ def inverse_square_sums(r):
     return out
 
 
-@kernel(inline=True)
+@kernel
 def run_cost(cost, a, b):
     """Fitting error of run ``[a, b]``; in noise units when ``cost.inv_r2`` is given.
 

@@ -74,7 +74,7 @@ def merge_by_criterion(cost, a, b, cluster, segment_cost):
     return a[:m], b[:m], cluster[:m]
 
 
-@kernel(inline=True)
+@kernel
 def chi_square(rho_1, alpha_1, rho_2, alpha_2, covariance_1, covariance_2):
     """``dL^T (P_1 + P_2)^-1 dL`` of two lines; NaN where the sum is singular."""
     d_rho, d_alpha = hesse_difference(rho_1, alpha_1, rho_2, alpha_2)

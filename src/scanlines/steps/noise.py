@@ -79,7 +79,7 @@ UNKNOWN_NOISE = NoiseLine(math.nan, math.nan)
 """The noise of a method built without a sensor profile: each scan measures its own."""
 
 
-@kernel(inline=True)
+@kernel
 def noise_at(noise, r):
     """The noise sigma of :class:`NoiseLine` ``noise`` at range ``r``."""
     return max(noise.sigma0 + noise.per_metre * r, MIN_NOISE_SIGMA)
@@ -129,7 +129,7 @@ def local_residuals(returns, gap):
     return sample[:count], at[:count]
 
 
-@kernel(inline=True)
+@kernel
 def parabola_at_centre(index, r, a, b, i):
     """Least-squares parabola of ``r`` over the beam offsets ``index - index[i]`` of
     positions ``a..b``: ``(r[i] - fit at i, leverage of i, slope at i per beam)``."""

@@ -83,7 +83,7 @@ def insert_in_rank_order(start, end, n, candidates, shared):
     return accepted, parent_a, parent_b
 
 
-@kernel(inline=True)
+@kernel
 def criterion_value(criterion, sse, segments, log_n, sigma, penalty):
     """The criterion of one segmentation (smaller is better); NaN SSE counts as inf.
 

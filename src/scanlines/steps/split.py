@@ -52,7 +52,7 @@ CHORD, LINE = 0, 1
 REFERENCE_CODES = {"chord": CHORD, "fit": LINE}
 
 
-@kernel(inline=True)
+@kernel
 def chord_distance(x, y, a, b, p):
     """Distance of point ``p`` to the chord from point ``a`` to point ``b``.
 
@@ -75,13 +75,13 @@ def chord_distance(x, y, a, b, p):
     return math.hypot(px - t * dx, py - t * dy)
 
 
-@kernel(inline=True)
+@kernel
 def line_residual(x, y, p, rho, alpha):
     """Orthogonal distance of point ``p`` to the line ``(rho, alpha)``."""
     return abs(x[p] * math.cos(alpha) + y[p] * math.sin(alpha) - rho)
 
 
-@kernel(inline=True)
+@kernel
 def farthest_from_chord(x, y, a, b):
     """Largest distance of an interior point of run ``[a, b]`` from its chord, and that point.
 
@@ -95,7 +95,7 @@ def farthest_from_chord(x, y, a, b):
     return worst, at
 
 
-@kernel(inline=True)
+@kernel
 def farthest_from_line(x, y, moments, a, b):
     """Largest distance of an interior point of run ``[a, b]`` from the run's TLS line."""
     rho, alpha, _ = tls_run(moments, a, b)
@@ -108,7 +108,7 @@ def farthest_from_line(x, y, moments, a, b):
     return worst
 
 
-@kernel(inline=True)
+@kernel
 def split_side(x, y, moments, a, b, at):
     """Last position of the first part when run ``[a, b]`` is split at ``at``: ``at`` or ``at - 1``.
 

@@ -1,0 +1,273 @@
+"""What a user feels besides one kernel call: ``scanlines bench``'s pipeline section.
+
+* **Cold start**: a fresh process with an empty kernel cache imports scanlines and makes
+  its first extraction (compiling), then a second fresh process does the same with the
+  cache filled (loading). Each is timed inside the child, import and first call apart.
+* **Stages of** ``scanlines run`` **on a log**, per scan: reading and parsing the log,
+  extraction of whole chunks (:meth:`~scanlines.Extractor.batch`), the single-call loop
+  on the same scans, encoding each text format, and end to end (read, extract, write,
+  commit) into JSON Lines, CSV and MCAP.
+* **Jobs**: end to end to JSON Lines with 1 to ``max_jobs`` threads, with the machine's
+  load average before and after (the machine may be shared).
+* **The floor**: one compiled pass over the returns of the same stack (the sum of their
+  ``x`` and ``y``), against which the extraction's cost per scan is a ratio.
+
+Every figure of one section is measured in the same process, close in time, so that the
+ratios hold on a shared machine even where the absolute times do not.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from scanlines._jit import kernel
+from scanlines.evaluation.report import TableData
+
+__all__ = ["ColdStart", "PipelineResult", "cold_start", "measure_pipeline", "one_pass"]
+
+_CHILD = """
+import json, sys, time
+t0 = time.perf_counter()
+from scanlines import Extractor
+from scanlines._jit import kernel_seconds
+t1 = time.perf_counter()
+Extractor(sys.argv[1]).warm_up()
+t2 = time.perf_counter()
+print(json.dumps({"import_s": t1 - t0, "first_call_s": t2 - t1, "kernel_s": kernel_seconds()}))
+"""
+
+
+@dataclass
+class ColdStart:
+    """Seconds to import scanlines and to make the first extraction of ``method`` in a
+    fresh process: with an empty kernel cache (compiling) and with it filled (loading)."""
+
+    method: str
+    import_s: float
+    compile_s: float
+    cache_load_s: float
+
+
+def cold_start(method: str = "adaptive") -> ColdStart:
+    """:class:`ColdStart` of ``method``, measured in two child processes."""
+    with tempfile.TemporaryDirectory(prefix="scanlines-cold-") as cache:
+        cold = _child_timings(method, cache)
+        warm = _child_timings(method, cache)
+    return ColdStart(method, warm["import_s"], cold["first_call_s"], warm["first_call_s"])
+
+
+def _child_timings(method: str, cache: str) -> dict[str, float]:
+    env = {**os.environ, "NUMBA_CACHE_DIR": cache}
+    done = subprocess.run(
+        [sys.executable, "-c", _CHILD, method], env=env, capture_output=True, text=True, check=True
+    )
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+@kernel
+def one_pass(stack, valid, cos, sin):
+    """The floor: one pass over the returns of each row (the sums of their x and y)."""
+    sums = np.zeros((stack.shape[0], 2))
+    for row in range(stack.shape[0]):
+        for i in range(stack.shape[1]):
+            if valid[row, i]:
+                sums[row, 0] += stack[row, i] * cos[i]
+                sums[row, 1] += stack[row, i] * sin[i]
+    return sums
+
+
+@dataclass
+class PipelineResult:
+    """The figures of the section (see the module docstring); times in microseconds per
+    scan, throughputs in scans per second."""
+
+    log: str
+    scans: int
+    method: str
+    stages_us: dict[str, float] = field(default_factory=dict)
+    end_to_end: dict[str, float] = field(default_factory=dict)
+    jobs: dict[int, float] = field(default_factory=dict)
+    load_before: list[float] = field(default_factory=list)
+    load_after: list[float] = field(default_factory=list)
+    floor_us: float = 0.0
+    cold: ColdStart | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+    def tables(self) -> list[TableData]:
+        stage_rows = [(name, f"{us:,.1f}") for name, us in self.stages_us.items()]
+        batch, loop = self.stages_us.get("extract (batch)"), self.stages_us.get("extract (loop)")
+        if batch and loop:
+            stage_rows.append(("loop / batch", f"{loop / batch:.2f}x"))
+        if self.floor_us:
+            stage_rows.append(("one pass over the returns (floor)", f"{self.floor_us:.2f}"))
+            stage_rows.append(("batch / floor", f"{batch / self.floor_us:,.0f}x"))
+        tables = [
+            TableData(
+                f"run stages, {self.method} on {self.log} ({self.scans} scans), us / scan",
+                ("stage", "us / scan"),
+                tuple(stage_rows),
+            ),
+            TableData(
+                "run end to end, one job",
+                ("output", "scans / s"),
+                tuple((name, f"{rate:,.0f}") for name, rate in self.end_to_end.items()),
+            ),
+        ]
+        if self.jobs:
+            one = self.jobs.get(1)
+            load = f"load average before {self.load_before[0]:.2f}, after {self.load_after[0]:.2f}"
+            tables.append(
+                TableData(
+                    f"run to JSON Lines by jobs ({load}; {os.cpu_count()} cores)",
+                    ("jobs", "scans / s", "speed-up"),
+                    tuple(
+                        (str(j), f"{rate:,.0f}", f"{rate / one:.2f}x" if one else "-")
+                        for j, rate in self.jobs.items()
+                    ),
+                )
+            )
+        if self.cold is not None:
+            c = self.cold
+            tables.append(
+                TableData(
+                    f"cold start of {c.method} in a fresh process",
+                    ("what", "s"),
+                    (
+                        ("import scanlines", f"{c.import_s:.2f}"),
+                        ("first extraction, empty cache (compiling)", f"{c.compile_s:.1f}"),
+                        ("first extraction, cache filled (loading)", f"{c.cache_load_s:.2f}"),
+                    ),
+                )
+            )
+        return tables
+
+
+def measure_pipeline(
+    log: str | Path,
+    *,
+    method: str = "adaptive",
+    repeats: int = 3,
+    max_jobs: int = 1,
+    with_cold_start: bool = False,
+    tick: Callable[[str], None] = lambda _stage: None,
+) -> PipelineResult:
+    """Measure the section on ``log`` (see the module docstring)."""
+    from scanlines import Extractor
+    from scanlines.io import open_log
+    from scanlines.runner import log_profile
+
+    log = Path(log)
+    extractor = Extractor(method, sensor_profile=log_profile(log, {}))
+    extractor.warm_up()
+    with open_log(log) as reader:
+        scans = list(reader)
+    result = PipelineResult(log.name, len(scans), method)
+    per_scan = 1e6 / max(1, len(scans))
+
+    def best(work: Callable[[], Any]) -> float:
+        work()  # untimed
+        return min(_seconds(work) for _ in range(repeats)) * per_scan
+
+    result.stages_us["read and parse"] = best(lambda: _read_all(log))
+    stacks = _stacks(scans)
+    result.stages_us["extract (batch)"] = best(lambda: [extractor.batch(*s) for s in stacks])
+    if max_jobs > 1:
+        result.stages_us[f"extract (batch, {max_jobs} threads)"] = best(
+            lambda: [extractor.batch(*s, jobs=max_jobs) for s in stacks]
+        )
+    result.stages_us["extract (loop)"] = best(lambda: [extractor(scan) for scan in scans])
+    tables = [extractor.batch(*s) for s in stacks]
+    for name, suffix in (("encode JSON Lines", ".jsonl"), ("encode CSV", ".csv")):
+        result.stages_us[name] = best(lambda suffix=suffix: _encode_all(scans, tables, suffix))
+    tick("run stages")
+    for suffix in (".jsonl", ".csv", ".mcap"):
+        _run_seconds(log, extractor, suffix, 1)  # untimed: imports, first writes
+        seconds = min(_run_seconds(log, extractor, suffix, 1) for _ in range(repeats))
+        result.end_to_end[suffix] = len(scans) / seconds
+    tick("end to end")
+    result.load_before = list(os.getloadavg())
+    for jobs in range(1, max_jobs + 1):
+        seconds = min(_run_seconds(log, extractor, ".jsonl", jobs) for _ in range(repeats))
+        result.jobs[jobs] = len(scans) / seconds
+    result.load_after = list(os.getloadavg())
+    tick("jobs")
+    passes = [(s[0], s[0] > 0, *_bearings(s)) for s in stacks]
+    one_pass(*passes[0])  # untimed: compiles
+    result.floor_us = best(lambda: [one_pass(*arguments) for arguments in passes])
+    if with_cold_start:
+        result.cold = cold_start(method)
+        tick("cold start")
+    return result
+
+
+def _seconds(work: Callable[[], Any]) -> float:
+    start = time.perf_counter()
+    work()
+    return time.perf_counter() - start
+
+
+def _read_all(log: Path) -> int:
+    from scanlines.io import open_log
+
+    with open_log(log) as reader:
+        return sum(1 for _ in reader)
+
+
+def _stacks(scans: list) -> list[tuple]:
+    """Runs of consecutive scans of one geometry as ``Extractor.batch`` arguments."""
+    stacks, start = [], 0
+    for end in range(1, len(scans) + 1):
+        if end == len(scans) or _geometry(scans[end]) != _geometry(scans[start]):
+            first = scans[start]
+            ranges = np.stack([s.ranges for s in scans[start:end]])
+            stacks.append(
+                (ranges, first.angle_min, first.angle_increment, first.range_min, first.range_max)
+            )
+            start = end
+    return stacks
+
+
+def _geometry(scan) -> tuple:
+    return (len(scan), scan.angle_min, scan.angle_increment, scan.range_min, scan.range_max)
+
+
+def _bearings(stack: tuple) -> tuple[np.ndarray, np.ndarray]:
+    ranges, angle_min, step = stack[0], stack[1], stack[2]
+    bearings = angle_min + step * np.arange(ranges.shape[1])
+    return np.cos(bearings), np.sin(bearings)
+
+
+def _encode_all(scans: list, tables: list, suffix: str) -> None:
+    from scanlines.io import open_writer
+
+    with tempfile.TemporaryDirectory() as folder:
+        writer = open_writer(Path(folder) / f"out{suffix}")
+        start = 0
+        for table in tables:
+            chunk = scans[start : start + len(table)]
+            writer.encode_chunk(list(range(start, start + len(table))), chunk, table)
+            start += len(table)
+        writer.abort()
+
+
+def _run_seconds(log: Path, extractor: Any, suffix: str, jobs: int) -> float:
+    from scanlines.io import open_log
+    from scanlines.runner import run_log_to_file
+
+    with tempfile.TemporaryDirectory() as folder, open_log(log) as reader:
+        start = time.perf_counter()
+        run_log_to_file(reader, extractor, Path(folder) / f"out{suffix}", jobs=jobs)
+        return time.perf_counter() - start
