@@ -8,6 +8,7 @@ suffix.
 from __future__ import annotations
 
 import contextlib
+import functools
 import math
 import os
 import shutil
@@ -17,15 +18,17 @@ from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
+import orjson
 
 from scanlines.errors import ParameterError
-from scanlines.extraction import END_X, END_Y, START_X, START_Y
+from scanlines.extraction import END_X, END_Y, START_X, START_Y, ExtractionTable
 from scanlines.io.writers import (
     UNSTAMPED_PERIOD,
     Frame,
     ResultWriter,
     ScanFeatures,
     json_record,
+    json_records,
 )
 from scanlines.scan import Scan
 
@@ -162,6 +165,23 @@ class Ros2BagWriter(ResultWriter):
 
     def _marker(self, stamp: Any, namespace: str, marker_id: int, points: np.ndarray) -> Any:
         t = self._types.types
+        header = self._header(stamp, self.marker_frame)
+        point = t["geometry_msgs/msg/Point"]
+        return t["visualization_msgs/msg/Marker"](
+            header=header,
+            ns=namespace,
+            id=marker_id,
+            points=[point(x=x, y=y, z=0.0) for x, y in points.tolist()],
+            texture=t["sensor_msgs/msg/CompressedImage"](
+                header=header, format="", data=np.empty(0, dtype=np.uint8)
+            ),
+            **self._marker_constants(namespace),
+        )
+
+    @functools.cache  # noqa: B019 - one writer, a handful of namespaces
+    def _marker_constants(self, namespace: str) -> dict[str, Any]:
+        """The fields of a marker that depend on its namespace alone (read-only, shared)."""
+        t = self._types.types
         marker_type = t["visualization_msgs/msg/Marker"]
         if namespace == "":
             kind, action, scale, color = (
@@ -173,35 +193,27 @@ class Ros2BagWriter(ResultWriter):
         else:
             kind = marker_type.LINE_LIST if namespace == "segments" else marker_type.SPHERE_LIST
             action, scale, color = marker_type.ADD, _SCALES[namespace], _COLORS[namespace]
-        header = self._header(stamp, self.marker_frame)
-        return marker_type(
-            header=header,
-            ns=namespace,
-            id=marker_id,
-            type=kind,
-            action=action,
-            pose=t["geometry_msgs/msg/Pose"](
+        return {
+            "type": kind,
+            "action": action,
+            "pose": t["geometry_msgs/msg/Pose"](
                 position=t["geometry_msgs/msg/Point"](x=0.0, y=0.0, z=0.0),
                 orientation=t["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0),
             ),
-            scale=t["geometry_msgs/msg/Vector3"](x=scale, y=scale, z=scale),
-            color=t["std_msgs/msg/ColorRGBA"](r=color[0], g=color[1], b=color[2], a=color[3]),
-            lifetime=t["builtin_interfaces/msg/Duration"](sec=0, nanosec=0),
-            frame_locked=False,
-            points=[t["geometry_msgs/msg/Point"](x=float(x), y=float(y), z=0.0) for x, y in points],
-            colors=[],
-            texture_resource="",
-            texture=t["sensor_msgs/msg/CompressedImage"](
-                header=header, format="", data=np.empty(0, dtype=np.uint8)
-            ),
-            uv_coordinates=[],
-            text="",
-            mesh_resource="",
-            mesh_file=t["visualization_msgs/msg/MeshFile"](
+            "scale": t["geometry_msgs/msg/Vector3"](x=scale, y=scale, z=scale),
+            "color": t["std_msgs/msg/ColorRGBA"](r=color[0], g=color[1], b=color[2], a=color[3]),
+            "lifetime": t["builtin_interfaces/msg/Duration"](sec=0, nanosec=0),
+            "frame_locked": False,
+            "colors": [],
+            "texture_resource": "",
+            "uv_coordinates": [],
+            "text": "",
+            "mesh_resource": "",
+            "mesh_file": t["visualization_msgs/msg/MeshFile"](
                 filename="", data=np.empty(0, dtype=np.uint8)
             ),
-            mesh_use_embedded_materials=False,
-        )
+            "mesh_use_embedded_materials": False,
+        }
 
     def _markers(self, features: ScanFeatures, stamp: Any) -> Any:
         lines = features.extraction.lines
@@ -235,21 +247,45 @@ class Ros2BagWriter(ResultWriter):
     # -- hooks ----------------------------------------------------------------------------
 
     def _write(self, features: ScanFeatures) -> None:
+        self._write_encoded(self._messages(features, json_record(features)))
+
+    def encode_chunk(self, indices, scans, table) -> list[tuple[Any, int, bytes]]:
+        """Every message of a chunk, serialised (the features records of the chunk are
+        encoded at once)."""
+        features = [
+            ScanFeatures(i, s, e, self.frame) for i, s, e in zip(indices, scans, table, strict=True)
+        ]
+        if self.frame == "world":
+            table = ExtractionTable.concatenate(
+                [f.extraction for f in features], table.method, table.params
+            )
+        records = json_records(indices, scans, table)
+        return [
+            message
+            for scan_features, record in zip(features, records, strict=True)
+            for message in self._messages(scan_features, orjson.dumps(record).decode())
+        ]
+
+    def _write_encoded(self, messages: list[tuple[Any, int, bytes]]) -> None:
+        for connection, bag_time, data in messages:
+            self._writer.write(connection, bag_time, data)
+
+    def _messages(self, features: ScanFeatures, record: str) -> list[tuple[Any, int, bytes]]:
+        """The serialised messages of one scan (its features record given as JSON)."""
         stamp, bag_time = self._stamp(features)
         serialize = self._types.serialize_cdr
         scan_msg = self._laser_scan(features.scan, stamp)
-        self._writer.write(
-            self._scan_conn, bag_time, serialize(scan_msg, "sensor_msgs/msg/LaserScan")
-        )
         markers = self._markers(features, stamp)
-        self._writer.write(
-            self._marker_conn, bag_time, serialize(markers, "visualization_msgs/msg/MarkerArray")
-        )
-        record = self._types.types["std_msgs/msg/String"](data=json_record(features))
-        self._writer.write(self._features_conn, bag_time, serialize(record, "std_msgs/msg/String"))
+        text = self._types.types["std_msgs/msg/String"](data=record)
+        messages = [
+            (self._scan_conn, serialize(scan_msg, "sensor_msgs/msg/LaserScan")),
+            (self._marker_conn, serialize(markers, "visualization_msgs/msg/MarkerArray")),
+            (self._features_conn, serialize(text, "std_msgs/msg/String")),
+        ]
         if features.scan.pose is not None:
             tf = self._transform(features.scan.pose, stamp)
-            self._writer.write(self._tf_conn, bag_time, serialize(tf, "tf2_msgs/msg/TFMessage"))
+            messages.append((self._tf_conn, serialize(tf, "tf2_msgs/msg/TFMessage")))
+        return [(connection, bag_time, data) for connection, data in messages]
 
     def _commit(self) -> None:
         self._writer.close()
