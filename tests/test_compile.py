@@ -89,3 +89,29 @@ def test_a_command_that_compiles_says_so_on_stderr(tmp_path):
     assert out.returncode == 0, out.stderr
     assert "compiling kernels for first use" in out.stderr
     assert "scanlines: compiled " in out.stderr
+
+
+def test_the_stages_of_adaptive_are_captured_in_plain_python(tmp_path):
+    """The second core compiles the stages with the arguments of a plain-Python run: every
+    stage named must be called by the method, in the order named."""
+    import pickle
+
+    from scanlines.methods.adaptive import Adaptive
+
+    path = tmp_path / "arguments.pickle"
+    env = dict(os.environ, NUMBA_DISABLE_JIT="1")
+    subprocess.run(
+        [sys.executable, "-m", "scanlines.warm", "capture", "adaptive", str(path)],
+        env=env, check=True, timeout=300,
+    )  # fmt: skip
+    calls = pickle.loads(path.read_bytes())
+    assert [name for name, _ in calls] == list(Adaptive.stages)
+
+
+def test_no_helper_process_when_the_stages_are_cached():
+    from scanlines import Extractor
+    from scanlines.warm import start_stage_compiler
+
+    Extractor().warm_up()  # this session's cache now holds every stage
+    assert start_stage_compiler("adaptive") is None
+    assert start_stage_compiler("iepf") is None  # no stages named

@@ -1,6 +1,6 @@
 """Whole logs: describe one, and run an extractor over every scan of it.
 
-Both stream: one scan is in memory at a time, whatever the size of the log.
+Both stream: a few chunks of scans are in memory at a time, whatever the size of the log.
 """
 
 from __future__ import annotations

@@ -100,7 +100,7 @@ def start_stage_compiler(method: str) -> subprocess.Popen | None:
     from scanlines.runner import default_jobs
 
     stages = getattr(method_class(method), "stages", ())
-    if not (COMPILED and stages and default_jobs() > 1) or _cached(stages[-1]):
+    if not (COMPILED and stages and default_jobs() > 1) or all(map(_cached, stages)):
         return None
     command = [sys.executable, "-m", "scanlines.warm", "stages", method]
     return subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
