@@ -202,3 +202,24 @@ def test_import_needs_no_rich():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
+
+
+def test_quick_pipeline_section(quick_run):
+    """The stages of `run`, end to end per format, jobs with the load, and the floor."""
+    out, folder = quick_run
+    assert out.returncode == 0, out.stderr
+    pipeline = json.loads((folder / "out.json").read_text())["pipeline"]
+    assert pipeline["scans"] == 300
+    assert pipeline["method"] == "adaptive"
+    stages = pipeline["stages_us"]
+    for stage in ("read and parse", "extract (batch)", "extract (loop)", "encode JSON Lines"):
+        assert stages[stage] > 0
+    assert set(pipeline["end_to_end"]) == {".jsonl", ".csv", ".mcap"}
+    assert all(rate > 0 for rate in pipeline["end_to_end"].values())
+    assert list(pipeline["jobs"]) == ["1"]
+    assert len(pipeline["load_before"]) == 3
+    assert 0 < pipeline["floor_us"] < stages["extract (batch)"]
+    assert pipeline["cold"] is None  # not in --quick: it compiles from an empty cache
+    page = (folder / "docs" / "PERFORMANCE.md").read_text()
+    assert "What a run costs besides the kernels" in page
+    assert "one pass over the returns (floor)" in page

@@ -99,6 +99,15 @@ def render_markdown(result: BenchResult) -> str:
     batch = result.batch_table()
     if batch is not None:
         parts += ["## Extractor.batch vs the loop\n", batch.to_markdown()]
+    if result.pipeline is not None:
+        parts += [
+            "## What a run costs besides the kernels\n",
+            "`scanlines run` on the intel excerpt by stage, end to end by output format, by "
+            "jobs (with the load average: the machine is shared), the floor (one compiled "
+            "pass over the returns) and the cold start in a fresh process "
+            "(`scanlines.evaluation.bench_pipeline`).\n",
+            *[t.to_markdown() for t in result.pipeline.tables()],
+        ]
     if result.profile is not None:
         p = result.profile
         share = [
