@@ -209,7 +209,7 @@ def test_quick_pipeline_section(quick_run):
     out, folder = quick_run
     assert out.returncode == 0, out.stderr
     pipeline = json.loads((folder / "out.json").read_text())["pipeline"]
-    assert pipeline["scans"] == 300
+    assert pipeline["scans"] == 20  # --quick
     assert pipeline["method"] == "adaptive"
     stages = pipeline["stages_us"]
     for stage in ("read and parse", "extract (batch)", "extract (loop)", "encode JSON Lines"):

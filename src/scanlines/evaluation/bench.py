@@ -364,6 +364,7 @@ def run(
             sample("intel"),
             repeats=config.repeats,
             max_jobs=config.jobs,
+            max_scans=config.pipeline_scans,
             with_cold_start=config.cold_start,
             tick=lambda stage: tick(stage)(),
         )

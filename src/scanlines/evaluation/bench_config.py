@@ -63,6 +63,7 @@ class BenchConfig:
     profile_scans: int | None = None
     profile_top: int = 15
     pipeline: bool = True
+    pipeline_scans: int | None = None
     jobs: int = 1
     cold_start: bool = True
     quick: bool = False
@@ -77,6 +78,7 @@ class BenchConfig:
             beam_counts=QUICK_BEAMS,
             scaling_scans=2,
             profile_scans=5,
+            pipeline_scans=20,
             cold_start=False,
             quick=True,
         )
@@ -131,6 +133,7 @@ class BenchConfig:
             "profile": self.profile,
             "profile_scans": self.profile_scans,
             "pipeline": self.pipeline,
+            "pipeline_scans": self.pipeline_scans,
             "jobs": self.jobs,
             "cold_start": self.cold_start,
             "quick": self.quick,

@@ -18,6 +18,7 @@ ratios hold on a shared machine even where the absolute times do not.
 
 from __future__ import annotations
 
+import itertools
 import json
 import os
 import subprocess
@@ -175,10 +176,12 @@ def measure_pipeline(
     method: str = "adaptive",
     repeats: int = 3,
     max_jobs: int = 1,
+    max_scans: int | None = None,
     with_cold_start: bool = False,
     tick: Callable[[str], None] = lambda _stage: None,
 ) -> PipelineResult:
-    """Measure the section on ``log`` (see the module docstring)."""
+    """Measure the section on the first ``max_scans`` scans of ``log`` (all by default;
+    see the module docstring)."""
     from scanlines import Extractor
     from scanlines.io import open_log
     from scanlines.runner import log_profile
@@ -187,7 +190,8 @@ def measure_pipeline(
     extractor = Extractor(method, sensor_profile=log_profile(log, {}))
     extractor.warm_up()
     with open_log(log) as reader:
-        scans = list(reader)
+        scans = list(itertools.islice(reader, max_scans))
+    selection = slice(0, len(scans))
     result = PipelineResult(log.name, len(scans), method)
     per_scan = 1e6 / max(1, len(scans))
 
@@ -195,7 +199,7 @@ def measure_pipeline(
         work()  # untimed
         return min(_seconds(work) for _ in range(repeats)) * per_scan
 
-    result.stages_us["read and parse"] = best(lambda: _read_all(log))
+    result.stages_us["read and parse"] = best(lambda: _read(log, len(scans)))
     stacks = _stacks(scans)
     result.stages_us["extract (batch)"] = best(lambda: [extractor.batch(*s) for s in stacks])
     if max_jobs > 1:
@@ -208,13 +212,15 @@ def measure_pipeline(
         result.stages_us[name] = best(lambda suffix=suffix: _encode_all(scans, tables, suffix))
     tick("run stages")
     for suffix in (".jsonl", ".csv", ".mcap"):
-        _run_seconds(log, extractor, suffix, 1)  # untimed: imports, first writes
-        seconds = min(_run_seconds(log, extractor, suffix, 1) for _ in range(repeats))
+        _run_seconds(log, selection, extractor, suffix, 1)  # untimed: imports, first writes
+        seconds = min(_run_seconds(log, selection, extractor, suffix, 1) for _ in range(repeats))
         result.end_to_end[suffix] = len(scans) / seconds
     tick("end to end")
     result.load_before = list(os.getloadavg())
     for jobs in range(1, max_jobs + 1):
-        seconds = min(_run_seconds(log, extractor, ".jsonl", jobs) for _ in range(repeats))
+        seconds = min(
+            _run_seconds(log, selection, extractor, ".jsonl", jobs) for _ in range(repeats)
+        )
         result.jobs[jobs] = len(scans) / seconds
     result.load_after = list(os.getloadavg())
     tick("jobs")
@@ -233,11 +239,11 @@ def _seconds(work: Callable[[], Any]) -> float:
     return time.perf_counter() - start
 
 
-def _read_all(log: Path) -> int:
+def _read(log: Path, count: int) -> int:
     from scanlines.io import open_log
 
     with open_log(log) as reader:
-        return sum(1 for _ in reader)
+        return sum(1 for _ in itertools.islice(reader, count))
 
 
 def _stacks(scans: list) -> list[tuple]:
@@ -277,11 +283,11 @@ def _encode_all(scans: list, tables: list, suffix: str) -> None:
         writer.abort()
 
 
-def _run_seconds(log: Path, extractor: Any, suffix: str, jobs: int) -> float:
+def _run_seconds(log: Path, scans: slice, extractor: Any, suffix: str, jobs: int) -> float:
     from scanlines.io import open_log
     from scanlines.runner import run_log_to_file
 
     with tempfile.TemporaryDirectory() as folder, open_log(log) as reader:
         start = time.perf_counter()
-        run_log_to_file(reader, extractor, Path(folder) / f"out{suffix}", jobs=jobs)
+        run_log_to_file(reader, extractor, Path(folder) / f"out{suffix}", scans=scans, jobs=jobs)
         return time.perf_counter() - start
