@@ -180,3 +180,17 @@ def test_batch_on_threads_gives_the_same_table(intel, table, jobs):
 def test_batch_refuses_a_bad_jobs_count(intel):
     with pytest.raises(ParameterError, match="jobs must be an integer >= 1"):
         Extractor().batch(np.ones((2, 10)), 0.0, 0.01, jobs=0)
+
+
+def test_a_process_pool_maps_an_extractor_over_scans(intel):
+    """Extractor and Extraction pickle: `pool.map(extractor, scans)` works and equals the
+    calls in this process."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    extractor = Extractor()
+    with ProcessPoolExecutor(2) as pool:
+        remote = list(pool.map(extractor, intel[:6]))
+    for scan, result in zip(intel[:6], remote, strict=True):
+        here = extractor(scan)
+        assert pickle.loads(pickle.dumps(here)).to_dict() == here.to_dict()
+        assert result.to_dict() == here.to_dict()
