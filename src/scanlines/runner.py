@@ -26,6 +26,7 @@ from scanlines.sensor_profile import DEFAULT_SCANS, SensorProfile, estimate_prof
 __all__ = [
     "LogDescription",
     "RunSummary",
+    "chunk_scans",
     "default_jobs",
     "describe_log",
     "log_profile",
@@ -234,7 +235,7 @@ def run_log(
     summary = RunSummary(method=extractor.method, params=dict(extractor.params), jobs=jobs)
     started = time.perf_counter()
     compiled_before, compiled_wall_before = kernel_seconds(), kernel_seconds(wall=True)
-    chunks = _chunks(select(reader.enumerate(), scans), chunk)
+    chunks = chunk_scans(select(reader.enumerate(), scans), chunk)
 
     def process(piece: _Chunk) -> _Chunk:
         return _process(piece, extractor, writer)
@@ -255,8 +256,9 @@ def run_log(
     return summary
 
 
-def _chunks(indexed: Iterator[tuple[int, Scan]], size: int) -> Iterator[_Chunk]:
-    """Consecutive scans in chunks of at most ``size`` of one sensor geometry."""
+def chunk_scans(indexed: Iterator[tuple[int, Scan]], size: int) -> Iterator[_Chunk]:
+    """``(index, scan)`` pairs in chunks of at most ``size`` consecutive scans of one sensor
+    geometry (what :func:`run_log` extracts at once)."""
     piece = _Chunk([], [])
     for index, scan in indexed:
         if piece.scans and (

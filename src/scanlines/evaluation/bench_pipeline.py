@@ -247,21 +247,17 @@ def _read(log: Path, count: int) -> int:
 
 
 def _stacks(scans: list) -> list[tuple]:
-    """Runs of consecutive scans of one geometry as ``Extractor.batch`` arguments."""
-    stacks, start = [], 0
-    for end in range(1, len(scans) + 1):
-        if end == len(scans) or _geometry(scans[end]) != _geometry(scans[start]):
-            first = scans[start]
-            ranges = np.stack([s.ranges for s in scans[start:end]])
-            stacks.append(
-                (ranges, first.angle_min, first.angle_increment, first.range_min, first.range_max)
-            )
-            start = end
+    """The chunks ``scanlines run`` would extract, as ``Extractor.batch`` arguments."""
+    from scanlines.runner import CHUNK_SCANS, chunk_scans
+
+    stacks = []
+    for chunk in chunk_scans(enumerate(scans), CHUNK_SCANS):
+        first = chunk.scans[0]
+        ranges = np.stack([s.ranges for s in chunk.scans])
+        stacks.append(
+            (ranges, first.angle_min, first.angle_increment, first.range_min, first.range_max)
+        )
     return stacks
-
-
-def _geometry(scan) -> tuple:
-    return (len(scan), scan.angle_min, scan.angle_increment, scan.range_min, scan.range_max)
 
 
 def _bearings(stack: tuple) -> tuple[np.ndarray, np.ndarray]:
