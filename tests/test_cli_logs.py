@@ -139,7 +139,8 @@ def test_malformed_record_fails_or_is_skipped(tmp_path):
     skipped = run("run", bad, "--on-error", "skip", "--out", tmp_path / "b.jsonl")
     assert skipped.returncode == 0, skipped.stderr
     meta = json.loads((tmp_path / "b.jsonl.meta.json").read_text())
-    assert meta["counts"]["skipped_records"] == 1
+    assert meta["counts"]["skipped_scan_records"] == 1
+    assert meta["counts"]["skip_reasons"] == {"range": 1}
 
 
 @pytest.mark.parametrize(

@@ -30,9 +30,11 @@ class LogFormatError(ScanlinesError, ValueError):
     path:
         The file, when known.
     record:
-        The line number (text logs) or message index (bags), when known.
+        The line number (text logs) or message number (bags), when known.
     field:
         The field of the record, when known.
+    unit:
+        What ``record`` counts: ``"line"`` (the default) or ``"message"``.
     """
 
     def __init__(
@@ -42,17 +44,37 @@ class LogFormatError(ScanlinesError, ValueError):
         path: object | None = None,
         record: int | None = None,
         field: str | None = None,
+        unit: str = "line",
     ) -> None:
         self.path = None if path is None else str(path)
         self.record = record
         self.field = field
-        self.reason = message
+        self.reason = one_line(message)
         where = []
         if self.path is not None:
             where.append(self.path)
         if record is not None:
-            where.append(f"line {record}")
+            where.append(f"{unit} {record}")
         if field is not None:
             where.append(f"field {field}")
         prefix = ": ".join([", ".join(where)]) + ": " if where else ""
-        super().__init__(prefix + message)
+        super().__init__(prefix + self.reason)
+
+
+#: Longest text of a foreign exception quoted in an error message.
+QUOTED_CHARACTERS = 200
+
+
+def one_line(text: str) -> str:
+    """``text`` on one line: line breaks (and the indentation after them) become ``" / "``."""
+    lines = [line.strip() for line in str(text).splitlines()]
+    return " / ".join(line for line in lines if line)
+
+
+def describe(exc: BaseException) -> str:
+    """A foreign exception (from numpy, zipfile, rosbags...) as a short one-line quote for
+    an error message: its type and the start of its text."""
+    text = one_line(str(exc))
+    if len(text) > QUOTED_CHARACTERS:
+        text = text[: QUOTED_CHARACTERS - 3] + "..."
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__

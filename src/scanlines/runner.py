@@ -158,6 +158,11 @@ def _add_unique(values: list[float], value: float, limit: int = 8) -> None:
 class RunSummary:
     """Counts and timings of :func:`run_log`.
 
+    ``scans`` were written; ``skipped_scans`` scan records were dropped as malformed
+    (``--on-error skip``), by reason in ``skip_reasons``; ``skipped_other`` other records
+    were dropped: malformed ones (odometry, parameters) and those ignored by design
+    (other topics, other message names, by name in ``ignored_records``).
+
     ``compile_seconds`` is the time spent compiling kernels, or loading them from the
     cache, on their first use in this process (summed over jobs); ``extract_seconds``
     (the time in the extraction kernels, summed over jobs) and ``total_seconds`` (wall
@@ -168,7 +173,10 @@ class RunSummary:
     segments: int = 0
     breakpoints: int = 0
     corners: int = 0
-    skipped_records: int = 0
+    skipped_scans: int = 0
+    skip_reasons: dict[str, int] = field(default_factory=dict)
+    skipped_other: int = 0
+    ignored_records: dict[str, int] = field(default_factory=dict)
     extract_seconds: float = 0.0
     compile_seconds: float = 0.0
     total_seconds: float = 0.0
@@ -248,12 +256,24 @@ def run_log(
         with ThreadPoolExecutor(jobs, thread_name_prefix="scanlines-run") as pool:
             for piece in _ordered(pool, process, chunks, ahead=2 * jobs):
                 _write(piece, writer, summary, on_scan)
-    summary.skipped_records = int(getattr(reader, "error_count", 0))
+    _count_skipped(reader, summary)
     summary.compile_seconds = kernel_seconds() - compiled_before
     summary.extract_seconds = max(0.0, summary.extract_seconds - summary.compile_seconds)
     compiled_wall = kernel_seconds(wall=True) - compiled_wall_before
     summary.total_seconds = time.perf_counter() - started - compiled_wall
     return summary
+
+
+#: ``reader.skipped`` keys that are not records (nothing was lost).
+NOT_RECORDS = frozenset({"blank", "comment", "header"})
+
+
+def _count_skipped(reader: Any, summary: RunSummary) -> None:
+    summary.skipped_scans = int(getattr(reader, "bad_scans", 0))
+    summary.skip_reasons = dict(getattr(reader, "skip_reasons", {}))
+    ignored = {k: v for k, v in getattr(reader, "skipped", {}).items() if k not in NOT_RECORDS}
+    summary.ignored_records = ignored
+    summary.skipped_other = int(getattr(reader, "bad_other", 0)) + sum(ignored.values())
 
 
 def chunk_scans(indexed: Iterator[tuple[int, Scan]], size: int) -> Iterator[_Chunk]:
@@ -338,10 +358,12 @@ def run_log_to_file(
     on_scan: Callable[[int], None] | None = None,
     input_name: str | None = None,
     jobs: int = 1,
+    overwrite: bool = False,
 ) -> RunSummary:
     """:func:`run_log`, writing to ``out`` (format by extension: :func:`scanlines.io.open_writer`).
 
-    The output appears complete, with its ``.meta.json``, or not at all.
+    The output appears complete, with its ``.meta.json``, or not at all; an existing one
+    is replaced only with ``overwrite``.
     """
     from scanlines.io import open_writer
 
@@ -357,9 +379,14 @@ def run_log_to_file(
             "" if v is None else str(v) for v in (scans.start, scans.stop, scans.step)
         ),
     }
-    with open_writer(out, meta=meta, frame=frame) as writer:
+    with open_writer(out, meta=meta, frame=frame, overwrite=overwrite) as writer:
         summary = run_log(reader, extractor, writer=writer, scans=scans, on_scan=on_scan, jobs=jobs)
         writer.update_meta(
-            counts={"scans": summary.scans, "skipped_records": summary.skipped_records}
+            counts={
+                "scans": summary.scans,
+                "skipped_scan_records": summary.skipped_scans,
+                "skip_reasons": summary.skip_reasons,
+                "skipped_other_records": summary.skipped_other,
+            }
         )
     return summary

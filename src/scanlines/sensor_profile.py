@@ -162,9 +162,9 @@ class SensorProfile:
 
     def save(self, path: str | Path) -> Path:
         """Write the profile as JSON to ``path``."""
-        path = Path(path)
-        path.write_text(json.dumps(self.to_dict(), indent=2) + "\n", encoding="utf-8")
-        return path
+        from scanlines.io.outputs import write_text_atomically
+
+        return write_text_atomically(path, json.dumps(self.to_dict(), indent=2) + "\n")
 
     @classmethod
     def from_dict(cls, values: dict[str, Any], where: str = "profile") -> SensorProfile:

@@ -160,8 +160,10 @@ def test_reader_options_lists_keywords() -> None:
         "pose",
         "timestamp",
         "on_error",
+        "max_beams",
+        "max_record_bytes",
     ]
-    assert reader_options("rosbag") == ["topic", "on_error"]
+    assert reader_options("rosbag") == ["topic", "on_error", "max_beams", "max_record_bytes"]
 
 
 def test_import_does_not_import_rosbags() -> None:

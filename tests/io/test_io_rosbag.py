@@ -173,6 +173,7 @@ def test_storage_error_mid_stream(tmp_path, real_scans, monkeypatch) -> None:
 
     monkeypatch.setattr(AnyReader, "messages", failing_messages)
     scans = []
-    with pytest.raises(LogFormatError, match=r"damaged after message 2 \(OSError: read error\)"):
+    damaged = r"damaged after message 2 of /scan \(OSError: read error\)"
+    with pytest.raises(LogFormatError, match=damaged):
         scans.extend(open_log(path))
     assert len(scans) == 2

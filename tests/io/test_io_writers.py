@@ -27,6 +27,7 @@ from scanlines.io import (
     open_writer,
     to_world,
 )
+from scanlines.io.outputs import OutputError
 from scanlines.scan import Scan
 
 
@@ -170,9 +171,9 @@ class TestMeta:
         assert (document["method"], document["params"]) == ("x", {"a": 1})
 
 
-def write_then_fail(path, scans, *, frame="sensor") -> None:
+def write_then_fail(path, scans, *, frame="sensor", overwrite=False) -> None:
     """Write two scans, then fail: by an exception, or by a scan without pose in world frame."""
-    with open_writer(path, frame=frame) as writer:
+    with open_writer(path, frame=frame, overwrite=overwrite) as writer:
         writer.write(0, scans[0], make_extraction(2))
         if frame == "world":
             writer.write(1, simple_scan(pose=None), make_extraction(2))
@@ -197,10 +198,12 @@ class TestAtomicity:
         write_all(path, scans[:1], [make_extraction(1)])
         before = {p.name: p.stat().st_mtime_ns for p in tmp_path.iterdir()}
         assert len(before) == 2  # the output and its .meta.json
-        with pytest.raises(RuntimeError):
+        with pytest.raises(OutputError, match="exists; not replacing it"):
             write_then_fail(path, scans)
+        with pytest.raises(RuntimeError):
+            write_then_fail(path, scans, overwrite=True)
         assert {p.name: p.stat().st_mtime_ns for p in tmp_path.iterdir()} == before
-        write_all(path, scans[:2], [make_extraction(1), make_extraction(1)])
+        write_all(path, scans[:2], [make_extraction(1), make_extraction(1)], overwrite=True)
         assert json.loads(meta_path_for(path).read_text())["counts"]["scans"] == 2
 
 
@@ -398,12 +401,12 @@ def test_bag_output_does_not_replace_other_things(tmp_path) -> None:
     plain_file = tmp_path / "results"
     plain_file.write_text("keep me")
     with pytest.raises(ParameterError, match="not a bag directory"):
-        open_writer(plain_file)
+        open_writer(plain_file, overwrite=True)
     folder = tmp_path / "folder"
     (folder / "sub").mkdir(parents=True)
     with pytest.raises(ParameterError, match="not a ROS 2 bag"):
-        open_writer(folder)
-    with pytest.raises(FileExistsError):
-        open_writer(plain_file, overwrite=False)
+        open_writer(folder, overwrite=True)
+    with pytest.raises(OutputError, match="exists"):
+        open_writer(plain_file)
     assert plain_file.read_text() == "keep me"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["folder", "results"]

@@ -8,7 +8,8 @@ import sys
 import threading
 import time
 from collections.abc import Callable
-from typing import Any, TypeVar
+from pathlib import Path
+from typing import Annotated, Any, Literal, TypeVar
 
 import typer
 
@@ -124,6 +125,32 @@ def jobs_option(jobs: int | None) -> int:
     if jobs < 1:
         raise ParameterError(f"--jobs must be at least 1, got {jobs}")
     return jobs
+
+
+def _method_names() -> tuple[str, ...]:
+    from scanlines.extractor import method_names
+
+    return tuple(method_names())
+
+
+#: The registered methods, as choices of ``--method``.
+MethodName = Literal[_method_names()]  # type: ignore[valid-type]
+
+OverwriteOption = Annotated[
+    bool, typer.Option("--overwrite", help="Replace output files that exist already.")
+]
+
+
+def writable(path: Path | None, overwrite: bool, *, with_meta: bool = False) -> Path | None:
+    """``path`` (an output the user named), checked before any work: its folder exists,
+    and it (and its ``.meta.json``) does not, unless ``--overwrite``."""
+    if path is None:
+        return None
+    from scanlines.io.outputs import check_output
+    from scanlines.io.writers import meta_path_for
+
+    companions = [meta_path_for(path)] if with_meta else []
+    return check_output(path, overwrite=overwrite, companions=companions)
 
 
 def parse_params(pairs: list[str] | None) -> dict[str, Any]:

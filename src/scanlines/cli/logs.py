@@ -5,19 +5,26 @@ from __future__ import annotations
 import math
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 import typer
 
-from scanlines.cli.common import guarded, jobs_option, parse_params
+from scanlines.cli.common import (
+    MethodName,
+    OverwriteOption,
+    guarded,
+    jobs_option,
+    parse_params,
+    writable,
+)
 
 LogArgument = Annotated[Path, typer.Argument(help="CARMEN log, ROS bag, .dat, .csv or .npz.")]
 FovOption = Annotated[
     float | None, typer.Option("--fov", help="CARMEN FLASER: field of view, degrees.")
 ]
 ConventionOption = Annotated[
-    str | None,
-    typer.Option("--angle-convention", help="CARMEN FLASER: 'step' or 'linspace' bearings."),
+    Literal["step", "linspace"] | None,
+    typer.Option("--angle-convention", help="CARMEN FLASER: bearings by step or linspace."),
 ]
 TopicOption = Annotated[str | None, typer.Option(help="ROS bag: the LaserScan topic.")]
 AngleMinOption = Annotated[
@@ -26,7 +33,15 @@ AngleMinOption = Annotated[
 AngleStepOption = Annotated[
     float | None, typer.Option("--angle-increment", help="CSV: bearing step, degrees.")
 ]
-MethodOption = Annotated[str, typer.Option(help="Extraction method.")]
+MethodOption = Annotated[MethodName, typer.Option(help="Extraction method.")]
+OnErrorOption = Annotated[
+    Literal["fail", "skip"],
+    typer.Option("--on-error", help="Stop at a malformed record, or skip and count it."),
+]
+MaxBeamsOption = Annotated[
+    int | None,
+    typer.Option("--max-beams", help="Most beams in one scan (default 1,000,000).", min=1),
+]
 PresetOption = Annotated[str | None, typer.Option(help="Named parameter set, e.g. paper.")]
 ParamOption = Annotated[list[str] | None, typer.Option("--param", help="NAME=VALUE, repeatable.")]
 ScansOption = Annotated[
@@ -69,9 +84,11 @@ def reader_options(
     angle_min: float | None = None,
     angle_increment: float | None = None,
     on_error: str | None = None,
+    max_beams: int | None = None,
 ) -> dict[str, Any]:
     """Only the options the user gave (each reader refuses the ones it does not take)."""
     options: dict[str, Any] = {
+        "max_beams": max_beams,
         "fov": fov,
         "angle_convention": angle_convention,
         "topic": topic,
@@ -89,6 +106,8 @@ def info_command(
     topic: TopicOption = None,
     angle_min: AngleMinOption = None,
     angle_increment: AngleStepOption = None,
+    on_error: OnErrorOption = "fail",
+    max_beams: MaxBeamsOption = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON.")] = False,
 ) -> None:
     import json
@@ -96,7 +115,9 @@ def info_command(
     from scanlines.io import open_log
     from scanlines.runner import describe_log
 
-    options = reader_options(fov, angle_convention, topic, angle_min, angle_increment)
+    options = reader_options(
+        fov, angle_convention, topic, angle_min, angle_increment, on_error, max_beams
+    )
     with open_log(log, **options) as reader:
         description = describe_log(reader)
     if as_json:
@@ -151,6 +172,12 @@ def _print_description(d) -> None:
         table.add_row(
             "skipped lines", ", ".join(f"{k} {v}" for k, v in sorted(reader["skipped"].items()))
         )
+    if reader.get("errors"):
+        table.add_row(
+            "malformed records skipped",
+            f"{_with_breakdown(reader['bad_scan_records'], reader['skip_reasons'])} scans, "
+            f"{reader['bad_other_records']} others",
+        )
     table.add_row("options", ", ".join(f"{k}={v}" for k, v in reader.get("options", {}).items()))
     Console().print(table)
 
@@ -164,12 +191,13 @@ def run_command(
     out: Annotated[
         Path | None, typer.Option(help="Output: .jsonl, .csv, .mcap, or a ROS 2 bag directory.")
     ] = None,
+    overwrite: OverwriteOption = False,
     frame: Annotated[
-        str, typer.Option(help="sensor, or world (needs poses in the log).")
+        Literal["sensor", "world"],
+        typer.Option(help="Features in the sensor frame, or the world frame (needs poses)."),
     ] = "sensor",
-    on_error: Annotated[
-        str, typer.Option("--on-error", help="fail, or skip malformed records.")
-    ] = "fail",
+    on_error: OnErrorOption = "fail",
+    max_beams: MaxBeamsOption = None,
     fov: FovOption = None,
     angle_convention: ConventionOption = None,
     topic: TopicOption = None,
@@ -190,14 +218,17 @@ def run_command(
     params = parse_params(param)
     Extractor(method, preset, **params)  # bad parameters fail before the log is read
     selection = parse_slice(scans)
-    options = reader_options(fov, angle_convention, topic, angle_min, angle_increment, on_error)
+    writable(out, overwrite, with_meta=True)  # and a taken output before any work
+    options = reader_options(
+        fov, angle_convention, topic, angle_min, angle_increment, on_error, max_beams
+    )
     jobs = jobs_option(jobs)
     with compiled_for(method) as compiled:
         profile = _profile_for_run(log, options, selection, sensor_profile)
         extractor = Extractor(method, preset, sensor_profile=profile, **params)
         extractor.warm_up()  # before the progress bar: the displays do not overlap
     with open_log(log, **options) as reader:
-        summary = _run_with_progress(reader, extractor, selection, out, frame, log, jobs)
+        summary = _run_with_progress(reader, extractor, selection, out, frame, log, jobs, overwrite)
     summary.compile_seconds += compiled.seconds
     _print_summary(summary, out)
 
@@ -210,6 +241,7 @@ def calibrate_command(
     plot: Annotated[
         Path | None, typer.Option(help="Figure of the noise curve (PNG, PDF, SVG).")
     ] = None,
+    overwrite: OverwriteOption = False,
     scans: ScansOption = None,
     max_scans: Annotated[int, typer.Option(help="Scans measured (the first selected).")] = 500,
     fov: FovOption = None,
@@ -228,11 +260,13 @@ def calibrate_command(
 
     if max_scans < 1:
         raise ParameterError(f"--max-scans must be at least 1, got {max_scans}")
+    out = out or log.with_name(log.name.split(".")[0] + ".profile.json")
+    writable(out, overwrite)
+    writable(plot, overwrite)
     options = reader_options(fov, angle_convention, topic, angle_min, angle_increment)
     with open_log(log, **options) as reader:
         selected = (scan for _, scan in select(reader.enumerate(), parse_slice(scans)))
         profile = estimate_profile(selected, max_scans=max_scans, source=log.name)
-    out = out or log.with_name(log.name.split(".")[0] + ".profile.json")
     profile.save(out)
     table = Table(title=f"sensor profile of {log.name}", show_header=False)
     for what, value in describe(profile):
@@ -277,7 +311,7 @@ def _profile_for_run(log, options, selection, given):
     return profile
 
 
-def _run_with_progress(reader, extractor, selection, out, frame, log, jobs):
+def _run_with_progress(reader, extractor, selection, out, frame, log, jobs, overwrite):
     from rich.progress import BarColumn, Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
     from scanlines.runner import run_log, run_log_to_file
@@ -300,7 +334,7 @@ def _run_with_progress(reader, extractor, selection, out, frame, log, jobs):
         else:
             summary = run_log_to_file(
                 reader, extractor, out, frame=frame, scans=selection, on_scan=advance,
-                input_name=str(log), jobs=jobs,
+                input_name=str(log), jobs=jobs, overwrite=overwrite,
             )  # fmt: skip
     return summary
 
@@ -336,21 +370,41 @@ def _print_summary(summary, out) -> None:
     table.add_row("extraction, us / scan", f"{summary.microseconds_per_scan:.0f}")
     table.add_row(f"end to end, scans / s ({summary.jobs} jobs)", f"{summary.scans_per_second:.0f}")
     table.add_row("kernels compiled or loaded, s", f"{summary.compile_seconds:.1f}")
-    table.add_row("skipped records", str(summary.skipped_records))
+    table.add_row(
+        "scan records skipped", _with_breakdown(summary.skipped_scans, summary.skip_reasons)
+    )
+    table.add_row(
+        "other records skipped", _with_breakdown(summary.skipped_other, summary.ignored_records)
+    )
     if out is not None:
         table.add_row("output", str(out))
     Console().print(table)
+
+
+def _with_breakdown(total: int, parts: dict[str, int]) -> str:
+    """``"42 (range 30, num_readings 12)"``, the largest parts first."""
+    if not parts:
+        return str(total)
+    largest = sorted(parts.items(), key=lambda item: (-item[1], item[0]))[:4]
+    more = ", ..." if len(parts) > 4 else ""
+    return f"{total} ({', '.join(f'{k} {v}' for k, v in largest)}{more})"
 
 
 def plot_command(
     log: LogArgument,
     scan: Annotated[int | None, typer.Option("--scan", help="Index of one scan to draw.")] = None,
     scans: Annotated[
-        str | None, typer.Option("--scans", help="Slice of scans for a grid, e.g. 0:300:50.")
+        str | None,
+        typer.Option("--scans", help="Slice of scans for grids of 12, e.g. 0:300:50."),
     ] = None,
-    output: Annotated[Path, typer.Option("-o", "--output", help="Figure file.")] = Path(
-        "scanlines-plot.png"
-    ),
+    output: Annotated[
+        Path,
+        typer.Option("-o", "--output", help="Figure file; pages of a long selection: NAME-2...."),
+    ] = Path("scanlines-plot.png"),
+    max_pages: Annotated[
+        int, typer.Option("--max-pages", help="Most pages (grids of 12 scans) drawn.", min=1)
+    ] = 10,
+    overwrite: OverwriteOption = False,
     method: MethodOption = "adaptive",
     preset: PresetOption = None,
     param: ParamOption = None,
@@ -371,23 +425,46 @@ def plot_command(
         raise ParameterError("give exactly one of --scan N or --scans START:STOP[:STEP]")
     selection = slice(scan, scan + 1) if scan is not None else parse_slice(scans)
     extractor = Extractor(method, preset, **parse_params(param))
+    writable(output, overwrite)
     options = reader_options(fov, angle_convention, topic, angle_min, angle_increment)
     with open_log(log, **options) as reader:
-        chosen = []
+        chosen, selected = [], 0
         for index, item in select(reader.enumerate(), selection):
-            chosen.append((item, extractor(item), f"{log.name} #{index}"))
-            if len(chosen) == MAX_PANELS:
-                break
+            selected += 1
+            if len(chosen) < max_pages * PANELS_PER_PAGE:
+                chosen.append((item, extractor(item), f"{log.name} #{index}"))
     if not chosen:
         raise ParameterError(f"no scan of {log} falls in the selection")
     if scan is not None:
-        figure = plot_extraction(*chosen[0][:2], title=chosen[0][2])
-    else:
-        figure = plot_grid(chosen)
-    typer.echo(f"figure: {save(figure, output)}")
+        typer.echo(f"figure: {save(plot_extraction(*chosen[0][:2], title=chosen[0][2]), output)}")
+        return
+    pages = [chosen[k : k + PANELS_PER_PAGE] for k in range(0, len(chosen), PANELS_PER_PAGE)]
+    paths = [_page_path(output, number, len(pages)) for number in range(1, len(pages) + 1)]
+    for path in paths[1:]:
+        writable(path, overwrite)
+    for page, path in zip(pages, paths, strict=True):
+        save(plot_grid(page), path)
+    left_out = (
+        f"; {selected - len(chosen)} more selected, past --max-pages"
+        if selected > len(chosen)
+        else ""
+    )
+    typer.echo(
+        f"drew {len(chosen)} scans ({chosen[0][2]} .. {chosen[-1][2]}) on {len(pages)} "
+        f"page(s){left_out}"
+    )
+    for path in paths:
+        typer.echo(f"figure: {path}")
 
 
-MAX_PANELS = 12
+PANELS_PER_PAGE = 12
+
+
+def _page_path(output: Path, number: int, pages: int) -> Path:
+    """``plot.png`` for page 1, ``plot-2.png``... for the next ones."""
+    if number == 1:
+        return output
+    return output.with_name(f"{output.stem}-{number}{output.suffix}")
 
 
 def demo_command(
@@ -406,11 +483,11 @@ def demo_command(
     with compiled_for("adaptive") as compiled:
         extractor = Extractor(sensor_profile=_profile_for_run(log, {}, slice(None), None))
         extractor.warm_up()
-    output.mkdir(parents=True, exist_ok=True)
+    output.mkdir(parents=True, exist_ok=True)  # the demo's own folder, replaced each time
     jsonl = output / "intel.jsonl"
     with open_log(log) as reader:
         summary = run_log_to_file(
-            reader, extractor, jsonl, input_name=log.name, jobs=default_jobs()
+            reader, extractor, jsonl, input_name=log.name, jobs=default_jobs(), overwrite=True
         )
         summary.compile_seconds += compiled.seconds
         panels = [

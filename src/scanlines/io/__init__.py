@@ -167,6 +167,7 @@ def open_writer(
     *,
     meta: Mapping[str, Any] | None = None,
     frame: Frame = "sensor",
+    overwrite: bool = False,
     **options: Any,
 ) -> ResultWriter:
     """Open a result writer, choosing the format from the path.
@@ -181,9 +182,13 @@ def open_writer(
         ``params``, ``reader`` (the reader's :meth:`~scanlines.io.base.LogReader.options`).
     frame:
         ``"sensor"`` or ``"world"`` (see the module docstring).
+    overwrite:
+        Replace an existing output and its ``.meta.json``; without it an existing
+        one is an :class:`~scanlines.io.outputs.OutputError` before anything is
+        written (as is a folder that does not exist).
     **options:
         Format options (``Ros2BagWriter``: ``storage``, ``topic``,
-        ``markers_topic``, ``laser_frame``, ``world_frame``, ``overwrite``).
+        ``markers_topic``, ``laser_frame``, ``world_frame``).
 
     Returns
     -------
@@ -195,7 +200,7 @@ def open_writer(
     >>> with open_log("run.clf") as reader, open_writer("out.jsonl") as writer:  # doctest: +SKIP
     ...     for index, scan in reader.enumerate():
     ...         writer.write(index, scan, extract(scan))
-    ...     writer.update_meta(counts={"skipped_records": reader.error_count})
+    ...     writer.update_meta(counts={"skipped_scan_records": reader.bad_scans})
     """
     path = Path(path)
     suffix = path.suffix.lower()
@@ -210,4 +215,4 @@ def open_writer(
         )
     if options and cls is not Ros2BagWriter:
         raise ParameterError(f"{path}: options {sorted(options)} apply only to ROS 2 bag output")
-    return cls(path, meta=meta, frame=frame, **options)
+    return cls(path, meta=meta, frame=frame, overwrite=overwrite, **options)

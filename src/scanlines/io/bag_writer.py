@@ -10,9 +10,6 @@ from __future__ import annotations
 import contextlib
 import functools
 import math
-import os
-import shutil
-import tempfile
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any, Literal
@@ -22,6 +19,7 @@ import orjson
 
 from scanlines.errors import ParameterError
 from scanlines.extraction import END_X, END_Y, START_X, START_Y, ExtractionTable
+from scanlines.io.outputs import OutputError, discard, temp_path
 from scanlines.io.writers import (
     UNSTAMPED_PERIOD,
     Frame,
@@ -31,6 +29,9 @@ from scanlines.io.writers import (
     json_records,
 )
 from scanlines.scan import Scan
+
+#: Largest ``builtin_interfaces/msg/Time.sec`` (an int32).
+MAX_STAMP_SECONDS = 2**31 - 1
 
 FEATURES_TOPIC = "/scanlines/features"
 """Topic of each scan's features as its JSON Lines record (``std_msgs/msg/String``)."""
@@ -64,7 +65,8 @@ class Ros2BagWriter(ResultWriter):
     laser_frame, world_frame:
         ``frame_id`` of the scans and of world-frame markers.
     overwrite:
-        Replace an existing output (a directory only if it is a ROS 2 bag).
+        Replace an existing output (a directory only if it is a ROS 2 bag) and its
+        ``.meta.json``.
     """
 
     format_name = "ros2"
@@ -80,9 +82,9 @@ class Ros2BagWriter(ResultWriter):
         markers_topic: str = "/scanlines/markers",
         laser_frame: str = "laser",
         world_frame: str = "map",
-        overwrite: bool = True,
+        overwrite: bool = False,
     ) -> None:
-        super().__init__(path, meta=meta, frame=frame)
+        super().__init__(path, meta=meta, frame=frame, overwrite=overwrite)
         from rosbags.rosbag2 import StoragePlugin, Writer
         from rosbags.typesys import Stores, get_typestore
 
@@ -91,17 +93,15 @@ class Ros2BagWriter(ResultWriter):
             storage = "mcap"
         if storage not in ("mcap", "sqlite3"):
             raise ParameterError(f"storage must be 'mcap' or 'sqlite3', got {storage!r}")
-        self._check_target(overwrite)
+        self._check_target()
         self.storage = storage
         self.topic = topic
         self.laser_frame = laser_frame
         self.marker_frame = world_frame if frame == "world" else laser_frame
         self.world_frame = world_frame
         self._types = get_typestore(Stores.ROS2_HUMBLE)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        self._tmpdir = Path(
-            tempfile.mkdtemp(dir=self.path.parent, prefix=f".{self.path.name}.", suffix=".tmp")
-        )
+        self._tmpdir = temp_path(self.path)
+        self._tmpdir.mkdir()
         self._bag_dir = self._tmpdir / (self.path.stem if self.single_file else self.path.name)
         plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
         self._writer = Writer(self._bag_dir, version=8, storage_plugin=plugin)
@@ -118,11 +118,9 @@ class Ros2BagWriter(ResultWriter):
             self._abort()
             raise
 
-    def _check_target(self, overwrite: bool) -> None:
+    def _check_target(self) -> None:
         if not self.path.exists():
             return
-        if not overwrite:
-            raise FileExistsError(f"{self.path} exists")
         if self.single_file == self.path.is_dir():
             wanted = "an .mcap file" if self.single_file else "a bag directory"
             raise ParameterError(f"{self.path} exists and is not {wanted}; not replacing it")
@@ -141,6 +139,12 @@ class Ros2BagWriter(ResultWriter):
         nanosec = round((seconds - sec) * 1e9)
         if nanosec >= 1_000_000_000:
             sec, nanosec = sec + 1, nanosec - 1_000_000_000
+        if sec > MAX_STAMP_SECONDS:
+            raise OutputError(
+                f"{self.path}: scan {features.index} has timestamp {seconds!r} s, past what a "
+                f"ROS 2 stamp holds (int32 seconds, at most {MAX_STAMP_SECONDS}: January 2038); "
+                "write .jsonl or .csv instead, or shift the log's times"
+            )
         time = self._types.types["builtin_interfaces/msg/Time"](sec=sec, nanosec=nanosec)
         return time, sec * 1_000_000_000 + nanosec
 
@@ -287,15 +291,23 @@ class Ros2BagWriter(ResultWriter):
             messages.append((self._tf_conn, serialize(tf, "tf2_msgs/msg/TFMessage")))
         return [(connection, bag_time, data) for connection, data in messages]
 
-    def _commit(self) -> None:
+    @property
+    def _temporary(self) -> Path:
+        if self.single_file:
+            return self._bag_dir / f"{self._bag_dir.name}.mcap"
+        return self._bag_dir
+
+    def _finish(self) -> None:
         self._writer.close()
-        source = self._bag_dir / f"{self._bag_dir.name}.mcap" if self.single_file else self._bag_dir
-        if self.path.is_dir():
-            shutil.rmtree(self.path)
-        os.replace(source, self.path)
-        shutil.rmtree(self._tmpdir, ignore_errors=True)
 
     def _abort(self) -> None:
         with contextlib.suppress(Exception):
             self._writer.abort()
-        shutil.rmtree(self._tmpdir, ignore_errors=True)
+        discard(self._tmpdir)
+
+    def close(self) -> None:
+        """Finish the bag and move it into place with its ``.meta.json``."""
+        try:
+            super().close()
+        finally:
+            discard(self._tmpdir)

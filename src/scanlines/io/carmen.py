@@ -85,7 +85,12 @@ from typing import Any, Literal
 import numpy as np
 
 from scanlines.errors import LogFormatError, ParameterError
-from scanlines.io.base import ErrorPolicy, LogReader
+from scanlines.io.base import (
+    DEFAULT_MAX_BEAMS,
+    DEFAULT_MAX_RECORD_BYTES,
+    ErrorPolicy,
+    LogReader,
+)
 from scanlines.io.fields import FieldLayout
 from scanlines.io.text import iter_lines, parse_floats, parse_int
 from scanlines.scan import Scan
@@ -117,6 +122,31 @@ LASER_MESSAGES = (
     "RAWLASER2",
     "RAWLASER3",
     "RAWLASER4",
+)
+#: Other message names a CARMEN logger writes (never read as scans).
+KNOWN_MESSAGES = frozenset(
+    {
+        *LASER_MESSAGES,
+        "ODOM",
+        "PARAM",
+        "TRUEPOS",
+        "SYNC",
+        "NMEAGGA",
+        "NMEARMC",
+        "GPSNMEA",
+        "SONAR",
+        "BUMPER",
+        "IMU",
+        "BASEVELOCITY",
+        "ROBOTVELOCITY",
+        "VECTORMOVE",
+        "FOLLOWTRAJECTORY",
+        "ARM",
+        "LASER3",
+        "LASER4",
+        "POSITIONLASER",
+        "SCANMARK",
+    }
 )
 _DETECT_WINDOW_LINES = 50
 _MESSAGE_NAME = re.compile(r"[A-Z][A-Z0-9_]{0,39}")
@@ -220,8 +250,12 @@ class CarmenReader(LogReader):
         pose: PoseSource = "laser",
         timestamp: TimestampSource = "logger",
         on_error: ErrorPolicy = "fail",
+        max_beams: int = DEFAULT_MAX_BEAMS,
+        max_record_bytes: int = DEFAULT_MAX_RECORD_BYTES,
     ) -> None:
-        super().__init__(path, on_error=on_error)
+        super().__init__(
+            path, on_error=on_error, max_beams=max_beams, max_record_bytes=max_record_bytes
+        )
         _check_choice("message", message, (*LASER_MESSAGES, None))
         _check_choice("angle_convention", angle_convention, ("step", "linspace"))
         _check_choice("pose", pose, ("laser", "robot"))
@@ -272,7 +306,7 @@ class CarmenReader(LogReader):
     def _detect_message(self) -> str:
         seen: set[str] = set()
         first_line: int | None = None
-        for line_number, line in iter_lines(self.path):
+        for line_number, line in iter_lines(self.path, self.max_record_bytes):
             parts = line.split(None, 1)
             if parts and parts[0] in LASER_MESSAGES:
                 seen.add(parts[0])
@@ -286,33 +320,61 @@ class CarmenReader(LogReader):
         return min(seen, key=LASER_MESSAGES.index)
 
     def _scans(self) -> Iterator[tuple[int, Scan]]:
-        message = self.message
+        self.message  # noqa: B018 - detect the laser message before reading
         self.params = {}
         self._numeric_params = {}
         self._odom_pose = None
         index = 0
-        for line_number, line in iter_lines(self.path):
-            tokens = line.split()
-            name = tokens[0] if tokens else ""
-            if name == message:
+        for line_number, line in iter_lines(self.path, self.max_record_bytes):
+            name = _record_name(line)
+            kind = self._record_kind(name, line, line_number)
+            if kind == "scan":
                 record_index = index
                 index += 1
-                scan = self._read_or_skip(self._parse_laser, tokens, line_number)
+                scan = self._read_or_skip(self._parse_laser, line, line_number)
                 if scan is not None:
                     self.counts[name] += 1
                     yield record_index, scan
-            elif name in ("ODOM", "PARAM"):
+            elif kind == "other":
                 parse = self._parse_odom if name == "ODOM" else self._parse_param
-                if self._read_or_skip(parse, tokens, line_number) is not None:
+                if self._read_or_skip(parse, line, line_number, scan=False) is not None:
                     self.counts[name] += 1
             else:
                 self.skipped[_skip_kind(name)] += 1
 
-    def _read_or_skip(self, parse: Any, tokens: list[str], line_number: int) -> Any:
+    def _record_kind(self, name: str, line: str, line_number: int) -> str:
+        """``"scan"`` (a record of the laser message read), ``"other"`` (ODOM, PARAM) or
+        ``"ignored"``. A line under an unknown name whose fields make a record of the
+        laser message is a scan record with a damaged name, so it keeps its place in the
+        scan numbering and is reported, not ignored."""
+        if name == self.message:
+            return "scan"
+        if name in ("ODOM", "PARAM"):
+            return "other"
+        if name in KNOWN_MESSAGES or not _MESSAGE_NAME.fullmatch(name):
+            return "ignored"
         try:
-            return parse(tokens, line_number)
+            self._check_line(line, line_number)
+            self._parse_laser([self.message, *line.split()[1:]], line_number)
+        except LogFormatError:
+            return "ignored"
+        self._bad_record(
+            LogFormatError(
+                f"unknown record name {name!r}; its fields make a {self.message} record, "
+                "so it is taken as a damaged scan record",
+                path=self.path,
+                record=line_number,
+                field="message name",
+            )
+        )
+        return "damaged scan"
+
+    def _read_or_skip(self, parse: Any, line: str, line_number: int, *, scan: bool = True) -> Any:
+        try:
+            self._check_line(line, line_number)
+            return parse(line.split(), line_number)
         except LogFormatError as error:
-            self._bad_record(error)
+            self._bad_record(error, scan=scan)
             return None
 
     # -- record parsers -------------------------------------------------------------------
@@ -474,6 +536,12 @@ class CarmenReader(LogReader):
     def _stamp(self, ipc: float, logger: float) -> float | None:
         value = float(logger if self.timestamp_source == "logger" else ipc)
         return None if math.isnan(value) else value
+
+
+def _record_name(line: str) -> str:
+    """The first token of a line (its message name), without splitting the whole line."""
+    parts = line.split(None, 1)
+    return parts[0] if parts else ""
 
 
 def _skip_kind(name: str) -> str:

@@ -31,7 +31,12 @@ from pathlib import Path
 from typing import Any
 
 from scanlines.errors import LogFormatError, ParameterError
-from scanlines.io.base import ErrorPolicy, LogReader
+from scanlines.io.base import (
+    DEFAULT_MAX_BEAMS,
+    DEFAULT_MAX_RECORD_BYTES,
+    ErrorPolicy,
+    LogReader,
+)
 from scanlines.io.fields import FieldLayout
 from scanlines.io.text import iter_lines, parse_floats
 from scanlines.scan import Scan
@@ -113,8 +118,12 @@ class CoreSlamReader(LogReader):
         range_min: float = URG04LX_RANGE_MIN,
         range_max: float = math.inf,
         on_error: ErrorPolicy = "fail",
+        max_beams: int = DEFAULT_MAX_BEAMS,
+        max_record_bytes: int = DEFAULT_MAX_RECORD_BYTES,
     ) -> None:
-        super().__init__(path, on_error=on_error)
+        super().__init__(
+            path, on_error=on_error, max_beams=max_beams, max_record_bytes=max_record_bytes
+        )
         if isinstance(beams, bool) or not isinstance(beams, int) or beams < 2:
             raise ParameterError(f"beams must be an integer >= 2, got {beams!r}")
         if fov is not None and not 0.0 < fov <= 360.0:
@@ -142,18 +151,19 @@ class CoreSlamReader(LogReader):
 
     def _scans(self) -> Iterator[tuple[int, Scan]]:
         index = 0
-        for line_number, line in iter_lines(self.path):
-            tokens = line.split()
-            if not tokens:
+        for line_number, line in iter_lines(self.path, self.max_record_bytes):
+            start = line.lstrip()[:1]
+            if not start:
                 self.skipped["blank"] += 1
                 continue
-            if tokens[0].startswith("#"):
+            if start == "#":
                 self.skipped["comment"] += 1
                 continue
             record_index = index
             index += 1
             try:
-                scan = self._parse(tokens, line_number)
+                self._check_line(line, line_number)
+                scan = self._parse(line.split(), line_number)
             except LogFormatError as error:
                 self._bad_record(error)
                 continue

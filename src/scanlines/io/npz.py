@@ -26,8 +26,10 @@ Other keys are ignored (listed by :meth:`NpzReader.info`).
 
 Streaming: per-scan arrays are read row by row straight out of the zip member
 (compressed or not), so memory stays at one row per key whatever the file
-size. Only Fortran-ordered arrays fall back to loading the whole key. Object
-arrays (pickles) are refused.
+size. Opening the archive reads the arrays through once to check their CRCs
+(damaged data is an error before any scan is read, not a wrong scan). Only
+Fortran-ordered arrays fall back to loading the whole key. Object arrays
+(pickles) are refused; so are arrays of strings, complex numbers or records.
 """
 
 from __future__ import annotations
@@ -40,8 +42,13 @@ from typing import IO, Any
 
 import numpy as np
 
-from scanlines.errors import LogFormatError
-from scanlines.io.base import ErrorPolicy, LogReader
+from scanlines.errors import LogFormatError, describe
+from scanlines.io.base import (
+    DEFAULT_MAX_BEAMS,
+    DEFAULT_MAX_RECORD_BYTES,
+    ErrorPolicy,
+    LogReader,
+)
 from scanlines.scan import Scan
 
 __all__ = ["NpzReader"]
@@ -53,13 +60,25 @@ _SCALAR_KEYS = ("angle_min", "angle_increment", "range_min", "range_max")
 _DEFAULTS = {"range_min": 0.0, "range_max": math.inf}
 
 
+#: Largest ratio of uncompressed to compressed size deflate can reach (about 1032);
+#: a zip member claiming more is damaged.
+_MAX_DEFLATE_RATIO = 1100
+
+
 class _NpyHeader:
     """Shape and dtype of one ``.npy`` member, read without loading its data."""
 
-    def __init__(self, shape: tuple[int, ...], dtype: np.dtype, fortran: bool) -> None:
+    def __init__(
+        self, shape: tuple[int, ...], dtype: np.dtype, fortran: bool, data_offset: int
+    ) -> None:
         self.shape = shape
         self.dtype = dtype
         self.fortran = fortran
+        self.data_offset = data_offset
+
+    @property
+    def data_bytes(self) -> int:
+        return math.prod(self.shape) * self.dtype.itemsize
 
 
 def _read_header(fh: IO[bytes]) -> _NpyHeader:
@@ -68,7 +87,7 @@ def _read_header(fh: IO[bytes]) -> _NpyHeader:
         shape, fortran, dtype = np.lib.format.read_array_header_1_0(fh)
     else:
         shape, fortran, dtype = np.lib.format.read_array_header_2_0(fh)
-    return _NpyHeader(tuple(shape), np.dtype(dtype), bool(fortran))
+    return _NpyHeader(tuple(shape), np.dtype(dtype), bool(fortran), fh.tell())
 
 
 class NpzReader(LogReader):
@@ -91,32 +110,48 @@ class NpzReader(LogReader):
 
     format_name = "npz"
 
-    def __init__(self, path: str | Path, *, on_error: ErrorPolicy = "fail") -> None:
-        super().__init__(path, on_error=on_error)
+    def __init__(
+        self,
+        path: str | Path,
+        *,
+        on_error: ErrorPolicy = "fail",
+        max_beams: int = DEFAULT_MAX_BEAMS,
+        max_record_bytes: int = DEFAULT_MAX_RECORD_BYTES,
+    ) -> None:
+        super().__init__(
+            path, on_error=on_error, max_beams=max_beams, max_record_bytes=max_record_bytes
+        )
         self.headers = self._read_headers()
         self.n_scans, self.n_beams = self._check_layout()
+        self._verify_data()
 
     # -- layout ---------------------------------------------------------------------------
 
     def _open_zip(self) -> zipfile.ZipFile:
         try:
             return zipfile.ZipFile(self.path)
-        except (zipfile.BadZipFile, OSError) as exc:
-            raise LogFormatError(f"not a readable .npz archive ({exc})", path=self.path) from None
+        except FileNotFoundError:
+            raise LogFormatError("file not found", path=self.path) from None
+        except Exception as exc:  # zipfile raises several types on a damaged directory
+            raise LogFormatError(
+                f"not a readable .npz archive ({describe(exc)})", path=self.path
+            ) from None
 
     def _read_headers(self) -> dict[str, _NpyHeader]:
         headers: dict[str, _NpyHeader] = {}
         with self._open_zip() as archive:
-            for member in archive.namelist():
-                if not member.endswith(".npy"):
+            for member in archive.infolist():
+                if not member.filename.endswith(".npy"):
                     continue
+                key = member.filename[:-4]
                 try:
                     with archive.open(member) as fh:
-                        headers[member[:-4]] = _read_header(fh)
-                except (ValueError, OSError, zipfile.BadZipFile, EOFError) as exc:
+                        headers[key] = _read_header(fh)
+                except Exception as exc:  # numpy's header parser raises many types
                     raise LogFormatError(
-                        f"unreadable array ({exc})", path=self.path, field=member[:-4]
+                        f"unreadable array header ({describe(exc)})", path=self.path, field=key
                     ) from None
+                _check_size(headers[key], member, self.path, key)
         return headers
 
     def _check_layout(self) -> tuple[int, int]:
@@ -136,6 +171,15 @@ class NpzReader(LogReader):
         for key, header in self.headers.items():
             if header.dtype.hasobject:
                 raise LogFormatError("object arrays are not read", path=self.path, field=key)
+        if n_beams > self.max_beams:
+            self._check_beams(n_beams, None)
+        for key in self._used_keys():
+            if self.headers[key].dtype.kind not in "biuf" or self.headers[key].dtype.names:
+                raise LogFormatError(
+                    f"must hold real numbers, got dtype {self.headers[key].dtype}",
+                    path=self.path,
+                    field=key,
+                )
         for key in ("angle_min", "angle_increment"):
             if key not in self.headers:
                 raise LogFormatError("missing (radians)", path=self.path, field=key)
@@ -154,6 +198,21 @@ class NpzReader(LogReader):
                     field=key,
                 )
         return n_scans, n_beams
+
+    def _verify_data(self) -> None:
+        """Read the used arrays through once so that zipfile checks their CRCs: a damaged
+        byte would otherwise be found only after the scans before it were read, and the
+        damaged scan itself cannot be told from a good one."""
+        with self._open_zip() as archive:
+            for key in self._used_keys():
+                try:
+                    with archive.open(f"{key}.npy") as fh:
+                        while fh.read(1 << 20):
+                            pass
+                except Exception as exc:  # zipfile/zlib errors on damaged data
+                    raise LogFormatError(
+                        f"the array data is damaged ({describe(exc)})", path=self.path, field=key
+                    ) from None
 
     def _used_keys(self) -> list[str]:
         keys = [k for k in (*_PER_BEAM_KEYS, *_SCALAR_KEYS) if k in self.headers]
@@ -179,7 +238,11 @@ class NpzReader(LogReader):
             streams = {key: self._rows(archive, key) for key in self._used_keys()}
             try:
                 for index in range(self.n_scans):
-                    row = {key: next(stream) for key, stream in streams.items()}
+                    try:
+                        row = {key: next(stream) for key, stream in streams.items()}
+                    except LogFormatError as error:  # the data ends or is damaged here
+                        self._bad_record(error, count=self.n_scans - index)
+                        return
                     try:
                         scan = self._scan(index, row)
                     except LogFormatError as error:
@@ -187,12 +250,21 @@ class NpzReader(LogReader):
                         continue
                     self.counts["scan"] += 1
                     yield index, scan
+                for key, stream in streams.items():
+                    self._finish(stream, key)
             finally:
                 for stream in streams.values():
                     stream.close()
 
+    def _finish(self, stream: Iterator[np.ndarray], key: str) -> None:
+        """Read a key's stream to its end, where zipfile checks the data's CRC: damage found
+        only there makes the file as a whole an error (its rows were already read)."""
+        for _ in stream:
+            return  # a repeated value: nothing left to check
+
     def _rows(self, archive: zipfile.ZipFile, key: str) -> Iterator[np.ndarray]:
-        """One row per scan of ``key``; a scalar (or 1-scan) array is repeated."""
+        """One row per scan of ``key``; a scalar (or 1-scan) array is repeated. Damaged
+        data is a LogFormatError naming the key and the scan."""
         header = self.headers[key]
         per_scan = self._is_per_scan(key, header.shape)
         if not per_scan:
@@ -204,17 +276,28 @@ class NpzReader(LogReader):
             return
         row_shape = header.shape[1:]
         row_bytes = int(np.prod(row_shape, dtype=np.int64)) * header.dtype.itemsize
-        with archive.open(f"{key}.npy") as fh:
-            _read_header(fh)
-            for index in range(self.n_scans):
-                data = fh.read(row_bytes)
-                if len(data) != row_bytes:
-                    raise LogFormatError(
-                        f"array data ends at scan {index} of {self.n_scans}",
-                        path=self.path,
-                        field=key,
-                    )
-                yield np.frombuffer(data, dtype=header.dtype).reshape(row_shape)
+        index = 0
+        try:
+            with archive.open(f"{key}.npy") as fh:
+                _read_header(fh)
+                for index in range(self.n_scans):
+                    data = fh.read(row_bytes)
+                    if len(data) != row_bytes:
+                        raise LogFormatError(
+                            f"array data ends at scan {index} of {self.n_scans}",
+                            path=self.path,
+                            field=key,
+                        )
+                    yield np.frombuffer(data, dtype=header.dtype).reshape(row_shape)
+                fh.read()  # to the end, where zipfile checks the CRC
+        except LogFormatError:
+            raise
+        except Exception as exc:  # zipfile/zlib errors on damaged data
+            raise LogFormatError(
+                f"the array data is damaged at scan {index} ({describe(exc)})",
+                path=self.path,
+                field=key,
+            ) from None
 
     def _is_per_scan(self, key: str, shape: tuple[int, ...]) -> bool:
         if self.headers["ranges"].shape == (self.n_beams,):  # a single scan: no row axis
@@ -229,8 +312,10 @@ class NpzReader(LogReader):
         try:
             with archive.open(f"{key}.npy") as fh:
                 return np.lib.format.read_array(fh, allow_pickle=False)
-        except (ValueError, OSError, EOFError, zipfile.BadZipFile) as exc:
-            raise LogFormatError(f"unreadable array ({exc})", path=self.path, field=key) from None
+        except Exception as exc:  # zipfile/zlib/numpy errors on damaged data
+            raise LogFormatError(
+                f"unreadable array ({describe(exc)})", path=self.path, field=key
+            ) from None
 
     def _scan(self, index: int, row: dict[str, np.ndarray]) -> Scan:
         ranges = np.asarray(row["ranges"], dtype=np.float64)
@@ -252,6 +337,22 @@ class NpzReader(LogReader):
             raise LogFormatError(
                 f"scan {index}: {exc}", path=self.path, field=str(exc).split(" ", 1)[0]
             ) from None
+
+
+def _check_size(header: _NpyHeader, member: zipfile.ZipInfo, path: Path, key: str) -> None:
+    """An array whose header claims more data than its zip member holds is damaged (and
+    must not be allocated)."""
+    stored = member.file_size - header.data_offset
+    deflated = member.compress_type != zipfile.ZIP_STORED
+    if header.data_bytes > stored or (
+        deflated and member.file_size > _MAX_DEFLATE_RATIO * max(member.compress_size, 1)
+    ):
+        raise LogFormatError(
+            f"the header claims {header.data_bytes} bytes of data (shape {header.shape}, "
+            f"{header.dtype}) but the archive holds {max(stored, 0)}",
+            path=path,
+            field=key,
+        )
 
 
 def _first_present(row: dict[str, np.ndarray], keys: tuple[str, ...]) -> np.ndarray | None:

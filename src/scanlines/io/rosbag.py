@@ -26,14 +26,19 @@ Record numbers in errors are 1-based message numbers within the topic.
 from __future__ import annotations
 
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from scanlines.errors import LogFormatError
-from scanlines.io.base import ErrorPolicy, LogReader
+from scanlines.errors import LogFormatError, describe
+from scanlines.io.base import (
+    DEFAULT_MAX_BEAMS,
+    DEFAULT_MAX_RECORD_BYTES,
+    ErrorPolicy,
+    LogReader,
+)
 from scanlines.scan import Scan
 
 __all__ = ["LASERSCAN_TYPES", "RosbagReader", "is_ros2_bag_dir"]
@@ -96,9 +101,17 @@ class RosbagReader(LogReader):
     format_name = "rosbag"
 
     def __init__(
-        self, path: str | Path, *, topic: str | None = None, on_error: ErrorPolicy = "fail"
+        self,
+        path: str | Path,
+        *,
+        topic: str | None = None,
+        on_error: ErrorPolicy = "fail",
+        max_beams: int = DEFAULT_MAX_BEAMS,
+        max_record_bytes: int = DEFAULT_MAX_RECORD_BYTES,
     ) -> None:
-        super().__init__(path, on_error=on_error)
+        super().__init__(
+            path, on_error=on_error, max_beams=max_beams, max_record_bytes=max_record_bytes
+        )
         self._paths = _bag_paths(self.path)
         with self._open() as reader:
             self.ros_version = 2 if reader.is2 else 1
@@ -137,19 +150,20 @@ class RosbagReader(LogReader):
 
     @contextmanager
     def _open(self) -> Iterator[Any]:
-        from rosbags.highlevel import AnyReader, AnyReaderError
+        from rosbags.highlevel import AnyReader
         from rosbags.typesys import Stores, get_typestore
 
         store = Stores.ROS1_NOETIC if self._paths[0].suffix == ".bag" else Stores.ROS2_HUMBLE
         try:
             reader = AnyReader(self._paths, default_typestore=get_typestore(store))
             reader.open()
-        except (AnyReaderError, OSError, ValueError, KeyError) as exc:
-            raise LogFormatError(f"cannot open the bag ({exc})", path=self.path) from None
+        except Exception as exc:  # rosbags raises many unrelated types on a damaged bag
+            raise LogFormatError(f"cannot open the bag ({describe(exc)})", path=self.path) from None
         try:
             yield reader
         finally:
-            reader.close()
+            with suppress(Exception):
+                reader.close()
 
     def options(self) -> dict[str, Any]:
         """Resolved options: the topic read."""
@@ -166,44 +180,63 @@ class RosbagReader(LogReader):
         }
 
     def _scans(self) -> Iterator[tuple[int, Scan]]:
-        from rosbags.highlevel import AnyReaderError
-
         with self._open() as reader:
             connections = [c for c in reader.connections if c.topic == self.topic]
-            messages = self._guarded(reader.messages(connections))
-            for index, (connection, bag_time, raw) in enumerate(messages):
+            index = -1
+            for index, (connection, bag_time, raw) in enumerate(self._guarded(reader, connections)):
                 try:
                     message = reader.deserialize(raw, connection.msgtype)
                     scan = self._scan(message, bag_time, index + 1)
-                except AnyReaderError as exc:
-                    self._bad_record(
-                        LogFormatError(f"cannot decode ({exc})", path=self.path, record=index + 1)
-                    )
-                    continue
                 except LogFormatError as error:
                     self._bad_record(error)
                     continue
+                except Exception as exc:  # a damaged message: any decoding error
+                    self._bad_record(
+                        LogFormatError(
+                            f"cannot decode ({describe(exc)})",
+                            path=self.path,
+                            record=index + 1,
+                            unit="message",
+                        )
+                    )
+                    continue
                 self.counts[self.topic] += 1
                 yield index, scan
+            self._account_for_every_message(read=index + 1)
             for topic in self.topics:
                 if topic != self.topic:
                     self.skipped[topic] = self.topics[topic][1]
 
-    def _guarded(self, messages: Iterator[Any]) -> Iterator[Any]:
-        """Pass messages through, turning a storage error mid-stream into a LogFormatError."""
+    def _guarded(self, reader: Any, connections: list[Any]) -> Iterator[Any]:
+        """The topic's messages, a storage error mid-stream turned into a LogFormatError."""
         count = 0
-        while True:
-            try:
-                item = next(messages)
-            except StopIteration:
-                return
-            except Exception as exc:  # rosbags raises several unrelated types here
-                raise LogFormatError(
-                    f"the bag is damaged after message {count} ({type(exc).__name__}: {exc})",
-                    path=self.path,
-                ) from None
-            count += 1
-            yield item
+        try:
+            for item in reader.messages(connections):
+                count += 1
+                yield item
+        except Exception as exc:  # rosbags raises several unrelated types here
+            raise LogFormatError(
+                f"the bag is damaged after message {count} of {self.topic} ({describe(exc)})",
+                path=self.path,
+                record=count + 1,
+                unit="message",
+            ) from None
+
+    def _account_for_every_message(self, read: int) -> None:
+        """The bag's index says how many messages the topic has: fewer read is damage,
+        an error (or, in skip mode, that many skipped records), never a short result."""
+        declared = self.topics[self.topic][1]
+        if read >= declared:
+            return
+        missing = declared - read
+        error = LogFormatError(
+            f"the bag declares {declared} messages on {self.topic} but only {read} could be "
+            f"read: {missing} lost to damage",
+            path=self.path,
+            record=read + 1,
+            unit="message",
+        )
+        self._bad_record(error, count=missing)
 
     def _scan(self, message: Any, bag_time: int, record: int) -> Scan:
         ranges = np.asarray(message.ranges, dtype=np.float64)

@@ -31,9 +31,14 @@ from typing import Any
 import numpy as np
 
 from scanlines.errors import LogFormatError, ParameterError
-from scanlines.io.base import ErrorPolicy, LogReader
+from scanlines.io.base import (
+    DEFAULT_MAX_BEAMS,
+    DEFAULT_MAX_RECORD_BYTES,
+    ErrorPolicy,
+    LogReader,
+)
 from scanlines.io.fields import FieldLayout
-from scanlines.io.text import iter_lines, parse_floats
+from scanlines.io.text import OverlongLine, iter_lines, parse_floats
 from scanlines.scan import Scan
 
 __all__ = ["CsvReader", "looks_like_table", "parse_preamble"]
@@ -118,8 +123,12 @@ class CsvReader(LogReader):
         range_max: float | None = None,
         timestamp_column: bool | None = None,
         on_error: ErrorPolicy = "fail",
+        max_beams: int = DEFAULT_MAX_BEAMS,
+        max_record_bytes: int = DEFAULT_MAX_RECORD_BYTES,
     ) -> None:
-        super().__init__(path, on_error=on_error)
+        super().__init__(
+            path, on_error=on_error, max_beams=max_beams, max_record_bytes=max_record_bytes
+        )
         preamble, header = self._read_preamble()
         given = {
             "angle_min": angle_min,
@@ -157,13 +166,16 @@ class CsvReader(LogReader):
     def _read_preamble(self) -> tuple[dict[str, float], list[str] | None]:
         """Geometry from the leading comments and the header row, if any."""
         found: dict[str, float] = {}
-        for _, line in iter_lines(self.path):
+        for line_number, line in iter_lines(self.path, self.max_record_bytes):
+            if isinstance(line, OverlongLine):  # a data row (reported when it is read)
+                return found, None
             text = line.strip()
             if not text:
                 continue
             if text.startswith("#"):
                 found |= parse_preamble(text)
                 continue
+            self._check_line(line, line_number)
             values = _split(text)
             return found, None if _is_numeric_row(values) else values
         return found, None
@@ -172,23 +184,21 @@ class CsvReader(LogReader):
         width: int | None = None
         index = 0
         header_pending = self.header is not None
-        for line_number, line in iter_lines(self.path):
-            text = line.strip()
-            if not text:
-                self.skipped["blank"] += 1
-                continue
-            if text.startswith("#"):
-                self.skipped["comment"] += 1
+        for line_number, line in iter_lines(self.path, self.max_record_bytes):
+            start = line.lstrip()[:1]
+            if not start or start == "#":
+                self.skipped["comment" if start else "blank"] += 1
                 continue
             if header_pending:
                 header_pending = False
                 self.skipped["header"] += 1
                 continue
-            values = _split(text)
-            width = width or len(values)
             record_index = index
             index += 1
             try:
+                self._check_line(line, line_number)
+                values = _split(line.strip())
+                width = width or len(values)
                 scan = self._parse(values, width, line_number)
             except LogFormatError as error:
                 self._bad_record(error)

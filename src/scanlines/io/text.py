@@ -19,6 +19,8 @@ from scanlines.errors import LogFormatError
 
 __all__ = [
     "GZIP_MAGIC",
+    "OverlongLine",
+    "check_record_size",
     "is_gzip",
     "iter_lines",
     "open_text",
@@ -48,8 +50,23 @@ def open_text(path: Path) -> IO[str]:
     return path.open("r", encoding="utf-8", errors="replace")
 
 
-def iter_lines(path: Path) -> Iterator[tuple[int, str]]:
+class OverlongLine(str):
+    """The start of a line longer than the limit :func:`iter_lines` was given (the rest of
+    the line was read past, never held); ``length`` is the whole line's length."""
+
+    length: int = 0
+
+
+#: How much of an overlong line :func:`iter_lines` keeps (enough for its record name).
+_OVERLONG_HEAD = 256
+
+
+def iter_lines(path: Path, max_line: int | None = None) -> Iterator[tuple[int, str]]:
     """Yield ``(line number, line)`` pairs, numbered from 1, streaming.
+
+    A line longer than ``max_line`` characters is never held whole: it comes as an
+    :class:`OverlongLine` (its start), which the reader reports with
+    :func:`check_record_size`.
 
     Raises
     ------
@@ -59,7 +76,8 @@ def iter_lines(path: Path) -> Iterator[tuple[int, str]]:
     line_number = 0
     try:
         with open_text(path) as fh:
-            for line_number, line in enumerate(fh, start=1):
+            lines = iter(fh) if max_line is None else _bounded_lines(fh, max_line)
+            for line_number, line in enumerate(lines, start=1):
                 yield line_number, line
     except _GZIP_ERRORS as exc:
         raise LogFormatError(
@@ -67,6 +85,44 @@ def iter_lines(path: Path) -> Iterator[tuple[int, str]]:
         ) from None
     except FileNotFoundError:
         raise LogFormatError("file not found", path=path) from None
+
+
+def _bounded_lines(fh: IO[str], max_line: int) -> Iterator[str]:
+    while line := fh.readline(max_line + 1):
+        if len(line) <= max_line or line.endswith("\n"):
+            yield line
+            continue
+        length = len(line)
+        while rest := fh.readline(1 << 20):
+            length += len(rest)
+            if rest.endswith("\n"):
+                break
+        head = OverlongLine(line[:_OVERLONG_HEAD])
+        head.length = length
+        yield head
+
+
+def check_record_size(
+    line: str, *, path: Path, record: int, max_line: int, max_fields: int
+) -> None:
+    """Raise a :class:`LogFormatError` for a line over the limits, before it is split:
+    longer than ``max_line`` (an :class:`OverlongLine`) or with more than ``max_fields``
+    separators (counted without allocating)."""
+    if isinstance(line, OverlongLine):
+        raise LogFormatError(
+            f"the line is {line.length} characters long, over the limit of {max_line} "
+            "(option max_record_bytes)",
+            path=path,
+            record=record,
+        )
+    separators = line.count(" ") + line.count("\t") + line.count(",")
+    if separators > max_fields:
+        raise LogFormatError(
+            f"about {separators} fields, over the limit of {max_fields} for scans of at most "
+            "max_beams beams (option max_beams)",
+            path=path,
+            record=record,
+        )
 
 
 def read_head(path: Path, max_bytes: int = 65536) -> bytes:

@@ -12,10 +12,13 @@ a path without suffix         a ROS 2 bag directory (``storage="mcap"`` or
 ============================  =================================================
 
 Every writer streams (one scan in memory at a time) and is atomic: output
-goes to a hidden temporary file or directory next to the target and is moved
-into place by ``os.replace`` only when the writer is closed without error; an
-exception inside the ``with`` block (or :meth:`ResultWriter.abort`) deletes
-it, leaving neither output nor ``.meta.json`` behind.
+goes to a hidden temporary file or directory next to the target
+(``.<name>.<process id>.<random>.tmp``) and is moved into place together with
+its ``.meta.json``, both or neither, only when the writer is closed without
+error (:mod:`scanlines.io.outputs`); an exception inside the ``with`` block
+(or :meth:`ResultWriter.abort`) deletes it. A writer refuses, before writing
+anything, a target in a folder that does not exist, and an existing target
+(or ``.meta.json``) unless ``overwrite=True``.
 
 Beside every output, ``<output>.meta.json`` (e.g. ``result.jsonl.meta.json``)
 records ``format_version``, ``scanlines_version``, the output format and
@@ -72,13 +75,12 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
 from functools import cached_property
 from pathlib import Path
 from types import TracebackType
-from typing import IO, Any, ClassVar, Literal, Self
+from typing import Any, ClassVar, Literal, Self
 
 import numpy as np
 import orjson
@@ -96,6 +98,7 @@ from scanlines.extraction import (
     Extraction,
     ExtractionTable,
 )
+from scanlines.io.outputs import check_output, commit, discard, temp_path, umask
 from scanlines.io.transform import points_to_world, to_world
 from scanlines.json_values import jsonable
 from scanlines.scan import Scan
@@ -273,53 +276,12 @@ def encode_csv_rows(indices: Sequence[int], scans: Sequence[Scan], table: Extrac
     return b"".join(rows).replace(b"null", b"")
 
 
-def _atomic_temp_file(target: Path, mode: str) -> IO[Any]:
-    target.parent.mkdir(parents=True, exist_ok=True)
-    return tempfile.NamedTemporaryFile(
-        mode,
-        dir=target.parent,
-        prefix=f".{target.name}.",
-        suffix=".tmp",
-        delete=False,
-        **({"encoding": "utf-8", "newline": ""} if "b" not in mode else {}),
-    )
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
-def _commit_file(handle: IO[Any], target: Path) -> None:
-    """Flush, give the usual permissions (temporary files are private) and move into place."""
-    handle.flush()
-    os.fsync(handle.fileno())
-    handle.close()
-    os.chmod(handle.name, 0o666 & ~_umask())
-    os.replace(handle.name, target)
-
-
-def _discard_file(handle: IO[Any]) -> None:
-    handle.close()
-    Path(handle.name).unlink(missing_ok=True)
-
-
-def _write_json_atomically(target: Path, content: Mapping[str, Any]) -> None:
-    write_text_atomically(target, json.dumps(content, indent=2, allow_nan=False) + "\n")
-
-
-def write_text_atomically(target: str | Path, text: str) -> Path:
-    """Write ``text`` to ``target`` so that it appears complete or not at all."""
-    target = Path(target)
-    handle = _atomic_temp_file(target, "w")
-    try:
-        handle.write(text)
-        _commit_file(handle, target)
-    except BaseException:
-        _discard_file(handle)
-        raise
-    return target
+def _write_json(path: Path, content: Mapping[str, Any]) -> None:
+    with open(path, "x", encoding="utf-8") as handle:
+        handle.write(json.dumps(content, indent=2, allow_nan=False) + "\n")
+        handle.flush()
+        os.fsync(handle.fileno())
+    os.chmod(path, 0o666 & ~umask())
 
 
 class ResultWriter(ABC):
@@ -334,16 +296,25 @@ class ResultWriter(ABC):
         ``reader``, ``counts``...).
     frame:
         ``"sensor"`` (as extracted) or ``"world"`` (moved by ``scan.pose``).
+    overwrite:
+        Replace an existing output and its ``.meta.json``.
     """
 
     format_name: ClassVar[str] = "result"
 
     def __init__(
-        self, path: str | Path, *, meta: Mapping[str, Any] | None = None, frame: Frame = "sensor"
+        self,
+        path: str | Path,
+        *,
+        meta: Mapping[str, Any] | None = None,
+        frame: Frame = "sensor",
+        overwrite: bool = False,
     ) -> None:
         if frame not in ("sensor", "world"):
             raise ParameterError(f"frame must be 'sensor' or 'world', got {frame!r}")
         self.path = Path(path)
+        self.overwrite = overwrite
+        check_output(self.path, overwrite=overwrite, companions=[meta_path_for(self.path)])
         self.frame: Frame = frame
         self.meta: dict[str, Any] = dict(meta or {})
         self.counts = {"scans": 0, "segments": 0, "breakpoints": 0, "corners": 0}
@@ -419,16 +390,22 @@ class ResultWriter(ABC):
         return meta_path_for(self.path)
 
     def close(self) -> None:
-        """Finish: move the output into place and write the ``.meta.json``."""
+        """Finish: move the output and its ``.meta.json`` into place, together."""
         if self._closed:
             return
         self._closed = True
+        meta_temporary = temp_path(self.meta_path)
         try:
-            self._commit()
+            self._finish()
+            _write_json(meta_temporary, self._meta_document())
+            commit(
+                [(self._temporary, self.path), (meta_temporary, self.meta_path)],
+                overwrite=self.overwrite,
+            )
         except BaseException:
             self._abort()
+            discard(meta_temporary)
             raise
-        _write_json_atomically(self.meta_path, self._meta_document())
 
     def abort(self) -> None:
         """Discard everything written; no output is left."""
@@ -461,9 +438,14 @@ class ResultWriter(ABC):
         """Write what :meth:`encode_chunk` returned."""
         raise NotImplementedError
 
+    @property
     @abstractmethod
-    def _commit(self) -> None:
-        """Move the temporary output into place."""
+    def _temporary(self) -> Path:
+        """The temporary output (file or folder) that :meth:`close` moves into place."""
+
+    @abstractmethod
+    def _finish(self) -> None:
+        """Complete the temporary output (flush, close)."""
 
     @abstractmethod
     def _abort(self) -> None:
@@ -499,15 +481,19 @@ class _TextFileWriter(ResultWriter):
     """Shared atomic temp-file handling of the text writers; a chunk is encoded at once
     (``_encode``: indices, scans, table in the output frame -> text or bytes)."""
 
-    mode: ClassVar[str] = "w"
-
     def __init__(
-        self, path: str | Path, *, meta: Mapping[str, Any] | None = None, frame: Frame = "sensor"
+        self,
+        path: str | Path,
+        *,
+        meta: Mapping[str, Any] | None = None,
+        frame: Frame = "sensor",
+        overwrite: bool = False,
     ) -> None:
-        super().__init__(path, meta=meta, frame=frame)
+        super().__init__(path, meta=meta, frame=frame, overwrite=overwrite)
         if self.path.is_dir():
             raise ParameterError(f"{self.path} is a directory")
-        self._handle = _atomic_temp_file(self.path, self.mode)
+        self._temporary_file = temp_path(self.path)
+        self._handle = open(self._temporary_file, "xb")  # noqa: SIM115 - closed by _finish
 
     def _write(self, features: ScanFeatures) -> None:
         extraction = features.extraction
@@ -532,18 +518,25 @@ class _TextFileWriter(ResultWriter):
     def _encode(indices, scans, table) -> str | bytes:
         raise NotImplementedError
 
-    def _commit(self) -> None:
-        _commit_file(self._handle, self.path)
+    @property
+    def _temporary(self) -> Path:
+        return self._temporary_file
+
+    def _finish(self) -> None:
+        self._handle.flush()
+        os.fsync(self._handle.fileno())
+        self._handle.close()
+        os.chmod(self._temporary_file, 0o666 & ~umask())
 
     def _abort(self) -> None:
-        _discard_file(self._handle)
+        self._handle.close()
+        discard(self._temporary_file)
 
 
 class JsonlWriter(_TextFileWriter):
     """One JSON object per written scan (see the module docstring)."""
 
     format_name = "jsonl"
-    mode = "wb"
     _encode = staticmethod(encode_json_lines)
 
 
@@ -551,13 +544,17 @@ class CsvWriter(_TextFileWriter):
     """One CSV row per segment (see the module docstring)."""
 
     format_name = "csv"
-    mode = "wb"
     _encode = staticmethod(encode_csv_rows)
 
     def __init__(
-        self, path: str | Path, *, meta: Mapping[str, Any] | None = None, frame: Frame = "sensor"
+        self,
+        path: str | Path,
+        *,
+        meta: Mapping[str, Any] | None = None,
+        frame: Frame = "sensor",
+        overwrite: bool = False,
     ) -> None:
-        super().__init__(path, meta=meta, frame=frame)
+        super().__init__(path, meta=meta, frame=frame, overwrite=overwrite)
         self._handle.write((",".join(CSV_COLUMNS) + "\n").encode())
 
 

@@ -9,6 +9,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from scanlines.errors import ParameterError
+
 __all__ = ["pyplot", "save"]
 
 FILE_BACKENDS = ("agg", "pdf", "svg", "cairo")
@@ -27,10 +29,24 @@ def pyplot() -> Any:
 
 
 def save(figure_or_axes: Any, path: str | Path, *, dpi: int = 130) -> Path:
-    """Save a figure (or the figure of an axes) to ``path`` and close it."""
+    """Save a figure (or the figure of an axes) to ``path`` and close it; the file
+    appears complete or not at all. The format is the suffix's (``.png``, ``.pdf``,
+    ``.svg``...); another suffix is a :class:`~scanlines.ParameterError`."""
+    from scanlines.io.outputs import commit, discard, temp_path
+
     figure = getattr(figure_or_axes, "figure", figure_or_axes)
     path = Path(path)
+    kind = path.suffix.lower().lstrip(".")
+    if kind not in figure.canvas.get_supported_filetypes():
+        pyplot().close(figure)
+        known = ", ".join(sorted(figure.canvas.get_supported_filetypes()))
+        raise ParameterError(f"{path}: figures are written as one of {known}, not {kind!r}")
     path.parent.mkdir(parents=True, exist_ok=True)
-    figure.savefig(path, dpi=dpi, bbox_inches="tight")
-    pyplot().close(figure)
+    temporary = temp_path(path)
+    try:
+        figure.savefig(temporary, dpi=dpi, bbox_inches="tight", format=kind)
+        commit([(temporary, path)], overwrite=True)
+    finally:
+        discard(temporary)
+        pyplot().close(figure)
     return path
