@@ -40,7 +40,7 @@ def test_core_works_with_numpy_alone():
     # Without numba the kernels run as plain Python: same results, slower.
     code = (
         "import sys; sys.modules['numba'] = None; "
-        "import numpy as np, scanlines; "
+        "import numpy as np, scanlines, scanlines._jit; "
         "assert not scanlines._jit.COMPILED; "
         "r = 2.0 / np.maximum(np.abs(np.cos(np.linspace(-1, 1, 61))), 0.3); "
         "e = scanlines.extract(scanlines.Scan(r, -1.0, 2.0 / 60)); "

@@ -34,13 +34,9 @@ def scans(draw, max_beams: int = 2000) -> Scan:
         ranges = base + np.cumsum(rng.normal(0, 0.02, n)) + rng.normal(0, 0.01, n)
         drop = rng.random(n) < rng.uniform(0, 0.3)
         ranges[drop] = rng.choice(SPECIAL, drop.sum())
-    increment = draw(
-        st.one_of(
-            st.floats(min_value=1e-4, max_value=0.1),
-            st.floats(min_value=-0.1, max_value=-1e-4),
-            st.sampled_from([2 * math.pi / max(n, 1), -2 * math.pi / max(n, 1)]),
-        )
-    )
+    turn = 2 * math.pi / max(n, 1)  # a scan spans at most one turn
+    step = draw(st.one_of(st.floats(min_value=1e-4, max_value=0.1).map(lambda s: min(s, turn))))
+    increment = draw(st.sampled_from([step, -step, turn, -turn]))
     angle_min = draw(st.floats(min_value=-math.pi, max_value=math.pi))
     return Scan(ranges, angle_min, increment, range_max=draw(st.sampled_from([math.inf, 30.0])))
 

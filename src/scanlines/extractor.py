@@ -14,9 +14,10 @@ import numpy as np
 
 from scanlines.errors import ParameterError, ScanError
 from scanlines.extraction import Extraction, ExtractionTable
+from scanlines.interrupts import kernel_calls
 from scanlines.methods import REGISTRY, method_class
 from scanlines.params import resolve
-from scanlines.scan import Scan, valid_returns
+from scanlines.scan import Scan, as_array, valid_returns
 from scanlines.sensor_profile import SensorProfile, as_profile
 
 __all__ = ["Extractor", "extract", "method_info", "method_names"]
@@ -106,7 +107,8 @@ class Extractor:
         step, angle_min = float32(scan.angle_increment), float32(scan.angle_min)
         valid = valid_returns(ranges, float32(scan.range_min), float32(scan.range_max))
         cos, sin = self._bearings(len(scan), step)
-        return self._method.extract(ranges, valid, cos, sin, step, angle_min)
+        with kernel_calls:
+            return self._method.extract(ranges, valid, cos, sin, step, angle_min)
 
     def warm_up(self) -> None:
         """Compile this extractor's kernels now (or load them from the cache), on a small
@@ -133,11 +135,11 @@ class Extractor:
         row ``i``'s :class:`Extraction`, built on access). ``jobs > 1`` splits the rows
         over that many threads (the kernels release the GIL); the table is the same.
         """
-        # Validate the sensor fields once, as Scan does (same errors).
-        sensor = Scan(np.zeros(0), angle_min, angle_increment, range_min, range_max)
-        stack = np.asarray(ranges)
+        stack = as_array(ranges, "ranges")
         if stack.ndim != 2:
             raise ScanError(f"ranges must be 2-D (scans, beams), got shape {stack.shape}")
+        # Validate the sensor fields once, as Scan does (same errors).
+        sensor = Scan(np.zeros(stack.shape[1]), angle_min, angle_increment, range_min, range_max)
         if stack.dtype.kind not in "fiu" or stack.dtype == np.bool_:
             raise ScanError(f"ranges must hold real numbers, got dtype {stack.dtype}")
         stack = at_float32(stack)
@@ -148,7 +150,8 @@ class Extractor:
             raise ParameterError(f"jobs must be an integer >= 1, got {jobs!r}")
         parts = min(jobs, len(stack))
         if parts <= 1:
-            return self._method.extract_many(stack, valid, cos, sin, step, angle_min)
+            with kernel_calls:
+                return self._method.extract_many(stack, valid, cos, sin, step, angle_min)
         bounds = np.linspace(0, len(stack), parts + 1).astype(int)
 
         def part(k: int) -> ExtractionTable:

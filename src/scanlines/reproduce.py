@@ -45,5 +45,5 @@ def reproduce(
     out = Path(out)
     figures = write_figures(result, out / "figures")
     names = {key: path.name for key, path in figures.items()}
-    md = write_text_atomically(out / "RESULTS.md", render_markdown(result, names))
+    md = write_text_atomically(out / "RESULTS.md", render_markdown(result, names), make_folder=True)
     return result, [md, *figures.values()]

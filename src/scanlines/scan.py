@@ -8,11 +8,13 @@ from typing import Any
 
 import numpy as np
 
-from scanlines.errors import ScanError
+from scanlines.errors import ScanError, describe
 
-__all__ = ["Scan", "is_full_circle", "valid_returns"]
+__all__ = ["Scan", "as_array", "is_full_circle", "valid_returns"]
 
 FloatArray = np.ndarray
+#: Largest angle from the first beam to the last (one turn, and a little for rounding).
+MAX_SPAN = 2.0 * math.pi * (1.0 + 1e-4)
 
 
 def _as_float(name: str, value: Any, *, finite: bool = False, allow_inf: bool = True) -> float:
@@ -28,8 +30,19 @@ def _as_float(name: str, value: Any, *, finite: bool = False, allow_inf: bool = 
     return out
 
 
+def as_array(values: Any, name: str) -> np.ndarray:
+    """``np.asarray(values)``, a ragged or otherwise unusable input being a
+    :class:`ScanError` naming ``name``."""
+    try:
+        return np.asarray(values)
+    except (ValueError, TypeError) as exc:
+        raise ScanError(
+            f"{name} must be an array of numbers, got {_preview(values)} ({describe(exc)})"
+        ) from None
+
+
 def _as_vector(name: str, values: Any, *, length: int | None = None) -> FloatArray:
-    arr = np.asarray(values)
+    arr = as_array(values, name)
     if arr.dtype.kind not in "fiu" or arr.dtype == np.bool_:
         raise ScanError(
             f"{name} must hold real numbers, got dtype {arr.dtype} ({_preview(values)})"
@@ -143,6 +156,12 @@ class Scan:
         increment = _as_float("angle_increment", angle_increment, finite=True)
         if increment == 0.0:
             raise ScanError("angle_increment must be non-zero, got 0.0")
+        span = abs(increment) * max(ranges_arr.shape[0] - 1, 1)
+        if span > MAX_SPAN:
+            raise ScanError(
+                f"angle_increment {increment!r} rad over {ranges_arr.shape[0]} beams spans "
+                f"{span:.6g} rad, more than one turn (2 pi): beams would overlap"
+            )
         set_(self, "angle_increment", increment)
         rmin = _as_float("range_min", range_min)
         rmax = _as_float("range_max", range_max)

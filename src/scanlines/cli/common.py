@@ -14,15 +14,21 @@ from typing import Annotated, Any, Literal, TypeVar
 import typer
 
 from scanlines.errors import ParameterError, ScanlinesError
+from scanlines.interrupts import Terminated, any_terminated, is_interrupt
 
 F = TypeVar("F", bound=Callable[..., Any])
 
 INPUT_ERROR = 2
+#: Exit codes of a command stopped by SIGINT (Ctrl-C) and SIGTERM: 128 + the signal.
+INTERRUPTED = 130
+TERMINATED = 143
 
 
 def guarded(command: F, *, show_compilation: bool = True) -> F:
-    """Turn an input error raised by ``command`` into one line on stderr and exit code 2;
-    show kernel compilation on stderr while it runs (:class:`CompileProgress`)."""
+    """Turn an input error raised by ``command`` into one line on stderr and exit code 2,
+    and Ctrl-C or SIGTERM into a one-line note and exit code 130 or 143 (outputs being
+    written are deleted on the way out); show kernel compilation on stderr while it runs
+    (:class:`CompileProgress`)."""
 
     @functools.wraps(command)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
@@ -32,6 +38,12 @@ def guarded(command: F, *, show_compilation: bool = True) -> F:
         except (ScanlinesError, OSError, EOFError) as error:
             print(f"scanlines: error: {error}", file=sys.stderr)
             raise typer.Exit(INPUT_ERROR) from None
+        except (KeyboardInterrupt, Terminated, SystemError) as stop:
+            if not is_interrupt(stop):
+                raise
+            terminated = any_terminated(stop)
+            print(f"scanlines: {'terminated' if terminated else 'interrupted'}", file=sys.stderr)
+            raise typer.Exit(TERMINATED if terminated else INTERRUPTED) from None
 
     return wrapper  # type: ignore[return-value]
 

@@ -215,7 +215,7 @@ class BenchResult:
     def to_json(self, path: str | Path) -> Path:
         """Write :meth:`to_dict` as JSON (atomically); returns the path."""
         text = json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
-        return write_text_atomically(Path(path), text)
+        return write_text_atomically(Path(path), text, make_folder=True)
 
     # ----------------------------------------------------------------- tables
 

@@ -133,4 +133,4 @@ def render_markdown(result: BenchResult) -> str:
 
 def write_docs(result: BenchResult, path: str | Path) -> Path:
     """Write :func:`render_markdown` to ``path`` (atomically); returns the path."""
-    return write_text_atomically(Path(path), render_markdown(result))
+    return write_text_atomically(Path(path), render_markdown(result), make_folder=True)

@@ -157,8 +157,13 @@ def commit(moves: Sequence[tuple[Path, Path]], *, overwrite: bool) -> None:
         discard(aside)
 
 
-def write_text_atomically(target: str | Path, text: str, *, overwrite: bool = True) -> Path:
-    """Write ``text`` to ``target`` so that it appears complete or not at all."""
+def write_text_atomically(
+    target: str | Path, text: str, *, overwrite: bool = True, make_folder: bool = False
+) -> Path:
+    """Write ``text`` to ``target`` so that it appears complete or not at all
+    (``make_folder``: create its folder, for reports written into a folder of their own)."""
+    if make_folder:
+        Path(target).parent.mkdir(parents=True, exist_ok=True)
     target = check_output(target, overwrite=overwrite)
     temporary = temp_path(target)
     try:
