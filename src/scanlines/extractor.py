@@ -6,9 +6,10 @@ import math
 import sys
 from collections.abc import Mapping
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -20,7 +21,7 @@ from scanlines.params import resolve
 from scanlines.scan import Scan, as_array, valid_returns
 from scanlines.sensor_profile import SensorProfile, as_profile
 
-__all__ = ["Extractor", "extract", "method_info", "method_names"]
+__all__ = ["Extractor", "MethodInfo", "ParamInfo", "extract", "method_info", "method_names"]
 
 
 def method_names() -> tuple[str, ...]:
@@ -28,16 +29,65 @@ def method_names() -> tuple[str, ...]:
     return tuple(REGISTRY)
 
 
-def method_info(method: str) -> dict[str, Any]:
-    """Parameters (default and doc) and presets of ``method``."""
+class ParamInfo(NamedTuple):
+    """One parameter of a method: its default, what it does, and the values it takes (in
+    words, and as ``domain``: ``{"type": "float", "low": 0.0, "high": 90.0, ...}``)."""
+
+    default: Any
+    doc: str
+    allowed: str
+    domain: dict[str, Any]
+
+
+@dataclass(frozen=True)
+class MethodInfo:
+    """What :func:`method_info` returns; prints as a table. Items can also be read as
+    ``info["params"]`` (``"name"``, ``"doc"``, ``"params"``, ``"presets"``)."""
+
+    name: str
+    doc: str
+    params: dict[str, ParamInfo]
+    presets: dict[str, dict[str, Any]]
+
+    def __getitem__(self, key: str) -> Any:
+        if key not in ("name", "doc", "params", "presets"):
+            raise KeyError(key)
+        return getattr(self, key)
+
+    def __str__(self) -> str:
+        width = max(len(name) for name in self.params)
+        lines = [f"{self.name}: {self.doc}", "", "parameters (default; allowed values):"]
+        for name, param in self.params.items():
+            lines.append(f"  {name:<{width}}  {param.default!r}; {param.allowed}")
+            lines.append(f"  {'':<{width}}  {param.doc}")
+        lines.append("")
+        lines.append("presets: " + (", ".join(self.presets) or "none"))
+        for preset, values in self.presets.items():
+            shown = ", ".join(f"{k}={v!r}" for k, v in values.items())
+            lines.append(f"  {preset}: {shown}")
+        return "\n".join(lines)
+
+    __repr__ = __str__
+
+
+def method_info(method: str) -> MethodInfo:
+    """The parameters of ``method`` (default, doc, allowed values) and its presets.
+
+    Every value outside a parameter's domain (wrong type, out of bounds, inf, NaN) is a
+    :class:`~scanlines.ParameterError` when an :class:`Extractor` is made, before
+    anything runs. ``print(method_info("adaptive"))`` shows them as a table.
+    """
     cls = method_class(method)
     module = sys.modules[cls.__module__]
-    return {
-        "name": cls.name,
-        "doc": (module.__doc__ or cls.__doc__ or "").strip().splitlines()[0],
-        "params": {name: (p.default, p.doc) for name, p in cls.parameters.items()},
-        "presets": {name: dict(values) for name, values in cls.presets.items()},
-    }
+    return MethodInfo(
+        name=cls.name,
+        doc=(module.__doc__ or cls.__doc__ or "").strip().splitlines()[0],
+        params={
+            name: ParamInfo(p.default, p.doc, p.check.describe(), p.check.domain())
+            for name, p in cls.parameters.items()
+        },
+        presets={name: dict(values) for name, values in cls.presets.items()},
+    )
 
 
 class Extractor:
@@ -211,6 +261,56 @@ def extract(
     sensor_profile: SensorProfile | str | Path | None = None,
     **params: Any,
 ) -> Extraction:
-    """One-shot form of :class:`Extractor`:
-    ``Extractor(method, preset, sensor_profile=..., **params)(scan)``."""
+    """Line segments, breakpoints and corners of one scan.
+
+    The one-shot form of :class:`Extractor` (``Extractor(method, preset,
+    sensor_profile=..., **params)(scan)``); make an :class:`Extractor` once to extract
+    many scans (it keeps its bearing tables).
+
+    Parameters
+    ----------
+    scan:
+        The :class:`~scanlines.Scan`.
+    method:
+        ``"adaptive"`` (the paper's method, with defaults that hold on real noisy
+        scans), or another of :func:`method_names`: ``"iepf"``, ``"pdbs"``,
+        ``"split_merge"``, ``"line_tracking"``, ``"line_regression"``, ``"ransac"``,
+        ``"hough"``.
+    preset:
+        A named parameter set of the method; ``"paper"`` runs the adaptive method
+        exactly as published.
+    sensor_profile:
+        A :class:`~scanlines.sensor_profile.SensorProfile`, or the path of one saved
+        by ``scanlines calibrate``: the range noise thresholds and covariances use.
+        Without one, the noise is measured from the scan itself.
+    **params:
+        Single parameters of the method, e.g. ``k=3.0``, ``min_points=5``,
+        ``fit="tls"``. ``print(scanlines.method_info(method))`` lists every one with
+        its default, meaning and allowed values.
+
+    Returns
+    -------
+    Extraction
+        ``segments`` (each with its line, end points, covariance and what ends it),
+        ``breakpoints`` and ``corners`` (beam indices), ``params`` (every resolved
+        parameter).
+
+    Raises
+    ------
+    ScanError
+        ``scan`` is not a :class:`~scanlines.Scan`.
+    ParameterError
+        An unknown method, preset or parameter, or a value outside its domain (wrong
+        type, out of bounds, inf, NaN), before anything runs.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from scanlines import Scan, extract
+    >>> bearings = np.radians(np.arange(-90, 91))
+    >>> ranges = 2.0 / np.maximum(np.abs(np.cos(bearings)), 0.3)  # a wall and two sides
+    >>> result = extract(Scan(ranges, angle_min=-np.pi / 2, angle_increment=np.pi / 180))
+    >>> len(result.segments) >= 1
+    True
+    """
     return Extractor(method, preset, sensor_profile=sensor_profile, **params)(scan)

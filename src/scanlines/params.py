@@ -3,29 +3,50 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+import numbers
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 from scanlines.errors import ParameterError
 
 __all__ = [
+    "MAX_COUNT",
+    "MAX_METRES",
+    "MAX_NUMBER",
+    "Check",
     "Param",
+    "auto_or",
     "choice",
     "float_pair",
-    "int_at_least",
+    "integer",
     "number",
     "optional",
     "resolve",
     "with_default",
 ]
 
-Check = Callable[[str, Any], Any]
+
+class Check:
+    """A parameter's domain: ``check(name, value)`` returns the value converted (a string
+    from the command line becomes a number...) or raises :class:`ParameterError`;
+    :meth:`domain` describes the domain for :func:`~scanlines.method_info`."""
+
+    def __call__(self, name: str, value: Any) -> Any:
+        raise NotImplementedError
+
+    def domain(self) -> dict[str, Any]:
+        raise NotImplementedError
+
+    def describe(self) -> str:
+        """The domain in words, e.g. ``"float in (0, 90]"``."""
+        raise NotImplementedError
 
 
 @dataclass(frozen=True, slots=True)
 class Param:
-    """One parameter of a method: its default, a validator and a one-line doc."""
+    """One parameter of a method: its default, its domain (a :class:`Check`) and a
+    one-line doc."""
 
     default: Any
     check: Check
@@ -42,114 +63,198 @@ def segment_params(
 ) -> dict[str, Param]:
     """The output parameters every method has, with that method's defaults."""
     return {
-        "min_points": Param(min_points, int_at_least(2), "fewest points of a segment"),
-        "min_length": Param(min_length, number(low=0.0), "shortest segment (m)"),
+        "min_points": Param(min_points, integer(2, MAX_COUNT), "fewest points of a segment"),
+        "min_length": Param(min_length, number(low=0.0, high=MAX_METRES), "shortest segment (m)"),
         "range_sigma": Param(
             range_sigma,
-            auto_or(number(low=0.0, low_open=True)),
+            auto_or(number(low=0.0, high=MAX_METRES, low_open=True)),
             "range noise of the covariances (m), or auto: the noise model's",
         ),
     }
 
 
-def number(*, low: float = -math.inf, high: float = math.inf, low_open: bool = False) -> Check:
-    """A real number in ``[low, high]`` (``(low, high]`` when ``low_open``)."""
+#: Upper bound of the counts that scale with a scan (points, votes): the most beams a
+#: reader accepts by default.
+MAX_COUNT = 1_000_000
+#: Upper bound of lengths and distances, metres (far beyond any laser's range).
+MAX_METRES = 1e6
+#: Bound of a number parameter that declares no narrower one: far beyond any distance
+#: (m), multiple of a noise sigma or chi-square that means anything.
+MAX_NUMBER = 1e6
 
-    def check(name: str, value: Any) -> float:
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            try:
-                value = float(value)
-            except (TypeError, ValueError):
-                raise ParameterError(f"{name} must be a number, got {value!r}") from None
+
+def _real(name: str, value: Any, kind: str = "a number") -> float:
+    """``value`` as a finite float (strings from the command line are parsed)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real | str):
+        raise ParameterError(f"{name} must be {kind}, got {value!r}")
+    try:
         out = float(value)
-        below = out <= low if low_open else out < low
-        if math.isnan(out) or below or out > high:
-            bracket = "(" if low_open else "["
-            raise ParameterError(f"{name} must be in {bracket}{low}, {high}], got {value!r}")
+    except (TypeError, ValueError, OverflowError):
+        raise ParameterError(f"{name} must be {kind}, got {value!r}") from None
+    if not math.isfinite(out):
+        raise ParameterError(f"{name} must be a finite number, got {value!r}")
+    return out
+
+
+@dataclass(frozen=True, slots=True)
+class Number(Check):
+    """A finite real number in ``[low, high]`` (``(low, high]`` when ``low_open``)."""
+
+    low: float = -MAX_NUMBER
+    high: float = MAX_NUMBER
+    low_open: bool = False
+
+    def __call__(self, name: str, value: Any) -> float:
+        out = _real(name, value)
+        below = out <= self.low if self.low_open else out < self.low
+        if below or out > self.high:
+            raise ParameterError(f"{name} must be {self.describe()}, got {value!r}")
         return out
 
-    return check
+    def domain(self) -> dict[str, Any]:
+        return {"type": "float", "low": self.low, "high": self.high, "low_open": self.low_open}
+
+    def describe(self) -> str:
+        bracket = "(" if self.low_open else "["
+        return f"a number in {bracket}{self.low:g}, {self.high:g}]"
 
 
-def int_at_least(low: int) -> Check:
-    """An integer ``>= low``."""
+@dataclass(frozen=True, slots=True)
+class Integer(Check):
+    """An integer in ``[low, high]`` (a float with an integral value, or a string, is
+    accepted)."""
 
-    def check(name: str, value: Any) -> int:
-        if isinstance(value, bool):
-            raise ParameterError(f"{name} must be an integer, got {value!r}")
-        try:
-            out = int(value)
-        except (TypeError, ValueError):
-            raise ParameterError(f"{name} must be an integer, got {value!r}") from None
-        if out != value and not (isinstance(value, str) and str(out) == value.strip()):
-            raise ParameterError(f"{name} must be an integer, got {value!r}")
-        if out < low:
-            raise ParameterError(f"{name} must be >= {low}, got {value!r}")
-        return out
+    low: int
+    high: int
 
-    return check
+    def __call__(self, name: str, value: Any) -> int:
+        if isinstance(value, str):
+            text = value.strip()
+            try:
+                value = int(text)
+            except ValueError:
+                value = _real(name, text, "an integer")
+        elif not isinstance(value, int) or isinstance(value, bool):
+            real = _real(name, value, "an integer")
+            if isinstance(value, bool) or not real.is_integer():
+                raise ParameterError(f"{name} must be an integer, got {value!r}")
+            value = real
+        if isinstance(value, float):
+            if not value.is_integer():
+                raise ParameterError(f"{name} must be an integer, got {value!r}")
+            value = int(value)
+        if not self.low <= value <= self.high:
+            raise ParameterError(f"{name} must be {self.describe()}, got {value!r}")
+        return int(value)
+
+    def domain(self) -> dict[str, Any]:
+        return {"type": "int", "low": self.low, "high": self.high}
+
+    def describe(self) -> str:
+        return f"an integer in [{self.low}, {self.high}]"
 
 
-def choice(*options: Any) -> Check:
-    """One of ``options`` (strings are compared case-sensitively)."""
+@dataclass(frozen=True, slots=True)
+class Choice(Check):
+    """One of ``options`` (strings are compared case-sensitively; ``"true"``/``"1"``
+    select ``True``)."""
 
-    def check(name: str, value: Any) -> Any:
-        for option in options:
+    options: tuple[Any, ...]
+
+    def __call__(self, name: str, value: Any) -> Any:
+        for option in self.options:
             if value == option and type(value) is type(option):
                 return option
         if isinstance(value, str):
             lowered = value.strip().lower()
-            for option in options:
+            for option in self.options:
                 if isinstance(option, bool) and lowered in ("true", "false", "1", "0"):
                     if (lowered in ("true", "1")) == option:
                         return option
                 elif str(option) == lowered:
                     return option
-        valid = ", ".join(repr(o) for o in options)
-        raise ParameterError(f"{name} must be one of {valid}, got {value!r}")
+        raise ParameterError(f"{name} must be {self.describe()}, got {value!r}")
 
-    return check
+    def domain(self) -> dict[str, Any]:
+        return {"type": "choice", "choices": list(self.options)}
 
-
-def optional(inner: Check, *, none_words: tuple[str, ...] = ("none", "off")) -> Check:
-    """``None`` (or one of ``none_words`` as a string) or a value accepted by ``inner``."""
-
-    def check(name: str, value: Any) -> Any:
-        if value is None or (isinstance(value, str) and value.strip().lower() in none_words):
-            return None
-        return inner(name, value)
-
-    return check
+    def describe(self) -> str:
+        return "one of " + ", ".join(repr(o) for o in self.options)
 
 
-def auto_or(inner: Check) -> Check:
-    """The string ``"auto"`` or a value accepted by ``inner``."""
+@dataclass(frozen=True, slots=True)
+class Either(Check):
+    """A word (``"auto"``, ``None``...) or a value of ``inner``."""
 
-    def check(name: str, value: Any) -> Any:
-        if isinstance(value, str) and value.strip().lower() == "auto":
-            return "auto"
-        return inner(name, value)
+    inner: Check
+    words: tuple[str, ...]
+    value: Any
 
-    return check
+    def __call__(self, name: str, value: Any) -> Any:
+        if value is self.value or (isinstance(value, str) and value.strip().lower() in self.words):
+            return self.value
+        return self.inner(name, value)
+
+    def domain(self) -> dict[str, Any]:
+        return {**self.inner.domain(), "or": self.value}
+
+    def describe(self) -> str:
+        return f"{self.value!r} or {self.inner.describe()}"
 
 
-def float_pair(*, low: float = 0.0) -> Check:
-    """Two numbers ``(a, b)`` with ``low <= a < b``; a string "a,b" is accepted."""
-    element = number(low=low)
+@dataclass(frozen=True, slots=True)
+class Pair(Check):
+    """Two numbers ``(a, b)`` of ``element`` with ``a < b``; a string "a,b" is accepted."""
 
-    def check(name: str, value: Any) -> tuple[float, float]:
+    element: Number
+
+    def __call__(self, name: str, value: Any) -> tuple[float, float]:
         if isinstance(value, str):
             value = [part for part in value.replace("(", "").replace(")", "").split(",") if part]
         try:
             first, second = value
         except (TypeError, ValueError):
             raise ParameterError(f"{name} must be a pair (a, b), got {value!r}") from None
-        a, b = element(name, first), element(name, second)
+        a, b = self.element(name, first), self.element(name, second)
         if not a < b:
             raise ParameterError(f"{name} must have a < b, got {value!r}")
         return (a, b)
 
-    return check
+    def domain(self) -> dict[str, Any]:
+        return {"type": "pair", "element": self.element.domain()}
+
+    def describe(self) -> str:
+        return f"a pair a < b, each {self.element.describe()}"
+
+
+def number(*, low: float = -MAX_NUMBER, high: float = MAX_NUMBER, low_open: bool = False) -> Number:
+    """A finite real number in ``[low, high]`` (``(low, high]`` when ``low_open``)."""
+    return Number(low, high, low_open)
+
+
+def integer(low: int, high: int) -> Integer:
+    """An integer in ``[low, high]``."""
+    return Integer(low, high)
+
+
+def choice(*options: Any) -> Choice:
+    """One of ``options``."""
+    return Choice(options)
+
+
+def optional(inner: Check, *, none_words: tuple[str, ...] = ("none", "off")) -> Either:
+    """``None`` (or one of ``none_words`` as a string) or a value accepted by ``inner``."""
+    return Either(inner, none_words, None)
+
+
+def auto_or(inner: Check) -> Either:
+    """The string ``"auto"`` or a value accepted by ``inner``."""
+    return Either(inner, ("auto",), "auto")
+
+
+def float_pair(*, low: float = 0.0, high: float = MAX_NUMBER) -> Pair:
+    """Two finite numbers ``(a, b)`` with ``low <= a < b <= high``."""
+    return Pair(Number(low, high))
 
 
 def resolve(

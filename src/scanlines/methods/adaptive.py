@@ -136,11 +136,13 @@ import numpy as np
 from scanlines._jit import kernel
 from scanlines.methods.base import CompiledMethod, as_record
 from scanlines.params import (
+    MAX_COUNT,
+    MAX_METRES,
     Param,
     auto_or,
     choice,
     float_pair,
-    int_at_least,
+    integer,
     number,
     optional,
     segment_params,
@@ -189,16 +191,20 @@ PARAMETERS: dict[str, Param] = {
     "denoise": Param(
         "isolated", choice("isolated", "paper", "none"), "noise rule: isolated | paper | none"
     ),
-    "window": Param(10, int_at_least(1), "paper denoising: mean-filter window N (eq. 5)"),
+    "window": Param(10, integer(1, 1000), "paper denoising: mean-filter window N (eq. 5)"),
     "corner_score": Param("turn", choice(*SCORES), "corner score: " + ", ".join(SCORES)),
     "slope_window": Param(
-        "auto", auto_or(int_at_least(2)), "turn score: points fitted on each side, or auto"
+        "auto", auto_or(integer(2, 1000)), "turn score: points fitted on each side, or auto"
     ),
     "dkth_range": Param(
-        "auto", auto_or(float_pair()), "threshold range (a, b), or auto: the candidates' scores"
+        "auto",
+        auto_or(float_pair(high=MAX_METRES)),
+        "threshold range (a, b), or auto: the candidates' scores",
     ),
-    "dkth_step": Param(0.01, number(low=0.0, low_open=True), "threshold step with a fixed range"),
-    "max_evaluations": Param(100, int_at_least(1), "most thresholds tried"),
+    "dkth_step": Param(
+        0.01, number(low=1e-9, high=MAX_METRES), "threshold step with a fixed range"
+    ),
+    "max_evaluations": Param(100, integer(1, 10_000), "most thresholds tried"),
     "criterion": Param("bic", choice(*CRITERIA), "selection: bic | sse (smallest SSE)"),
     "penalty": Param(4.0, number(low=0.0), "bic: cost of a segment, in ln(n) noise variances"),
     "noise_sigma": Param(
@@ -227,7 +233,7 @@ PARAMETERS: dict[str, Param] = {
         "ABD: worst incidence angle, degrees, or auto: 10, more on scans coarser than 0.67 deg",
     ),
     "min_cluster_points": Param(
-        2, int_at_least(1), "isolated denoising: smaller clusters are dropped as noise"
+        2, integer(1, MAX_COUNT), "isolated denoising: smaller clusters are dropped as noise"
     ),
     "noise_model": Param(
         "range",

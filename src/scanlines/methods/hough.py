@@ -50,7 +50,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from scanlines.methods.consensus import WHOLE_SCAN, ConsensusMethod
-from scanlines.params import Param, int_at_least, number, segment_params
+from scanlines.params import MAX_COUNT, Param, integer, number, segment_params
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, LITERAL_CLUSTERING
 from scanlines.steps.events import EVENT_PARAMS
 from scanlines.steps.returns import Returns
@@ -72,9 +72,9 @@ class Hough(ConsensusMethod):
             0.02, number(low=0.0, low_open=True), "accumulator cell size in rho (m)"
         ),
         "angle_resolution": Param(
-            1.0, number(low=0.0, high=90.0, low_open=True), "accumulator cell size in alpha (deg)"
+            1.0, number(low=0.05, high=90.0), "accumulator cell size in alpha (deg)"
         ),
-        "min_votes": Param(5, int_at_least(1), "fewest votes of an accumulator peak"),
+        "min_votes": Param(5, integer(1, MAX_COUNT), "fewest votes of an accumulator peak"),
         "inlier_distance": Param(
             0.05, number(low=0.0, low_open=True), "largest distance of an inlier from its line (m)"
         ),

@@ -58,7 +58,7 @@ from typing import ClassVar
 import numpy as np
 
 from scanlines.methods.base import ClusteredMethod
-from scanlines.params import Param, int_at_least, number, segment_params, with_default
+from scanlines.params import Param, integer, number, segment_params, with_default
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, LITERAL_CLUSTERING
 from scanlines.steps.events import EVENT_PARAMS
 from scanlines.steps.fit import TLS, Moments, fit_many, prefix_moments, run_covariances
@@ -80,7 +80,7 @@ class LineRegression(ClusteredMethod):
         "breakpoints": with_default(
             BREAKPOINT_PARAMS["breakpoints"], "fixed", "line regression: fixed jump distance"
         ),
-        "window": Param(9, int_at_least(2), "sliding window N_f: points per window fit"),
+        "window": Param(9, integer(2, 1000), "sliding window N_f: points per window fit"),
         "fidelity": Param(
             4.0, number(low=0.0, low_open=True), "largest fidelity (summed chi-square) of a window"
         ),

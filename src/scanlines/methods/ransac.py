@@ -55,10 +55,13 @@ from typing import Any, ClassVar
 import numpy as np
 
 from scanlines.methods.consensus import WHOLE_SCAN, ConsensusMethod
-from scanlines.params import Param, int_at_least, number, segment_params
+from scanlines.params import Param, integer, number, segment_params
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, LITERAL_CLUSTERING
 from scanlines.steps.events import EVENT_PARAMS
 from scanlines.steps.returns import Returns
+
+#: Most random pairs drawn per line (the cost grows with trials times the points).
+MAX_TRIALS = 10_000
 
 
 class Ransac(ConsensusMethod):
@@ -73,11 +76,11 @@ class Ransac(ConsensusMethod):
         "inlier_distance": Param(
             0.05, number(low=0.0, low_open=True), "largest distance of an inlier from its line (m)"
         ),
-        "trials": Param(200, int_at_least(1), "random point pairs drawn per line"),
+        "trials": Param(200, integer(1, MAX_TRIALS), "random point pairs drawn per line"),
         "max_gap": Param(
             0.4, number(low=0.0, low_open=True), "largest distance between consecutive inliers (m)"
         ),
-        "seed": Param(0, int_at_least(0), "seed of the random draws (per scan)"),
+        "seed": Param(0, integer(0, 2**63 - 1), "seed of the random draws (per scan)"),
         **EVENT_PARAMS,
     }
 

@@ -45,7 +45,7 @@ import numpy as np
 
 from scanlines._jit import kernel
 from scanlines.extraction import END_KINDS
-from scanlines.params import Param, int_at_least, number
+from scanlines.params import Param, integer, number
 from scanlines.steps.fit import TLS, fit_many, fit_run, hesse_difference, line_intersection
 from scanlines.steps.returns import MAX_BRIDGED_GAP
 from scanlines.steps.split import line_residual
@@ -62,7 +62,7 @@ __all__ = [
 
 EVENT_PARAMS: dict[str, Param] = {
     "corner_beams": Param(
-        2, int_at_least(1), "corner: most beams between the facing ends of two segments"
+        2, integer(1, 1000), "corner: most beams between the facing ends of two segments"
     ),
     "corner_distance": Param(
         0.2,
