@@ -6,7 +6,10 @@ and collected again; the consensus set is cut into runs contiguous in beam order
 (:func:`inlier_runs`); runs of at least ``min_points`` inliers become segments and
 their points leave the set. When no run is long enough the whole consensus set
 leaves instead, so every round removes points. A cluster's search stops when fewer
-than ``min_points`` free points remain or a line has fewer inliers.
+than ``min_points`` free points remain, a line has fewer inliers, or ``max_misses``
+lines in a row gave no segment (what is left is clutter: on a scan of random ranges
+the search would otherwise take one line of clutter at a time, at a cost of the whole
+scan each, which grows as the square of the beams).
 """
 
 from __future__ import annotations
@@ -17,16 +20,29 @@ from typing import Any, Protocol
 import numpy as np
 
 from scanlines.methods.base import NO_CLUSTERING, ClusteredMethod
-from scanlines.params import Param, choice
+from scanlines.params import Param, choice, integer
 from scanlines.steps.breakpoints import RULES
 from scanlines.steps.fit import prefix_moments, tls_run
 from scanlines.steps.returns import MAX_BRIDGED_GAP, Returns
 
-__all__ = ["BRIDGE_RETURNS", "WHOLE_SCAN", "ConsensusMethod", "LineFinder", "inlier_runs"]
+__all__ = [
+    "BRIDGE_RETURNS",
+    "MAX_MISSES",
+    "WHOLE_SCAN",
+    "ConsensusMethod",
+    "LineFinder",
+    "inlier_runs",
+]
 
 BRIDGE_RETURNS = 1
 """Most returns between two consecutive inliers of one consensus run (:func:`inlier_runs`):
 one return off the line (a noise peak, a spurious echo) does not cut a wall."""
+
+MAX_MISSES = Param(
+    20,
+    integer(1, 1_000_000),
+    "stop a cluster's search after this many lines in a row gave no segment",
+)
 
 WHOLE_SCAN = Param(
     NO_CLUSTERING,
@@ -86,7 +102,8 @@ class ConsensusMethod(ClusteredMethod):
         inlier_distance = self.params["inlier_distance"]
         free = member.copy()
         runs_a, runs_b, bridged_all = [], [], []
-        while np.count_nonzero(free) >= min_points:
+        misses = 0
+        while np.count_nonzero(free) >= min_points and misses < self.params["max_misses"]:
             proposal = finder.best_line(free)
             if proposal is None:
                 break
@@ -96,6 +113,7 @@ class ConsensusMethod(ClusteredMethod):
             a, b, bridged = inlier_runs(returns, gap, inlier, free, self.params["max_gap"])
             long_enough = _run_inlier_counts(inlier, a, b) >= min_points
             taken = _covered(returns.index.shape[0], a[long_enough], b[long_enough])
+            misses = 0 if long_enough.any() else misses + 1
             if not long_enough.any():
                 taken = inlier
             runs_a.append(a[long_enough])

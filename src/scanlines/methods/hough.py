@@ -49,7 +49,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from scanlines.methods.consensus import WHOLE_SCAN, ConsensusMethod
+from scanlines.methods.consensus import MAX_MISSES, WHOLE_SCAN, ConsensusMethod
 from scanlines.params import MAX_COUNT, Param, integer, number, segment_params
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, LITERAL_CLUSTERING
 from scanlines.steps.events import EVENT_PARAMS
@@ -57,6 +57,8 @@ from scanlines.steps.returns import Returns
 
 MAX_RHO_BINS = 4096
 """Most rho cells of an accumulator (the cells widen beyond)."""
+BLOCK_CELLS = 1 << 21
+"""Votes computed at once (a block of points times the angles)."""
 
 
 class Hough(ConsensusMethod):
@@ -68,6 +70,7 @@ class Hough(ConsensusMethod):
         **BREAKPOINT_PARAMS,
         **LITERAL_CLUSTERING,
         "breakpoints": WHOLE_SCAN,
+        "max_misses": MAX_MISSES,
         "rho_resolution": Param(
             0.02, number(low=0.0, low_open=True), "accumulator cell size in rho (m)"
         ),
@@ -118,13 +121,27 @@ class Accumulator:
         self.resolution = rho_resolution
         self.half = half
         self.n_rho = 2 * half + 1
-        rho = np.outer(u, np.cos(self.angles)) + np.outer(v, np.sin(self.angles))
-        cell = np.clip(np.rint(rho / rho_resolution).astype(np.intp) + half, 0, self.n_rho - 1)
-        self.cells = cell + np.arange(self.angles.size) * self.n_rho
-        self.votes = np.bincount(self.cells.ravel(), minlength=self.angles.size * self.n_rho)
+        self.u, self.v = u, v
+        self.votes = np.zeros(self.angles.size * self.n_rho, dtype=np.int64)
+        block = max(1, BLOCK_CELLS // self.angles.size)
+        for start in range(0, points.size, block):
+            self.votes += self._tally(np.arange(start, min(start + block, points.size)))
         self.row = np.full(returns.index.shape[0], -1, dtype=np.intp)
         self.row[points] = np.arange(points.size)
         self.min_votes = min_votes
+
+    def _tally(self, rows: np.ndarray) -> np.ndarray:
+        """The votes of the points ``rows`` (of the member points), one per angle. Cells
+        are computed when needed, never stored: memory stays at about
+        :data:`BLOCK_CELLS` cells whatever the number of points."""
+        rho = np.outer(self.u[rows], np.cos(self.angles)) + np.outer(
+            self.v[rows], np.sin(self.angles)
+        )
+        cell = np.clip(
+            np.rint(rho / self.resolution).astype(np.intp) + self.half, 0, self.n_rho - 1
+        )
+        cell += np.arange(self.angles.size) * self.n_rho
+        return np.bincount(cell.ravel(), minlength=self.votes.size)
 
     def best_line(self, free: np.ndarray) -> tuple[float, float] | None:
         """``(rho, alpha)`` of the most-voted cell in the scan's local frame, or ``None``."""
@@ -141,5 +158,6 @@ class Accumulator:
         rows = self.row[positions]
         rows = rows[rows >= 0]
         self.row[positions] = -1
-        if rows.size:
-            self.votes -= np.bincount(self.cells[rows].ravel(), minlength=self.votes.size)
+        block = max(1, BLOCK_CELLS // self.angles.size)
+        for start in range(0, rows.size, block):
+            self.votes -= self._tally(rows[start : start + block])

@@ -177,24 +177,27 @@ def _resolve_overlaps(
     sigma: np.ndarray,
     merge_chi2: float,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Step 5: merge or divide overlapping neighbours, left to right."""
+    """Step 5: merge or divide overlapping neighbours, left to right.
+
+    The runs kept are compacted in place (``kept`` is the last one), so a merge costs no
+    copy of the arrays: linear in the runs, not quadratic."""
     a, b, group = a.copy(), b.copy(), group.copy()
-    k = 0
-    while k < a.size - 1:
-        if group[k] != group[k + 1] or b[k] < a[k + 1]:
-            k += 1
-            continue
-        rho, alpha, covariance = _lines_and_covariances(
-            returns, moments, a[k : k + 2], b[k : k + 2], sigma
-        )
-        value = pair_chi_squares(rho, alpha, covariance, _FIRST, _SECOND)[0]
-        if value < merge_chi2:
-            b[k] = max(b[k], b[k + 1])
-            a, b, group = np.delete(a, k + 1), np.delete(b, k + 1), np.delete(group, k + 1)
-            continue
-        b[k], a[k + 1] = _best_cut(moments, a[k], b[k], a[k + 1], b[k + 1])
-        k += 1
-    return a, b, group
+    if a.size == 0:
+        return a, b, group
+    kept = 0
+    for following in range(1, a.size):
+        if group[kept] == group[following] and b[kept] >= a[following]:
+            pair = np.array([kept, following])
+            rho, alpha, covariance = _lines_and_covariances(
+                returns, moments, a[pair], b[pair], sigma
+            )
+            if pair_chi_squares(rho, alpha, covariance, _FIRST, _SECOND)[0] < merge_chi2:
+                b[kept] = max(b[kept], b[following])
+                continue
+            b[kept], a[following] = _best_cut(moments, a[kept], b[kept], a[following], b[following])
+        kept += 1
+        a[kept], b[kept], group[kept] = a[following], b[following], group[following]
+    return a[: kept + 1], b[: kept + 1], group[: kept + 1]
 
 
 def _best_cut(moments: Moments, a1: int, b1: int, a2: int, b2: int) -> tuple[int, int]:

@@ -7,7 +7,9 @@ described by Nguyen et al. [2]_):
    from the set of all points); with a clustering rule, on each cluster
    separately;
 2. draw ``trials`` pairs of free points uniformly at random; each pair defines a
-   line; the line with the most free points within ``inlier_distance`` wins;
+   line; the line with the most free points within ``inlier_distance`` wins (with
+   more than :data:`SCORED_POINTS` free points, the lines are scored on a random
+   sample of that many, so a huge scan costs linear time);
 3. refit the winner's inliers by total least squares and collect the inliers of
    the refitted line;
 4. cut the consensus set into runs contiguous in beam order
@@ -16,8 +18,8 @@ described by Nguyen et al. [2]_):
    consecutive inliers more than ``max_gap`` apart, end a run); runs with at
    least ``min_points`` inliers become segments and leave the set (a set without
    such a run leaves as a whole) -- :mod:`scanlines.methods.consensus`;
-5. repeat from 2 until fewer than ``min_points`` points remain or the best line
-   has fewer inliers;
+5. repeat from 2 until fewer than ``min_points`` points remain, the best line
+   has fewer inliers, or ``max_misses`` lines in a row made no segment;
 6. segments shorter than ``min_length`` are dropped; corners and (on the whole
    scan) breakpoints between consecutive segments by the shared rule of
    :func:`scanlines.steps.events.segment_events`.
@@ -54,7 +56,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from scanlines.methods.consensus import WHOLE_SCAN, ConsensusMethod
+from scanlines.methods.consensus import MAX_MISSES, WHOLE_SCAN, ConsensusMethod
 from scanlines.params import Param, integer, number, segment_params
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, LITERAL_CLUSTERING
 from scanlines.steps.events import EVENT_PARAMS
@@ -62,6 +64,11 @@ from scanlines.steps.returns import Returns
 
 #: Most random pairs drawn per line (the cost grows with trials times the points).
 MAX_TRIALS = 10_000
+#: Most free points each drawn line is scored on: beyond this, a random sample of them
+#: (scans of real 2D lasers have fewer returns, and are scored on all of them).
+SCORED_POINTS = 4096
+#: Distances computed at once while scoring (8 bytes each).
+BLOCK_CELLS = 1 << 21
 
 
 class Ransac(ConsensusMethod):
@@ -73,6 +80,7 @@ class Ransac(ConsensusMethod):
         **BREAKPOINT_PARAMS,
         **LITERAL_CLUSTERING,
         "breakpoints": WHOLE_SCAN,
+        "max_misses": MAX_MISSES,
         "inlier_distance": Param(
             0.05, number(low=0.0, low_open=True), "largest distance of an inlier from its line (m)"
         ),
@@ -119,9 +127,22 @@ class RandomSampler:
             return None
         nx, ny = -dy[usable] / length[usable], dx[usable] / length[usable]
         rho = nx * x[first[usable]] + ny * y[first[usable]]
-        near = np.abs(np.outer(nx, x) + np.outer(ny, y) - rho[:, None]) <= self.inlier_distance
-        best = int(np.argmax(near.sum(axis=1)))
+        if m > SCORED_POINTS:  # score the lines on a random sample of the free points
+            sample = self.rng.choice(m, SCORED_POINTS, replace=False)
+            x, y = x[sample], y[sample]
+        best = int(np.argmax(self._inlier_counts(nx, ny, rho, x, y)))
         return float(rho[best]), math.atan2(float(ny[best]), float(nx[best]))
+
+    def _inlier_counts(self, nx, ny, rho, x, y) -> np.ndarray:
+        """Points of ``x, y`` within ``inlier_distance`` of each line, in blocks of lines
+        (memory stays at about :data:`BLOCK_CELLS` distances)."""
+        counts = np.empty(nx.size, dtype=np.int64)
+        block = max(1, BLOCK_CELLS // max(x.size, 1))
+        for start in range(0, nx.size, block):
+            part = slice(start, start + block)
+            distance = np.outer(nx[part], x) + np.outer(ny[part], y) - rho[part, None]
+            counts[part] = np.count_nonzero(np.abs(distance) <= self.inlier_distance, axis=1)
+        return counts
 
     def remove(self, positions: np.ndarray) -> None:
         """Nothing to forget: every draw looks at the free points only."""

@@ -172,7 +172,13 @@ def split_by_residual(x, y, fit, moments, a, b, cluster, max_residual, min_point
     """Cut runs at their worst point until every point is within ``max_residual``.
 
     Each run is split recursively, left part first; parts shorter than
-    ``min_points`` are dropped. Terminates because every cut removes a point.
+    ``min_points`` are dropped. When the worst point lies in a run's last few points
+    (its cut would only trim an end shorter than ``min_points``) and the run also bends
+    away from the chord of its ends by more than ``max_residual`` (an arc, whose fitted
+    line is farthest from its ends), the run is cut where it is farthest from that chord
+    instead: arcs become chains of segments in O(n log n), rather than losing a point at
+    a time from their ends in O(n^2). A stray end point is still trimmed. Terminates
+    because every cut removes a point or halves a run.
     """
     out_a = np.empty(x.shape[0] + 1, dtype=np.int64)
     out_b = np.empty(x.shape[0] + 1, dtype=np.int64)
@@ -180,29 +186,61 @@ def split_by_residual(x, y, fit, moments, a, b, cluster, max_residual, min_point
     count = 0
     stack_a = np.empty(x.shape[0] + 1, dtype=np.int64)
     stack_b = np.empty(x.shape[0] + 1, dtype=np.int64)
+    shortest = max(min_points, 1)
     for k in range(a.shape[0]):
         stack_a[0], stack_b[0] = a[k], b[k]
         top = 1
         while top:
             top -= 1
             lo, hi = stack_a[top], stack_b[top]
-            if hi - lo + 1 < max(min_points, 1):
+            if hi - lo + 1 < shortest:
                 continue
             rho, alpha, _ = fit_run(fit, moments, lo, hi)
-            c, s = math.cos(alpha), math.sin(alpha)
-            worst, worst_at = -1.0, -1
-            for p in range(lo, hi + 1):
-                distance = abs(x[p] * c + y[p] * s - rho)
-                if distance > worst:  # NaN (no line) never counts
-                    worst, worst_at = distance, p
-            if worst > max_residual:
-                stack_a[top], stack_b[top] = worst_at + 1, hi  # right part after the left
-                stack_a[top + 1], stack_b[top + 1] = lo, worst_at - 1
-                top += 2
+            worst, worst_at = _farthest_from_line(
+                x, y, lo, hi, math.cos(alpha), math.sin(alpha), rho
+            )
+            if worst <= max_residual:
+                out_a[count], out_b[count], out_cluster[count] = lo, hi, cluster[k]
+                count += 1
                 continue
-            out_a[count], out_b[count], out_cluster[count] = lo, hi, cluster[k]
-            count += 1
+            if worst_at - lo < shortest or hi - worst_at < shortest:
+                bend, bend_at = _farthest_from_chord(x, y, lo, hi)
+                if bend > max_residual and bend_at - lo >= shortest and hi - bend_at >= shortest:
+                    stack_a[top], stack_b[top] = bend_at + 1, hi
+                    stack_a[top + 1], stack_b[top + 1] = lo, bend_at
+                    top += 2
+                    continue
+            stack_a[top], stack_b[top] = worst_at + 1, hi  # right part after the left
+            stack_a[top + 1], stack_b[top + 1] = lo, worst_at - 1
+            top += 2
     return out_a[:count], out_b[:count], out_cluster[:count]
+
+
+@kernel
+def _farthest_from_line(x, y, lo, hi, c, s, rho):
+    """The largest distance of points ``lo..hi`` from the line ``(rho, alpha)`` (given as
+    ``c = cos alpha, s = sin alpha``), and where; NaN distances never count."""
+    worst, worst_at = -1.0, lo
+    for p in range(lo, hi + 1):
+        distance = abs(x[p] * c + y[p] * s - rho)
+        if distance > worst:
+            worst, worst_at = distance, p
+    return worst, worst_at
+
+
+@kernel
+def _farthest_from_chord(x, y, lo, hi):
+    """The largest distance of points ``lo..hi`` from the chord joining the two, and where."""
+    dx, dy = x[hi] - x[lo], y[hi] - y[lo]
+    length = math.sqrt(dx * dx + dy * dy)
+    if length == 0.0:
+        return 0.0, lo
+    worst, worst_at = -1.0, lo
+    for p in range(lo, hi + 1):
+        distance = abs((x[p] - x[lo]) * dy - (y[p] - y[lo]) * dx) / length
+        if distance > worst:
+            worst, worst_at = distance, p
+    return worst, worst_at
 
 
 @kernel
