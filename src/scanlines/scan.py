@@ -56,6 +56,17 @@ def _as_vector(name: str, values: Any, *, length: int | None = None) -> FloatArr
     return out
 
 
+def _stamp_seconds(stamp: Any) -> float:
+    """A ROS time in seconds: ROS 2 and rosbags (``sec``, ``nanosec``), ROS 1 (``secs``,
+    ``nsecs``)."""
+    if hasattr(stamp, "sec"):
+        return stamp.sec + stamp.nanosec * 1e-9
+    try:
+        return stamp.secs + stamp.nsecs * 1e-9
+    except AttributeError:
+        raise ScanError(f"header.stamp is not a ROS time: {stamp!r}") from None
+
+
 def _preview(values: Any) -> str:
     text = repr(values)
     return text if len(text) <= 60 else text[:57] + "..."
@@ -188,6 +199,50 @@ class Scan:
 
     def __len__(self) -> int:
         return int(self.ranges.shape[0])
+
+    @classmethod
+    def from_laserscan(
+        cls,
+        message: Any,
+        *,
+        fallback_time: float | None = None,
+        pose: Sequence[float] | None = None,
+    ) -> Scan:
+        """A scan from a ``sensor_msgs/LaserScan`` message object: rosbags', rclpy's
+        (``stamp.sec``, ``stamp.nanosec``) or rospy's (``stamp.secs``, ``stamp.nsecs``).
+
+        Ranges and intensities are taken as they are (REP 117's ``-inf``, ``NaN`` and
+        ``+inf`` are beams without a return); intensities are kept when there is one per
+        beam. The timestamp is the header stamp in seconds, or ``fallback_time`` when the
+        stamp is zero (a driver that does not stamp).
+
+        Raises
+        ------
+        ScanError
+            When ``message`` lacks a LaserScan field or holds invalid values.
+        """
+        try:
+            ranges = np.asarray(message.ranges, dtype=np.float64)
+            intensities = np.asarray(message.intensities, dtype=np.float64)
+            geometry = (message.angle_min, message.angle_increment)
+            limits = (message.range_min, message.range_max)
+            stamp = message.header.stamp
+        except AttributeError as exc:
+            raise ScanError(
+                f"not a sensor_msgs/LaserScan message ({type(message).__name__} has no "
+                f"field {exc.name!r})"
+            ) from None
+        except (TypeError, ValueError) as exc:
+            raise ScanError(f"ranges or intensities are not numbers ({describe(exc)})") from None
+        seconds = _stamp_seconds(stamp)
+        return cls(
+            ranges,
+            *(float(value) for value in geometry),
+            *(float(value) for value in limits),
+            timestamp=seconds if seconds else fallback_time,
+            intensities=intensities if intensities.shape == ranges.shape else None,
+            pose=pose,
+        )
 
     def __reduce__(self) -> tuple:
         # Pickle by the constructor's arguments (for multiprocessing); caches are rebuilt.

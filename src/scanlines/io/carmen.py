@@ -335,6 +335,8 @@ class CarmenReader(LogReader):
                 if scan is not None:
                     self.counts[name] += 1
                     yield record_index, scan
+            elif kind == "damaged scan":
+                index += 1  # keeps its place in the scan numbering
             elif kind == "other":
                 parse = self._parse_odom if name == "ODOM" else self._parse_param
                 if self._read_or_skip(parse, line, line_number, scan=False) is not None:

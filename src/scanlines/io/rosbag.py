@@ -30,9 +30,7 @@ from contextlib import contextmanager, suppress
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from scanlines.errors import LogFormatError, describe
+from scanlines.errors import LogFormatError, ScanError, describe
 from scanlines.io.base import (
     DEFAULT_MAX_BEAMS,
     DEFAULT_MAX_RECORD_BYTES,
@@ -99,6 +97,7 @@ class RosbagReader(LogReader):
     """
 
     format_name = "rosbag"
+    record_unit = "message"
 
     def __init__(
         self,
@@ -239,20 +238,14 @@ class RosbagReader(LogReader):
         self._bad_record(error, count=missing)
 
     def _scan(self, message: Any, bag_time: int, record: int) -> Scan:
-        ranges = np.asarray(message.ranges, dtype=np.float64)
-        intensities = np.asarray(message.intensities, dtype=np.float64)
-        stamp = message.header.stamp
-        seconds = stamp.sec + stamp.nanosec / 1e9
-        return self._make_scan(
-            record,
-            ranges=ranges,
-            angle_min=float(message.angle_min),
-            angle_increment=float(message.angle_increment),
-            range_min=float(message.range_min),
-            range_max=float(message.range_max),
-            timestamp=seconds if (stamp.sec or stamp.nanosec) else bag_time * 1e-9,
-            intensities=intensities if intensities.shape == ranges.shape else None,
-        )
+        self._check_beams(len(message.ranges), record)
+        try:
+            return Scan.from_laserscan(message, fallback_time=bag_time * 1e-9)
+        except ScanError as exc:
+            field = str(exc).split(" ", 1)[0]
+            raise LogFormatError(
+                str(exc), path=self.path, record=record, field=field, unit="message"
+            ) from None
 
 
 def _topic_table(reader: Any) -> dict[str, tuple[str, int]]:

@@ -140,8 +140,10 @@ class CsvReader(LogReader):
         missing = [k for k in ("angle_min", "angle_increment") if k not in geometry]
         if missing:
             raise ParameterError(
-                f"{self.path}: a CSV log needs {' and '.join(missing)} (radians), as options "
-                f"or as '# angle_min=... angle_increment=...' comment lines"
+                f"{self.path}: a CSV log needs {' and '.join(missing)}: comment lines "
+                f"'# angle_min=... angle_increment=...' in radians, or the options (radians "
+                f"in the library; --angle-min and --angle-increment in degrees on the command "
+                f"line)"
             )
         self.angle_min = geometry["angle_min"]
         self.angle_increment = geometry["angle_increment"]
