@@ -46,17 +46,17 @@ class LogFormatError(ScanlinesError, ValueError):
         field: str | None = None,
         unit: str = "line",
     ) -> None:
-        self.path = None if path is None else str(path)
+        self.path = None if path is None else one_line(str(path))
         self.record = record
-        self.field = field
+        self.field = None if field is None else one_line(field)
         self.reason = one_line(message)
         where = []
         if self.path is not None:
             where.append(self.path)
         if record is not None:
             where.append(f"{unit} {record}")
-        if field is not None:
-            where.append(f"field {field}")
+        if self.field is not None:
+            where.append(f"field {self.field}")
         prefix = ": ".join([", ".join(where)]) + ": " if where else ""
         super().__init__(prefix + self.reason)
 
@@ -66,9 +66,11 @@ QUOTED_CHARACTERS = 200
 
 
 def one_line(text: str) -> str:
-    """``text`` on one line: line breaks (and the indentation after them) become ``" / "``."""
+    """``text`` on one line: line breaks (and the indentation after them) become ``" / "``,
+    other control characters (from a damaged file name, say) their escapes."""
     lines = [line.strip() for line in str(text).splitlines()]
-    return " / ".join(line for line in lines if line)
+    joined = " / ".join(line for line in lines if line)
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in joined)
 
 
 def describe(exc: BaseException) -> str:

@@ -237,8 +237,10 @@ def _warm_up_scan() -> Scan:
 
 
 def float32(value: float) -> float:
-    """``value`` rounded to float32 precision (infinities stay)."""
-    return float(np.float32(value))
+    """``value`` rounded to float32 precision (infinities stay; beyond float32's range a
+    range bound becomes infinite, which it is for every float32 range)."""
+    with np.errstate(over="ignore"):
+        return float(np.float32(value))
 
 
 def at_float32(ranges: np.ndarray) -> np.ndarray:

@@ -13,6 +13,8 @@ from scanlines.errors import ScanError, describe
 __all__ = ["Scan", "as_array", "is_full_circle", "valid_returns"]
 
 FloatArray = np.ndarray
+#: Largest magnitude of ``angle_min``, radians (two turns either way).
+MAX_ANGLE_MIN = 4.0 * math.pi
 #: Largest angle from the first beam to the last (one turn, and a little for rounding).
 MAX_SPAN = 2.0 * math.pi * (1.0 + 1e-4)
 
@@ -163,7 +165,13 @@ class Scan:
         set_ = object.__setattr__
         ranges_arr = _as_vector("ranges", ranges)
         set_(self, "ranges", ranges_arr)
-        set_(self, "angle_min", _as_float("angle_min", angle_min, finite=True))
+        first_bearing = _as_float("angle_min", angle_min, finite=True)
+        if abs(first_bearing) > MAX_ANGLE_MIN:
+            raise ScanError(
+                f"angle_min must be within [-4 pi, 4 pi] radians, got {angle_min!r} "
+                "(degrees given as radians?)"
+            )
+        set_(self, "angle_min", first_bearing)
         increment = _as_float("angle_increment", angle_increment, finite=True)
         if increment == 0.0:
             raise ScanError("angle_increment must be non-zero, got 0.0")
@@ -222,8 +230,9 @@ class Scan:
             When ``message`` lacks a LaserScan field or holds invalid values.
         """
         try:
-            ranges = np.asarray(message.ranges, dtype=np.float64)
-            intensities = np.asarray(message.intensities, dtype=np.float64)
+            with np.errstate(invalid="ignore"):  # a signaling NaN is still a NaN
+                ranges = np.asarray(message.ranges, dtype=np.float64)
+                intensities = np.asarray(message.intensities, dtype=np.float64)
             geometry = (message.angle_min, message.angle_increment)
             limits = (message.range_min, message.range_max)
             stamp = message.header.stamp

@@ -161,10 +161,10 @@ class Ros2BagWriter(ResultWriter):
             angle_increment=scan.angle_increment,
             time_increment=0.0,
             scan_time=0.0,
-            range_min=scan.range_min,
-            range_max=scan.range_max,
-            ranges=np.asarray(scan.ranges, dtype=np.float32),
-            intensities=np.asarray(intensities, dtype=np.float32),
+            range_min=float(_as_float32(scan.range_min)),
+            range_max=float(_as_float32(scan.range_max)),
+            ranges=_as_float32(scan.ranges),
+            intensities=_as_float32(intensities),
         )
 
     def _marker(self, stamp: Any, namespace: str, marker_id: int, points: np.ndarray) -> Any:
@@ -311,3 +311,9 @@ class Ros2BagWriter(ResultWriter):
             super().close()
         finally:
             discard(self._tmpdir)
+
+
+def _as_float32(values: Any) -> np.ndarray:
+    """Values as float32, as a LaserScan holds them (beyond float32's range: infinite)."""
+    with np.errstate(over="ignore"):
+        return np.asarray(values, dtype=np.float32)

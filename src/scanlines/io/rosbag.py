@@ -224,8 +224,9 @@ class RosbagReader(LogReader):
     def _account_for_every_message(self, read: int) -> None:
         """The bag's index says how many messages the topic has: fewer read is damage,
         an error (or, in skip mode, that many skipped records), never a short result."""
-        declared = self.topics[self.topic][1]
-        if read >= declared:
+        msgtype, declared = self.topics[self.topic]
+        if read >= declared:  # more than declared: the count was wrong, nothing is lost
+            self.topics[self.topic] = (msgtype, read)
             return
         missing = declared - read
         error = LogFormatError(
@@ -249,8 +250,13 @@ class RosbagReader(LogReader):
 
 
 def _topic_table(reader: Any) -> dict[str, tuple[str, int]]:
+    """Topic -> (message type, message count the bag declares). A count that is not a
+    non-negative integer (a damaged ``metadata.yaml``) counts as 0: nothing is declared."""
     table: dict[str, tuple[str, int]] = {}
     for connection in reader.connections:
         msgtype, count = table.get(connection.topic, (connection.msgtype, 0))
-        table[connection.topic] = (msgtype, count + max(connection.msgcount, 0))
+        declared = connection.msgcount
+        if isinstance(declared, bool) or not isinstance(declared, int) or declared < 0:
+            declared = 0
+        table[connection.topic] = (msgtype, count + declared)
     return table

@@ -1,0 +1,79 @@
+"""Which mutators are tried on which seed, and writing one mutated input.
+
+A :class:`Plan` names a mutator and, for a ROS 2 bag directory, the file it
+damages. Plain text seeds get the byte and line mutators; gzip text seeds the
+byte mutators on the compressed bytes (``gz-bytes/...``) and every text mutator
+on the content (``text/...``); the NPZ seed the byte and NPZ mutators; bag
+directories the byte mutators on the storage file (``storage/...``) and the
+text mutators on ``metadata.yaml`` (``metadata/...``); other binary seeds the
+byte mutators.
+"""
+
+from __future__ import annotations
+
+import random
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+
+from .mutate import BYTE_MUTATORS, LINE_MUTATORS, Mutator, inside_gzip
+from .mutate_npz import NPZ_MUTATORS
+
+PLAIN_TEXT_SEEDS = ("carmen-log", "carmen-robotlaser", "coreslam-dat", "csv")
+GZIP_TEXT_SEEDS = ("carmen-clf-gz", "coreslam-dat-gz", "csv-gz")
+BAG_DIRECTORY_SEEDS = ("ros2-db3-dir", "ros2-mcap-dir")
+
+
+@dataclass(frozen=True)
+class Plan:
+    """One way of mutating a seed: ``name`` (e.g. ``text/bad_number``), the mutator and,
+    for a bag directory, the file it damages (``"storage"`` or ``"metadata.yaml"``)."""
+
+    name: str
+    mutator: Mutator
+    target: str | None = None
+
+
+def interleave(*families: list[Plan]) -> list[Plan]:
+    """Alternate the families, so that a short run tries some plans of each."""
+    plans: list[Plan] = []
+    for k in range(max(len(f) for f in families)):
+        plans += [f[k] for f in families if k < len(f)]
+    return plans
+
+
+def plans_for(seed_name: str) -> list[Plan]:
+    """Every plan tried on the seed ``seed_name`` (a key of ``seeds.SEED_FILES``)."""
+    text_mutators = LINE_MUTATORS | BYTE_MUTATORS
+    if seed_name in PLAIN_TEXT_SEEDS:
+        return [Plan(name, m) for name, m in text_mutators.items()]
+    if seed_name in GZIP_TEXT_SEEDS:
+        return interleave(
+            [Plan(f"text/{name}", inside_gzip(m)) for name, m in text_mutators.items()],
+            [Plan(f"gz-bytes/{name}", m) for name, m in BYTE_MUTATORS.items()],
+        )
+    if seed_name == "npz":
+        return interleave(
+            [Plan(name, m) for name, m in NPZ_MUTATORS.items()],
+            [Plan(name, m) for name, m in BYTE_MUTATORS.items()],
+        )
+    if seed_name in BAG_DIRECTORY_SEEDS:
+        return interleave(
+            [Plan(f"storage/{name}", m, "storage") for name, m in BYTE_MUTATORS.items()],
+            [Plan(f"metadata/{name}", m, "metadata.yaml") for name, m in text_mutators.items()],
+        )
+    return [Plan(name, m) for name, m in BYTE_MUTATORS.items()]
+
+
+def make_input(seed: Path, plan: Plan, rng: random.Random, destination: Path) -> Path:
+    """Write the seed, mutated by ``plan``, at ``destination`` (a file, or a bag directory)."""
+    if not seed.is_dir():
+        destination.write_bytes(plan.mutator(rng, seed.read_bytes()))
+        return destination
+    shutil.copytree(seed, destination)
+    if plan.target == "metadata.yaml":
+        target = destination / "metadata.yaml"
+    else:
+        target = next(p for p in sorted(destination.iterdir()) if p.name != "metadata.yaml")
+    target.write_bytes(plan.mutator(rng, target.read_bytes()))
+    return destination
