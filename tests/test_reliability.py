@@ -381,3 +381,8 @@ def test_n_plot_pages_a_long_selection(tmp_path) -> None:
 
 def test_n_extract_is_documented() -> None:
     assert "ParameterError" in extract.__doc__
+
+
+def test_angle_min_in_degrees_is_caught() -> None:
+    with pytest.raises(ScanError, match="degrees given as radians"):
+        Scan(np.ones(181), -90.0, np.radians(1.0))

@@ -229,6 +229,8 @@ class CarmenReader(LogReader):
         ``"logger"`` (default) or ``"ipc"`` timestamp field.
     on_error:
         ``"fail"`` or ``"skip"`` malformed records.
+    max_beams, max_record_bytes:
+        Limits of one record (:mod:`scanlines.io.base`).
 
     Attributes
     ----------

@@ -105,6 +105,8 @@ class CoreSlamReader(LogReader):
         Valid range interval in metres.
     on_error:
         ``"fail"`` or ``"skip"`` malformed lines.
+    max_beams, max_record_bytes:
+        Limits of one record (:mod:`scanlines.io.base`).
     """
 
     format_name = "coreslam"

@@ -100,6 +100,8 @@ class NpzReader(LogReader):
     on_error:
         ``"fail"`` or ``"skip"`` scans whose values are unusable (e.g. a zero
         ``angle_increment`` in one row).
+    max_beams, max_record_bytes:
+        Limits of one record (:mod:`scanlines.io.base`).
 
     Raises
     ------

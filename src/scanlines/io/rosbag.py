@@ -80,6 +80,8 @@ class RosbagReader(LogReader):
         The ``LaserScan`` topic; ``None`` picks the only one.
     on_error:
         ``"fail"`` or ``"skip"`` messages that do not make a valid scan.
+    max_beams, max_record_bytes:
+        Limits of one record (:mod:`scanlines.io.base`).
 
     Attributes
     ----------

@@ -104,6 +104,8 @@ class CsvReader(LogReader):
         Whether the first column is a timestamp; ``None`` decides from the header.
     on_error:
         ``"fail"`` or ``"skip"`` malformed rows.
+    max_beams, max_record_bytes:
+        Limits of one record (:mod:`scanlines.io.base`).
 
     Raises
     ------
