@@ -183,7 +183,13 @@ def _print_description(d) -> None:
 
 
 def run_command(
-    log: LogArgument,
+    logs: Annotated[
+        list[Path],
+        typer.Argument(
+            help="Logs (CARMEN, ROS bag, .dat, .csv, .npz), folders of logs, or globs.",
+            metavar="LOG...",
+        ),
+    ],
     method: MethodOption = "adaptive",
     preset: PresetOption = None,
     param: ParamOption = None,
@@ -205,12 +211,47 @@ def run_command(
     angle_increment: AngleStepOption = None,
     sensor_profile: ProfileOption = None,
     jobs: JobsOption = None,
+    output_format: Annotated[
+        Literal["jsonl", "csv", "mcap", "parquet"] | None,
+        typer.Option(
+            "--format",
+            help="Output format for several logs or a dataset (parquet: one dataset "
+            "for all logs; default: by --out's suffix, else jsonl).",
+        ),
+    ] = None,
+    scheduler: Annotated[
+        str | None,
+        typer.Option(
+            help="Run on Dask: a scheduler address, or 'local' for a LocalCluster of "
+            "--jobs workers (several logs or parquet only).",
+        ),
+    ] = None,
+    chunk_records: Annotated[
+        int,
+        typer.Option(
+            help="Several logs: a longer log is split in tasks of this many scans.", min=1
+        ),
+    ] = 5000,
 ) -> None:
     from scanlines.errors import ParameterError
     from scanlines.extractor import Extractor
     from scanlines.io import open_log
     from scanlines.runner import parse_slice
 
+    if _many(logs, out, output_format):
+        from scanlines.cli.fleet import run_many
+
+        options = reader_options(
+            fov, angle_convention, topic, angle_min, angle_increment, on_error, max_beams
+        )
+        run_many(logs, out, output_format, method=method, preset=preset,
+                 params=parse_params(param), options=options, sensor_profile=sensor_profile,
+                 jobs=jobs_option(jobs), scheduler=scheduler, chunk_records=chunk_records,
+                 overwrite=overwrite, scans=scans, frame=frame)  # fmt: skip
+        return
+    if scheduler is not None:
+        raise ParameterError("--scheduler runs several logs or a parquet dataset")
+    (log,) = logs
     if frame not in ("sensor", "world"):
         raise ParameterError(f"--frame must be sensor or world, got {frame!r}")
     if on_error not in ("fail", "skip"):
@@ -379,6 +420,19 @@ def _print_summary(summary, out) -> None:
     if out is not None:
         table.add_row("output", str(out))
     Console().print(table)
+
+
+def _many(logs: list[Path], out: Path | None, output_format: str | None) -> bool:
+    """Several logs (or a folder of logs, or a glob), or a Parquet dataset: the fleet path.
+    One folder that is a ROS 2 bag (``metadata.yaml``, or one storage file) is one log."""
+    from scanlines.io.rosbag import is_ros2_bag_dir
+
+    if len(logs) != 1 or output_format == "parquet":
+        return True
+    (log,) = logs
+    if any(c in str(log) for c in "*?[") or (log.is_dir() and not is_ros2_bag_dir(log)):
+        return True
+    return out is not None and out.suffix.lower() == ".parquet"
 
 
 def _with_breakdown(total: int, parts: dict[str, int]) -> str:

@@ -1,0 +1,483 @@
+"""Many logs at once: a Parquet dataset of their features, on local processes or a Dask cluster.
+
+The work is a list of :class:`ChunkTask`: one per log, or several for a long log (records
+``[start, stop)``, the last one open-ended), each extracting its records and writing them
+as one part of each table of the dataset (:mod:`scanlines.io.parquet`). The same tasks
+run on a local process pool (``jobs``) or on Dask (``scheduler``: an address, or
+``"local"`` for a :class:`distributed.LocalCluster`); :func:`fleet_tasks` gives them as
+``dask.delayed`` objects for a notebook with a cluster of its own.
+
+Faults: a log that cannot be read is reported with its reason and the others go on; its
+rows are removed. A task whose worker dies is run again by Dask; a part written twice
+replaces itself, so no row is lost or doubled. When a log is done, ``_logs/NAME.json``
+records its input checksum, method, parameters and sensor profile option: running the
+same command again skips it; a different one is an error unless ``overwrite``.
+
+Every chunk of a log measures the log's sensor profile from the log's first scans (as
+``scanlines run`` does), so the rows are those of a single-log run, bit for bit.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import glob
+import hashlib
+import json
+import multiprocessing
+import time
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from scanlines.errors import ParameterError, ScanlinesError, describe
+
+__all__ = [
+    "CHUNK_RECORDS",
+    "ChunkTask",
+    "FleetSummary",
+    "LogOutcome",
+    "expand_inputs",
+    "extract_chunk",
+    "fleet_tasks",
+    "plan",
+    "run_fleet",
+]
+
+#: Scan records per task: a longer log is split into chunks of this many.
+CHUNK_RECORDS = 5000
+#: Suffixes of the log files a folder given as input is searched for.
+LOG_SUFFIXES = (".log", ".clf", ".gz", ".dat", ".csv", ".npz", ".bag", ".mcap", ".db3")
+
+
+@dataclass(frozen=True)
+class ChunkTask:
+    """The records ``[start, stop)`` of one log (``stop=None``: to the end), extracted
+    and written to ``dataset``."""
+
+    log: str
+    path: str
+    dataset: str
+    start: int
+    stop: int | None
+    method: str
+    preset: str | None
+    params: dict[str, Any]
+    reader_options: dict[str, Any]
+    sensor_profile: str | None = None
+
+
+@dataclass
+class ChunkResult:
+    log: str
+    start: int
+    scans: int
+    segments: int
+    skipped_scans: int | None
+    seconds: float
+
+
+@dataclass
+class LogOutcome:
+    """One log of a fleet run: what was written, or why it failed or was skipped."""
+
+    log: str
+    path: str
+    status: str = "done"  # done | skipped (already done) | failed
+    reason: str = ""
+    scans: int = 0
+    segments: int = 0
+    skipped_scans: int = 0
+    seconds: float = 0.0
+    chunks: int = 0
+
+
+@dataclass
+class FleetSummary:
+    """Per log outcomes and the totals of a fleet run."""
+
+    logs: list[LogOutcome] = field(default_factory=list)
+    seconds: float = 0.0
+    engine: str = ""
+
+    @property
+    def failed(self) -> list[LogOutcome]:
+        return [log for log in self.logs if log.status == "failed"]
+
+    @property
+    def scans(self) -> int:
+        return sum(log.scans for log in self.logs)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"engine": self.engine, "seconds": self.seconds,
+                "logs": [asdict(log) for log in self.logs]}  # fmt: skip
+
+
+# -- inputs and plan ----------------------------------------------------------------------
+
+
+def expand_inputs(inputs: Iterable[str | Path]) -> list[Path]:
+    """Files, folders (searched for logs, ROS 2 bag folders kept whole) and glob patterns,
+    in a stable order without duplicates."""
+    found: list[Path] = []
+    for item in inputs:
+        text = str(item)
+        matches = sorted(glob.glob(text)) if any(c in text for c in "*?[") else [text]
+        if not matches:
+            raise ParameterError(f"no log matches {text!r}")
+        for match in map(Path, matches):
+            if match.is_dir() and not _is_bag_folder(match):
+                found += _logs_in(match)
+            else:
+                found.append(match)
+    return list(dict.fromkeys(p.resolve() for p in found))
+
+
+def _logs_in(folder: Path) -> list[Path]:
+    """The logs under ``folder``: files with a log suffix, ROS 2 bag folders whole; hidden
+    files and folders (temporary outputs) left out."""
+    found: list[Path] = []
+    for child in sorted(folder.iterdir()):
+        if child.name.startswith("."):
+            continue
+        if child.is_dir():
+            found += [child] if _is_bag_folder(child) else _logs_in(child)
+        elif child.suffix.lower() in LOG_SUFFIXES:
+            found.append(child)
+    return found
+
+
+def _is_bag_folder(path: Path) -> bool:
+    """A ROS 2 bag folder (with its ``metadata.yaml``); other folders are searched."""
+    return (path / "metadata.yaml").exists()
+
+
+def log_names(paths: Sequence[Path]) -> list[str]:
+    """A unique name per log: its file name, with as many parent folders as it takes to
+    tell equal names apart (joined by ``__``)."""
+    depth = 1
+    while True:
+        names = ["__".join(p.parts[-depth:]) for p in paths]
+        if len(set(names)) == len(names) or depth > max(len(p.parts) for p in paths):
+            return [_safe(name) for name in names]
+        depth += 1
+
+
+def _safe(name: str) -> str:
+    return "".join(c if c.isalnum() or c in "._-" else "_" for c in name)
+
+
+def estimated_records(path: Path, reader_options: dict[str, Any]) -> int:
+    """About how many scan records a log holds, cheaply (the last chunk is open-ended, so
+    this only decides how a log is split)."""
+    from scanlines.io import open_log
+    from scanlines.io.carmen import CarmenReader
+    from scanlines.io.npz import NpzReader
+    from scanlines.io.rosbag import RosbagReader
+    from scanlines.io.text import iter_lines
+
+    with open_log(path, **reader_options) as reader:
+        if isinstance(reader, NpzReader):
+            return reader.n_scans
+        if isinstance(reader, RosbagReader):
+            return reader.topics[reader.topic][1]
+        if isinstance(reader, CarmenReader):
+            name = reader.message + " "
+            return sum(line.startswith(name) for _, line in iter_lines(reader.path, 1 << 16))
+        return sum(1 for _, line in iter_lines(reader.path, 1 << 16) if line.strip()[:1] not in "#")
+
+
+def plan(
+    paths: Sequence[Path],
+    dataset: Path,
+    *,
+    method: str = "adaptive",
+    preset: str | None = None,
+    params: dict[str, Any] | None = None,
+    reader_options: dict[str, Any] | None = None,
+    sensor_profile: str | None = None,
+    chunk_records: int = CHUNK_RECORDS,
+) -> tuple[list[ChunkTask], list[LogOutcome]]:
+    """The tasks of ``paths`` (records split in chunks of ``chunk_records``), and the
+    logs that failed already (unreadable)."""
+    tasks, failed = [], []
+    for name, path in zip(log_names(paths), paths, strict=True):
+        try:
+            records = estimated_records(path, reader_options or {})
+        except (ScanlinesError, OSError) as error:
+            failed.append(LogOutcome(name, str(path), "failed", str(error)))
+            continue
+        starts = list(range(0, max(records, 1), chunk_records))
+        for k, start in enumerate(starts):
+            stop = starts[k + 1] if k + 1 < len(starts) else None
+            tasks.append(
+                ChunkTask(name, str(path), str(dataset), start, stop, method, preset,
+                          dict(params or {}), dict(reader_options or {}), sensor_profile)
+            )  # fmt: skip
+    return tasks, failed
+
+
+# -- one task -----------------------------------------------------------------------------
+
+
+def extract_chunk(task: ChunkTask) -> ChunkResult:
+    """Extract the task's records and write them as one part of each table."""
+    import numpy as np
+
+    from scanlines.extraction import ExtractionTable
+    from scanlines.extractor import Extractor
+    from scanlines.io import open_log
+    from scanlines.io.parquet import write_parts
+    from scanlines.runner import CHUNK_SCANS, chunk_scans, select
+    from scanlines.sensor_profile import ProfileError, read_profile
+
+    started = time.perf_counter()
+    if task.sensor_profile is not None:
+        profile = read_profile(task.sensor_profile)
+    else:
+        from scanlines.runner import log_profile
+
+        try:
+            profile = log_profile(task.path, task.reader_options)
+        except ProfileError:
+            profile = None
+    extractor = Extractor(task.method, task.preset, sensor_profile=profile, **task.params)
+    indices, scans, tables = [], [], []
+    with open_log(task.path, **task.reader_options) as reader:
+        selected = select(reader.enumerate(), slice(task.start, task.stop))
+        for piece in chunk_scans(selected, CHUNK_SCANS):
+            first = piece.scans[0]
+            stack = np.stack([scan.ranges for scan in piece.scans])
+            tables.append(extractor.batch(stack, first.angle_min, first.angle_increment,
+                                          first.range_min, first.range_max))  # fmt: skip
+            indices += piece.indices
+            scans += piece.scans
+        ended = task.stop is None
+        skipped = reader.bad_scans if ended else None
+    table = ExtractionTable.join(tables) if tables else _empty_table(extractor)
+    write_parts(Path(task.dataset), task.log, task.start, indices, scans, table)
+    return ChunkResult(task.log, task.start, len(scans), len(table.first), skipped,
+                       time.perf_counter() - started)  # fmt: skip
+
+
+def _empty_table(extractor: Any) -> Any:
+    from scanlines.extraction import ExtractionTable
+
+    return ExtractionTable.concatenate([], extractor.method, dict(extractor.params))
+
+
+# -- checksums and the record of finished logs --------------------------------------------
+
+
+def checksum(path: Path) -> str:
+    """SHA-256 of a log's bytes (a bag folder: of its files, in name order)."""
+    digest = hashlib.sha256()
+    files = sorted(p for p in path.rglob("*") if p.is_file()) if path.is_dir() else [path]
+    for file in files:
+        digest.update(file.name.encode())
+        with open(file, "rb") as fh:
+            while chunk := fh.read(1 << 20):
+                digest.update(chunk)
+    return digest.hexdigest()
+
+
+def _fingerprint(task: ChunkTask, digest: str) -> dict[str, Any]:
+    from scanlines.json_values import jsonable
+
+    return jsonable({"input_sha256": digest, "method": task.method, "preset": task.preset,
+                     "params": task.params, "reader_options": task.reader_options,
+                     "sensor_profile": task.sensor_profile})  # fmt: skip
+
+
+# -- running ------------------------------------------------------------------------------
+
+
+def run_fleet(
+    inputs: Iterable[str | Path],
+    dataset: str | Path,
+    *,
+    method: str = "adaptive",
+    preset: str | None = None,
+    params: dict[str, Any] | None = None,
+    reader_options: dict[str, Any] | None = None,
+    sensor_profile: str | Path | None = None,
+    jobs: int = 1,
+    scheduler: str | None = None,
+    chunk_records: int = CHUNK_RECORDS,
+    overwrite: bool = False,
+    on_chunk: Callable[[ChunkResult], None] | None = None,
+) -> FleetSummary:
+    """Extract every log of ``inputs`` into the Parquet dataset ``dataset``.
+
+    ``scheduler``: ``None`` runs ``jobs`` local processes; ``"local"`` starts a Dask
+    ``LocalCluster`` of ``jobs`` workers; anything else is the address of a Dask
+    scheduler. Returns one :class:`LogOutcome` per log; a failed log does not stop
+    the others.
+    """
+    from scanlines.extractor import Extractor
+    from scanlines.io.parquet import require_pyarrow
+
+    require_pyarrow()
+    Extractor(method, preset, **(params or {}))  # bad parameters fail before any work
+    started = time.perf_counter()
+    dataset = Path(dataset)
+    if not dataset.parent.is_dir():
+        raise ParameterError(f"{dataset}: the folder {dataset.parent} does not exist")
+    dataset.mkdir(exist_ok=True)
+    paths = expand_inputs(inputs)
+    if not paths:
+        raise ParameterError("no log to run")
+    profile = None if sensor_profile is None else str(Path(sensor_profile).resolve())
+    tasks, failed = plan(paths, dataset, method=method, preset=preset, params=params,
+                         reader_options=reader_options, sensor_profile=profile,
+                         chunk_records=chunk_records)  # fmt: skip
+    tasks, done_before = _skip_finished(tasks, dataset, overwrite)
+    outcomes = {o.log: o for o in failed + done_before}
+    for task in tasks:
+        outcomes.setdefault(task.log, LogOutcome(task.log, task.path))
+    with _executor(jobs, scheduler) as (executor, engine):
+        _collect(executor, tasks, outcomes, on_chunk)
+    _finish_logs(dataset, tasks, outcomes)
+    order = {name: k for k, name in enumerate(log_names(paths))}
+    summary = FleetSummary(sorted(outcomes.values(), key=lambda o: order.get(o.log, 0)))
+    summary.seconds, summary.engine = time.perf_counter() - started, engine
+    return summary
+
+
+def _skip_finished(
+    tasks: list[ChunkTask], dataset: Path, overwrite: bool
+) -> tuple[list[ChunkTask], list[LogOutcome]]:
+    """Drop the tasks of logs finished with the same input, method and parameters; an
+    earlier result that does not match is an error unless ``overwrite``."""
+    from scanlines.io.outputs import OutputError
+    from scanlines.io.parquet import remove_log
+
+    kept, skipped, decided = [], [], {}
+    for task in tasks:
+        if task.log not in decided:
+            record = dataset / "_logs" / f"{task.log}.json"
+            wanted = _fingerprint(task, checksum(Path(task.path)))
+            if record.exists() and json.loads(record.read_text()).get("fingerprint") == wanted:
+                decided[task.log] = "skip"
+                previous = json.loads(record.read_text())
+                skipped.append(
+                    LogOutcome(
+                        task.log,
+                        task.path,
+                        "skipped",
+                        "done before",
+                        previous.get("scans", 0),
+                        previous.get("segments", 0),
+                    )
+                )
+            elif record.exists() or any(
+                (dataset / t).joinpath(f"log={task.log}").exists()
+                for t in ("segments", "events", "scans")
+            ):
+                if not overwrite:
+                    raise OutputError(
+                        f"{dataset}: log {task.log} was written before from another input "
+                        "or with other parameters; pass --overwrite to replace it"
+                    )
+                remove_log(dataset, task.log)
+                decided[task.log] = "run"
+            else:
+                decided[task.log] = "run"
+        if decided[task.log] == "run":
+            kept.append(task)
+    return kept, skipped
+
+
+class _executor:
+    """The executor of ``jobs`` and ``scheduler`` (see :func:`run_fleet`), and its name."""
+
+    def __init__(self, jobs: int, scheduler: str | None) -> None:
+        self.jobs, self.scheduler = jobs, scheduler
+        self._client = self._cluster = self._pool = None
+
+    def __enter__(self) -> tuple[cf.Executor, str]:
+        if self.scheduler is None:
+            context = multiprocessing.get_context("spawn")
+            self._pool = cf.ProcessPoolExecutor(self.jobs, mp_context=context)
+            return self._pool, f"{self.jobs} local processes"
+        try:
+            from distributed import Client, LocalCluster
+        except ImportError:
+            raise ParameterError(
+                'a Dask scheduler needs dask and distributed: pip install "scanlines[fleet]"'
+            ) from None
+        if self.scheduler == "local":
+            self._cluster = LocalCluster(n_workers=self.jobs, threads_per_worker=1,
+                                         processes=True, dashboard_address=None)  # fmt: skip
+            self._client = Client(self._cluster)
+            engine = f"Dask LocalCluster of {self.jobs} workers"
+        else:
+            self._client = Client(self.scheduler)
+            engine = f"Dask scheduler {self.scheduler}"
+        return self._client.get_executor(), engine
+
+    def __exit__(self, *exc: object) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(cancel_futures=True)
+        if self._client is not None:
+            self._client.close()
+        if self._cluster is not None:
+            self._cluster.close()
+
+
+def _collect(executor, tasks, outcomes, on_chunk) -> None:
+    futures = {executor.submit(extract_chunk, task): task for task in tasks}
+    for future in cf.as_completed(futures):
+        task = futures[future]
+        outcome = outcomes[task.log]
+        try:
+            result = future.result()
+        except (ScanlinesError, OSError) as error:
+            outcome.status, outcome.reason = "failed", str(error)
+            continue
+        except Exception as error:  # a defect: report it with the log, go on
+            outcome.status, outcome.reason = "failed", describe(error)
+            continue
+        outcome.chunks += 1
+        outcome.scans += result.scans
+        outcome.segments += result.segments
+        outcome.seconds += result.seconds
+        if result.skipped_scans is not None:
+            outcome.skipped_scans = result.skipped_scans
+        if on_chunk is not None:
+            on_chunk(result)
+
+
+def _finish_logs(dataset: Path, tasks: list[ChunkTask], outcomes: dict[str, LogOutcome]) -> None:
+    """Remove the rows of failed logs; record the finished ones."""
+    from scanlines.io.outputs import write_text_atomically
+    from scanlines.io.parquet import remove_log
+
+    first_task = {}
+    for task in tasks:
+        first_task.setdefault(task.log, task)
+    for name, task in first_task.items():
+        outcome = outcomes[name]
+        if outcome.status == "failed":
+            remove_log(dataset, name)
+            continue
+        record = {"log": name, "input": task.path, "scans": outcome.scans,
+                  "segments": outcome.segments, "skipped_scans": outcome.skipped_scans,
+                  "fingerprint": _fingerprint(task, checksum(Path(task.path)))}  # fmt: skip
+        (dataset / "_logs").mkdir(exist_ok=True)
+        write_text_atomically(dataset / "_logs" / f"{name}.json", json.dumps(record, indent=2))
+
+
+def fleet_tasks(inputs: Iterable[str | Path], dataset: str | Path, **options: Any) -> list[Any]:
+    """The tasks of a fleet run as ``dask.delayed`` objects, for a notebook with a Dask
+    cluster of its own: ``dask.compute(*fleet_tasks(logs, "features"))``. ``options``
+    are those of :func:`plan`. Finished-log records are not written (use
+    :func:`run_fleet` with ``scheduler=`` for that)."""
+    import dask
+
+    dataset = Path(dataset)
+    dataset.mkdir(exist_ok=True)
+    tasks, failed = plan(expand_inputs(inputs), dataset, **options)
+    if failed:
+        raise ParameterError("; ".join(f"{o.log}: {o.reason}" for o in failed))
+    return [dask.delayed(extract_chunk)(task) for task in tasks]

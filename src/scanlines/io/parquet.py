@@ -1,0 +1,218 @@
+"""Features as a Parquet dataset: three tables, partitioned by log, for DuckDB, pandas, polars.
+
+Layout of a dataset folder::
+
+    DATASET/segments/log=NAME/part-FIRST.parquet   one row per segment
+    DATASET/events/log=NAME/part-FIRST.parquet     one row per breakpoint or corner
+    DATASET/scans/log=NAME/part-FIRST.parquet      one row per scan
+    DATASET/_logs/NAME.json                        what made a log's rows (see scanlines.fleet)
+
+``FIRST`` is the first scan record of the part (zero-padded), so a part written again
+(a retried task) replaces itself: no row is ever written twice. Every file carries the
+package version, the method and its resolved parameters in its schema metadata (key
+``scanlines``). Columns:
+
+* ``segments``: ``scan`` (record index in the log), ``segment`` (its order in the scan),
+  ``timestamp``, ``method``, ``first``, ``last``, ``n_points``, ``rho``, ``alpha``,
+  ``start_x``, ``start_y``, ``end_x``, ``end_y``, ``rms``, ``var_rho``,
+  ``cov_rho_alpha``, ``var_alpha``, ``start_kind``, ``end_kind``;
+* ``events``: ``scan``, ``kind`` (``breakpoint`` or ``corner``), ``beam``;
+* ``scans``: ``scan``, ``timestamp``, ``pose_x``, ``pose_y``, ``pose_theta``, ``beams``,
+  ``segments``, ``breakpoints``, ``corners``.
+
+The ``log`` column comes from the partition folder (hive partitioning): DuckDB reads it as
+``read_parquet('DATASET/segments/*/*.parquet', hive_partitioning = true)``.
+
+pyarrow is imported here only: ``pip install "scanlines[fleet]"`` brings it.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from scanlines.errors import ParameterError
+from scanlines.extraction import (
+    ALPHA,
+    END_KINDS,
+    END_X,
+    END_Y,
+    RHO,
+    RMS,
+    START_X,
+    START_Y,
+    ExtractionTable,
+)
+from scanlines.io.outputs import commit, discard, temp_path
+from scanlines.scan import Scan
+
+__all__ = [
+    "TABLES",
+    "dataset_exists",
+    "part_name",
+    "remove_log",
+    "require_pyarrow",
+    "write_parts",
+]
+
+#: The dataset's tables.
+TABLES = ("segments", "events", "scans")
+
+
+def require_pyarrow() -> Any:
+    """``pyarrow`` and ``pyarrow.parquet``, or a one-line error naming the extra."""
+    try:
+        import pyarrow
+        import pyarrow.parquet
+    except ImportError:
+        raise ParameterError(
+            'Parquet output needs pyarrow: pip install "scanlines[fleet]"'
+        ) from None
+    return pyarrow
+
+
+def part_name(first_record: int) -> str:
+    """The file name of the part whose first scan record is ``first_record``."""
+    return f"part-{first_record:010d}.parquet"
+
+
+def write_parts(
+    dataset: Path,
+    log: str,
+    first_record: int,
+    indices: Sequence[int],
+    scans: Sequence[Scan],
+    table: ExtractionTable,
+) -> dict[str, int]:
+    """Write the three tables of one chunk of a log's scans; return rows per table.
+
+    Each file appears whole or not at all and replaces a part of the same name (a
+    retried task writes the same rows again)."""
+    pa = require_pyarrow()
+    metadata = {
+        b"scanlines": json.dumps(
+            {"version": _version(), "method": table.method, "params": _jsonable(table.params)}
+        ).encode()
+    }
+    tables = {
+        "segments": _segments(pa, indices, scans, table),
+        "events": _events(pa, indices, table),
+        "scans": _scans(pa, indices, scans, table),
+    }
+    for name, columns in tables.items():
+        folder = dataset / name / f"log={log}"
+        folder.mkdir(parents=True, exist_ok=True)
+        _write_atomically(pa, folder / part_name(first_record), columns, metadata)
+    return {name: columns.num_rows for name, columns in tables.items()}
+
+
+def _write_atomically(pa: Any, target: Path, columns: Any, metadata: dict) -> None:
+    import pyarrow.parquet as pq
+
+    temporary = temp_path(target)
+    try:
+        pq.write_table(columns.replace_schema_metadata(metadata), temporary)
+        commit([(temporary, target)], overwrite=True)
+    finally:
+        discard(temporary)
+
+
+def _segments(pa: Any, indices, scans, table: ExtractionTable) -> Any:
+    owner = table.segment_scan
+    order = np.arange(len(owner)) - table.offsets["segments"][owner]
+    scan_index = np.asarray(indices, dtype=np.int64)[owner]
+    stamps = np.array([_stamp(s) for s in scans], dtype=np.float64)[owner]
+    lines, cov = table.lines, table.covariances.reshape(-1, 4)
+    kinds = np.asarray(END_KINDS, dtype=object)
+    return pa.table(
+        {
+            "scan": scan_index,
+            "segment": order.astype(np.int32),
+            "timestamp": pa.array(stamps, mask=np.isnan(stamps)),
+            "method": pa.array([table.method] * len(owner), pa.string()).dictionary_encode(),
+            "first": table.first.astype(np.int64),
+            "last": table.last.astype(np.int64),
+            "n_points": table.n_points.astype(np.int64),
+            "rho": lines[:, RHO],
+            "alpha": lines[:, ALPHA],
+            "start_x": lines[:, START_X],
+            "start_y": lines[:, START_Y],
+            "end_x": lines[:, END_X],
+            "end_y": lines[:, END_Y],
+            "rms": lines[:, RMS],
+            "var_rho": cov[:, 0],
+            "cov_rho_alpha": cov[:, 1],
+            "var_alpha": cov[:, 3],
+            "start_kind": pa.array(kinds[table.end_kinds[:, 0]].tolist(), pa.string()),
+            "end_kind": pa.array(kinds[table.end_kinds[:, 1]].tolist(), pa.string()),
+        }
+    )
+
+
+def _events(pa: Any, indices, table: ExtractionTable) -> Any:
+    parts = []
+    for kind in ("breakpoints", "corners"):
+        owner = np.repeat(np.arange(len(table)), table.counts(kind))
+        parts.append((np.asarray(indices, dtype=np.int64)[owner], kind[:-1], table.columns[kind]))
+    return pa.table(
+        {
+            "scan": np.concatenate([scan for scan, _, _ in parts]),
+            "kind": pa.array(
+                [kind for scan, kind, _ in parts for _ in range(len(scan))], pa.string()
+            ),
+            "beam": np.concatenate([beams for _, _, beams in parts]).astype(np.int64),
+        }
+    )
+
+
+def _scans(pa: Any, indices, scans, table: ExtractionTable) -> Any:
+    poses = np.array([s.pose if s.pose is not None else (math.nan,) * 3 for s in scans])
+    stamps = np.array([_stamp(s) for s in scans], dtype=np.float64)
+    missing = np.isnan(poses[:, 0]) if len(scans) else np.zeros(0, dtype=bool)
+    return pa.table(
+        {
+            "scan": np.asarray(indices, dtype=np.int64),
+            "timestamp": pa.array(stamps, mask=np.isnan(stamps)),
+            "pose_x": pa.array(poses[:, 0] if len(scans) else [], pa.float64(), mask=missing),
+            "pose_y": pa.array(poses[:, 1] if len(scans) else [], pa.float64(), mask=missing),
+            "pose_theta": pa.array(poses[:, 2] if len(scans) else [], pa.float64(), mask=missing),
+            "beams": np.array([len(s) for s in scans], dtype=np.int64),
+            "segments": table.counts("segments").astype(np.int64),
+            "breakpoints": table.counts("breakpoints").astype(np.int64),
+            "corners": table.counts("corners").astype(np.int64),
+        }
+    )
+
+
+def _stamp(scan: Scan) -> float:
+    return math.nan if scan.timestamp is None else float(scan.timestamp)
+
+
+def _version() -> str:
+    from scanlines import __version__
+
+    return __version__
+
+
+def _jsonable(values: Any) -> Any:
+    from scanlines.json_values import jsonable
+
+    return jsonable(values)
+
+
+def dataset_exists(dataset: Path) -> bool:
+    """True when ``dataset`` holds any table folder."""
+    return any((dataset / name).is_dir() for name in TABLES) if dataset.is_dir() else False
+
+
+def remove_log(dataset: Path, log: str) -> None:
+    """Delete every part of ``log`` (a failed or replaced log leaves no rows behind)."""
+    for name in TABLES:
+        shutil.rmtree(dataset / name / f"log={log}", ignore_errors=True)
+    (dataset / "_logs" / f"{log}.json").unlink(missing_ok=True)

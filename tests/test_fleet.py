@@ -1,0 +1,192 @@
+"""Many logs at once: a Parquet dataset, local processes or a real Dask LocalCluster.
+
+The logs: copies of the shipped Intel and Freiburg excerpts (CARMEN, two flavours) and an
+MCAP bag written from the Intel excerpt by ``scanlines run``, split in chunks of 120
+records so every log spreads over several tasks. The dataset is read back with DuckDB.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import duckdb
+import pytest
+from distributed import Client, LocalCluster
+
+from scanlines.data import sample
+from scanlines.fleet import run_fleet
+
+CHUNK = 120
+SEGMENT_QUERY = """
+    select log, scan, segment, first, last, rho, alpha, var_rho, start_kind, end_kind
+    from read_parquet('{dataset}/segments/*/*.parquet', hive_partitioning = true)
+    order by log, scan, segment
+"""
+
+
+def cli(*args: object) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-m", "scanlines", *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        env={**os.environ, "COLUMNS": "200"},
+    )
+
+
+@pytest.fixture(scope="module")
+def logs(tmp_path_factory) -> Path:
+    folder = tmp_path_factory.mktemp("fleet") / "logs"
+    for copy in ("a", "b"):
+        (folder / copy).mkdir(parents=True)
+        shutil.copy(sample("intel"), folder / copy)
+        shutil.copy(sample("freiburg"), folder / copy)
+    out = cli("run", sample("intel"), "--out", folder / "a" / "intel.mcap")
+    assert out.returncode == 0, out.stderr
+    (folder / "a" / "intel.mcap.meta.json").unlink()
+    return folder
+
+
+def segment_rows(dataset: Path) -> list[tuple]:
+    return duckdb.connect().execute(SEGMENT_QUERY.format(dataset=dataset)).fetchall()
+
+
+@pytest.fixture(scope="module")
+def local_dataset(logs, tmp_path_factory) -> Path:
+    dataset = tmp_path_factory.mktemp("local") / "features"
+    summary = run_fleet([logs], dataset, jobs=2, chunk_records=CHUNK)
+    assert not summary.failed
+    assert [log.status for log in summary.logs] == ["done"] * 5
+    return dataset
+
+
+def test_rows_equal_those_of_single_log_runs(logs, local_dataset, tmp_path) -> None:
+    rows = segment_rows(local_dataset)
+    for log, name in (
+        ("a__intel.mcap", "a/intel.mcap"),
+        ("b__fr079_excerpt.log.gz", "b/fr079_excerpt.log.gz"),
+    ):
+        out = cli("run", logs / name, "--out", tmp_path / f"{log}.jsonl")
+        assert out.returncode == 0, out.stderr
+        expected = [
+            (log, record["scan"], k, s["first"], s["last"], s["rho"], s["alpha"],
+             s["covariance"][0][0], s["start_kind"], s["end_kind"])
+            for record in map(json.loads, (tmp_path / f"{log}.jsonl").read_text().splitlines())
+            for k, s in enumerate(record["segments"])
+        ]  # fmt: skip
+        assert [row for row in rows if row[0] == log] == expected
+
+
+def test_a_local_cluster_gives_the_same_rows(logs, local_dataset, tmp_path) -> None:
+    dataset = tmp_path / "features"
+    summary = run_fleet([logs], dataset, jobs=2, scheduler="local", chunk_records=CHUNK)
+    assert summary.engine.startswith("Dask LocalCluster")
+    assert segment_rows(dataset) == segment_rows(local_dataset)
+
+
+def test_a_killed_worker_loses_no_row_and_doubles_none(logs, local_dataset, tmp_path) -> None:
+    dataset = tmp_path / "features"
+    with (
+        LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None) as cluster,
+        Client(cluster) as client,
+    ):
+        victims = list(client.run(os.getpid).values())
+        killed = []
+
+        def kill_one(result) -> None:
+            if not killed:
+                os.kill(victims[0], signal.SIGKILL)
+                killed.append(victims[0])
+
+        summary = run_fleet(
+            [logs], dataset, scheduler=cluster.scheduler_address, chunk_records=CHUNK,
+            on_chunk=kill_one,
+        )  # fmt: skip
+    assert killed
+    assert not summary.failed
+    assert segment_rows(dataset) == segment_rows(local_dataset)
+
+
+def test_a_truncated_log_is_reported_and_the_others_finish(logs, tmp_path) -> None:
+    mixed = tmp_path / "mixed"
+    shutil.copytree(logs / "b", mixed)
+    data = sample("intel").read_bytes()
+    (mixed / "truncated.clf.gz").write_bytes(data[: len(data) // 2])
+    out = cli("run", mixed, "--out", tmp_path / "features", "--format", "parquet", "-j", "2")
+    assert out.returncode == 2, out.stderr
+    assert "failed: truncated.clf.gz:" in out.stdout
+    assert "truncated or corrupt" in out.stdout
+    logs_written = {p.name for p in (tmp_path / "features" / "segments").iterdir()}
+    assert logs_written == {"log=fr079_excerpt.log.gz", "log=intel_excerpt.clf.gz"}
+
+
+def test_a_second_run_skips_finished_logs_and_refuses_other_parameters(logs, tmp_path) -> None:
+    dataset = tmp_path / "features.parquet"
+    first = cli("run", logs / "b", "--out", dataset, "-j", "1")
+    assert first.returncode == 0, first.stderr
+    parts = sorted(p.stat().st_mtime_ns for p in dataset.rglob("*.parquet"))
+    again = cli("run", logs / "b", "--out", dataset, "-j", "1")
+    assert again.returncode == 0, again.stderr
+    assert "2 logs done before" in again.stdout
+    assert sorted(p.stat().st_mtime_ns for p in dataset.rglob("*.parquet")) == parts
+    other = cli("run", logs / "b", "--out", dataset, "--param", "k=4")
+    assert other.returncode == 2
+    assert "pass --overwrite" in other.stderr
+    replaced = cli("run", logs / "b", "--out", dataset, "--param", "k=4", "--overwrite")
+    assert replaced.returncode == 0, replaced.stderr
+
+
+def test_duckdb_reads_the_dataset_with_the_documented_schema(local_dataset) -> None:
+    con = duckdb.connect()
+    columns = {
+        table: [row[0] for row in con.execute(
+            f"describe select * from read_parquet('{local_dataset}/{table}/*/*.parquet', "
+            "hive_partitioning = true)"
+        ).fetchall()]
+        for table in ("segments", "events", "scans")
+    }  # fmt: skip
+    assert columns["segments"][:4] == ["scan", "segment", "timestamp", "method"]
+    assert "covariance" not in columns["segments"]
+    assert {"var_rho", "cov_rho_alpha", "var_alpha", "start_kind", "end_kind", "log"} <= set(
+        columns["segments"]
+    )
+    assert columns["events"] == ["scan", "kind", "beam", "log"]
+    assert {"pose_x", "beams", "segments", "corners", "log"} <= set(columns["scans"])
+    per_log = dict(con.execute(
+        f"select log, count(*) from read_parquet('{local_dataset}/scans/*/*.parquet', "
+        "hive_partitioning = true) group by log"
+    ).fetchall())  # fmt: skip
+    assert per_log == dict.fromkeys(
+        ["a__intel.mcap", "a__intel_excerpt.clf.gz", "a__fr079_excerpt.log.gz",
+         "b__intel_excerpt.clf.gz", "b__fr079_excerpt.log.gz"], 300
+    )  # fmt: skip
+    import pyarrow.parquet as pq
+
+    part = next((local_dataset / "segments").rglob("*.parquet"))
+    meta = json.loads(pq.read_schema(part).metadata[b"scanlines"])
+    assert meta["method"] == "adaptive"
+    assert meta["params"]["k"] == 3.0
+
+
+def test_several_logs_to_one_file_each(logs, tmp_path) -> None:
+    out = cli("run", logs / "b" / "*.gz", "--out", tmp_path, "--format", "csv")
+    assert out.returncode == 0, out.stderr
+    assert sorted(p.name for p in tmp_path.glob("*.csv")) == [
+        "fr079_excerpt.log.gz.csv", "intel_excerpt.clf.gz.csv"
+    ]  # fmt: skip
+
+
+def test_without_the_extra_the_message_names_it() -> None:
+    code = (
+        "import sys; sys.modules['pyarrow'] = None; sys.modules['distributed'] = None\n"
+        "from scanlines.io.parquet import require_pyarrow\n"
+        "try:\n    require_pyarrow()\nexcept Exception as e:\n    print(e)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == 'Parquet output needs pyarrow: pip install "scanlines[fleet]"'
