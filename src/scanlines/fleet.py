@@ -75,6 +75,8 @@ class ChunkResult:
     segments: int
     skipped_scans: int | None
     seconds: float
+    peak_mb: float = 0.0  # the worker process's peak resident memory so far
+    worker: int = 0  # its process id
 
 
 @dataclass
@@ -90,15 +92,18 @@ class LogOutcome:
     skipped_scans: int = 0
     seconds: float = 0.0
     chunks: int = 0
+    peak_mb: float = 0.0
 
 
 @dataclass
 class FleetSummary:
-    """Per log outcomes and the totals of a fleet run."""
+    """Per log outcomes and the totals of a fleet run; ``worker_peak_mb``: each worker
+    process's peak resident memory, as its last task saw it."""
 
     logs: list[LogOutcome] = field(default_factory=list)
     seconds: float = 0.0
     engine: str = ""
+    worker_peak_mb: dict[int, float] = field(default_factory=dict)
 
     @property
     def failed(self) -> list[LogOutcome]:
@@ -256,8 +261,12 @@ def extract_chunk(task: ChunkTask) -> ChunkResult:
         skipped = reader.bad_scans if ended else None
     table = ExtractionTable.join(tables) if tables else _empty_table(extractor)
     write_parts(Path(task.dataset), task.log, task.start, indices, scans, table)
+    import os
+    import resource
+
+    peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     return ChunkResult(task.log, task.start, len(scans), len(table.first), skipped,
-                       time.perf_counter() - started)  # fmt: skip
+                       time.perf_counter() - started, peak_mb, os.getpid())  # fmt: skip
 
 
 def _empty_table(extractor: Any) -> Any:
@@ -335,12 +344,20 @@ def run_fleet(
     outcomes = {o.log: o for o in failed + done_before}
     for task in tasks:
         outcomes.setdefault(task.log, LogOutcome(task.log, task.path))
+    peaks: dict[int, float] = {}
+
+    def record(result: ChunkResult) -> None:
+        peaks[result.worker] = max(peaks.get(result.worker, 0.0), result.peak_mb)
+        if on_chunk is not None:
+            on_chunk(result)
+
     with _executor(jobs, scheduler) as (executor, engine):
-        _collect(executor, tasks, outcomes, on_chunk)
+        _collect(executor, tasks, outcomes, record)
     _finish_logs(dataset, tasks, outcomes)
     order = {name: k for k, name in enumerate(log_names(paths))}
     summary = FleetSummary(sorted(outcomes.values(), key=lambda o: order.get(o.log, 0)))
     summary.seconds, summary.engine = time.perf_counter() - started, engine
+    summary.worker_peak_mb = peaks
     return summary
 
 
@@ -442,6 +459,7 @@ def _collect(executor, tasks, outcomes, on_chunk) -> None:
         outcome.scans += result.scans
         outcome.segments += result.segments
         outcome.seconds += result.seconds
+        outcome.peak_mb = max(outcome.peak_mb, result.peak_mb)
         if result.skipped_scans is not None:
             outcome.skipped_scans = result.skipped_scans
         if on_chunk is not None:
