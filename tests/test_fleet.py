@@ -190,3 +190,19 @@ def test_without_the_extra_the_message_names_it() -> None:
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == 'Parquet output needs pyarrow: pip install "scanlines[fleet]"'
+
+
+def test_a_notebook_computes_the_tasks_on_its_own_cluster(logs, local_dataset, tmp_path) -> None:
+    import dask
+
+    from scanlines.fleet import fleet_tasks
+
+    dataset = tmp_path / "features"
+    with (
+        LocalCluster(n_workers=1, threads_per_worker=1, dashboard_address=None) as cluster,
+        Client(cluster),
+    ):
+        results = dask.compute(*fleet_tasks([logs / "b"], dataset, chunk_records=CHUNK))
+    assert sum(result.scans for result in results) == 600
+    expected = [row for row in segment_rows(local_dataset) if row[0].startswith("b__")]
+    assert [row[1:] for row in segment_rows(dataset)] == [row[1:] for row in expected]
