@@ -6,8 +6,9 @@ inside numba's dispatcher (which runs some Python while it picks the compiled co
 returned a result with an exception set``. So the command line installs
 :func:`handle_signals`: SIGINT and SIGTERM raise :class:`KeyboardInterrupt` and
 :class:`Terminated` as usual, except while the main thread is inside :data:`kernel_calls`
-(the extractor's kernel calls), where the signal waits until the call returns (a
-fraction of a second at most). Either way the exception unwinds normally, so every
+(the extractor's kernel calls, and the command line's imports), where the signal waits
+until the call returns (a fraction of a second; a kernel being compiled is interrupted at
+once, compiling being Python). Either way the exception unwinds normally, so every
 writer deletes its temporary output.
 
 A library user's own signal handling is left alone: :data:`kernel_calls` only defers
@@ -17,6 +18,7 @@ signals while :func:`handle_signals` is installed.
 from __future__ import annotations
 
 import signal
+import sys
 import threading
 from collections.abc import Iterator
 from types import FrameType, TracebackType
@@ -33,12 +35,38 @@ class _KernelCalls:
 
     def __init__(self) -> None:
         self.depth = 0
+        self.compiling = 0
         self.pending: int | None = None
         self.main_thread = threading.main_thread().ident
+        self._listening = False
 
     def __enter__(self) -> None:
         if threading.get_ident() == self.main_thread:
             self.depth += 1
+            if not self._listening:
+                self._listen_to_compilation()
+
+    def _listen_to_compilation(self) -> None:
+        """Count numba's compilations: a compilation is Python code, interrupted at once
+        (a cold compile takes a minute; the signal does not wait for it)."""
+        numba = sys.modules.get("numba")
+        if numba is None:
+            return
+        import numba.core.event as events
+
+        calls = self
+
+        class Compiling(events.Listener):
+            def on_start(self, event: object) -> None:
+                if threading.get_ident() == calls.main_thread:
+                    calls.compiling += 1
+
+            def on_end(self, event: object) -> None:
+                if threading.get_ident() == calls.main_thread:
+                    calls.compiling -= 1
+
+        events.register("numba:compile", Compiling())
+        self._listening = True
 
     def __exit__(
         self,
@@ -54,7 +82,7 @@ class _KernelCalls:
             raise _exception_for(signum)
 
     def on_signal(self, signum: int, frame: FrameType | None) -> None:
-        if self.depth > 0:
+        if self.depth > 0 and self.compiling == 0:
             self.pending = signum
             return
         raise _exception_for(signum)

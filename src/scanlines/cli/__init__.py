@@ -10,6 +10,7 @@ the commands and numba).
 
 from __future__ import annotations
 
+import os
 import sys
 from typing import Any
 
@@ -18,15 +19,23 @@ __all__ = ["app", "main"]
 
 def main() -> None:
     """Console entry point: SIGINT and SIGTERM stop a command cleanly (exit 130, 143)."""
-    from scanlines.interrupts import any_terminated, handle_signals, ignore_signals, is_interrupt
+    from scanlines.interrupts import (
+        any_terminated,
+        handle_signals,
+        ignore_signals,
+        is_interrupt,
+        kernel_calls,
+    )
 
     handle_signals()
     try:
-        from scanlines.cli.commands import app
-
+        with kernel_calls:  # a signal waits for the imports (numba, LLVM) to finish
+            from scanlines.cli.commands import app
         app()
-    except SystemExit:
+    except SystemExit as done:
         ignore_signals()
+        if done.code in (INTERRUPTED, TERMINATED):
+            _leave(done.code)
         raise
     except BaseException as stop:  # an interrupt while starting, before a command runs
         if not is_interrupt(stop):
@@ -34,7 +43,20 @@ def main() -> None:
         ignore_signals()
         terminated = any_terminated(stop)
         print(f"scanlines: {'terminated' if terminated else 'interrupted'}", file=sys.stderr)
-        sys.exit(143 if terminated else 130)
+        _leave(TERMINATED if terminated else INTERRUPTED)
+
+
+INTERRUPTED, TERMINATED = 130, 143
+
+
+def _leave(code: int) -> None:
+    """Exit at once after an interrupt, without the interpreter's finalisation: the
+    command has cleaned up (its writers deleted their temporary files), and finalising
+    after an interrupt that landed inside numba or LLVM has crashed (SIGSEGV) or been
+    reported as a second interrupt."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)
 
 
 def __getattr__(name: str) -> Any:
