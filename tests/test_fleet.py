@@ -206,3 +206,18 @@ def test_a_notebook_computes_the_tasks_on_its_own_cluster(logs, local_dataset, t
     assert sum(result.scans for result in results) == 600
     expected = [row for row in segment_rows(local_dataset) if row[0].startswith("b__")]
     assert [row[1:] for row in segment_rows(dataset)] == [row[1:] for row in expected]
+
+
+def test_a_changed_sensor_profile_is_not_taken_for_done(logs, tmp_path) -> None:
+    from scanlines.io import open_log
+    from scanlines.io.outputs import OutputError
+    from scanlines.sensor_profile import estimate_profile
+
+    profile = tmp_path / "sensor.json"
+    estimate_profile(list(open_log(sample("intel")))).save(profile)
+    log, dataset = logs / "b" / "intel_excerpt.clf.gz", tmp_path / "features"
+    assert run_fleet([log], dataset, sensor_profile=profile).logs[0].status == "done"
+    assert run_fleet([log], dataset, sensor_profile=profile).logs[0].status == "skipped"
+    estimate_profile(list(open_log(sample("freiburg")))).save(profile)
+    with pytest.raises(OutputError, match="--overwrite"):
+        run_fleet([log], dataset, sensor_profile=profile)

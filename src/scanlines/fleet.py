@@ -293,9 +293,11 @@ def checksum(path: Path) -> str:
 def _fingerprint(task: ChunkTask, digest: str) -> dict[str, Any]:
     from scanlines.json_values import jsonable
 
+    profile = task.sensor_profile
     return jsonable({"input_sha256": digest, "method": task.method, "preset": task.preset,
                      "params": task.params, "reader_options": task.reader_options,
-                     "sensor_profile": task.sensor_profile})  # fmt: skip
+                     "sensor_profile_sha256": None if profile is None else checksum(Path(profile)),
+                     })  # fmt: skip
 
 
 # -- running ------------------------------------------------------------------------------
