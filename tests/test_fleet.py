@@ -221,3 +221,23 @@ def test_a_changed_sensor_profile_is_not_taken_for_done(logs, tmp_path) -> None:
     estimate_profile(list(open_log(sample("freiburg")))).save(profile)
     with pytest.raises(OutputError, match="--overwrite"):
         run_fleet([log], dataset, sensor_profile=profile)
+
+
+def test_an_interrupted_run_starts_its_logs_again(logs, tmp_path) -> None:
+    """Parts of a log whose run was interrupted (pending record, no finished one) are
+    redone by the same command, and refused under other options."""
+    log, dataset = logs / "b" / "intel_excerpt.clf.gz", tmp_path / "features"
+    run_fleet([log], dataset, chunk_records=CHUNK)
+    done = dataset / "_logs" / "intel_excerpt.clf.gz.json"
+    record = json.loads(done.read_text())
+    done.unlink()  # as if the run had stopped before the log's last task
+    (dataset / "_logs" / "intel_excerpt.clf.gz.pending.json").write_text(json.dumps(record))
+    rows = segment_rows(dataset)
+    summary = run_fleet([log], dataset, chunk_records=CHUNK)
+    assert summary.logs[0].status == "done"
+    assert segment_rows(dataset) == rows
+    done.unlink()
+    from scanlines.io.outputs import OutputError
+
+    with pytest.raises(OutputError, match="--overwrite"):
+        run_fleet([log], dataset, params={"k": 4.0})

@@ -366,45 +366,57 @@ def run_fleet(
 def _skip_finished(
     tasks: list[ChunkTask], dataset: Path, overwrite: bool
 ) -> tuple[list[ChunkTask], list[LogOutcome]]:
-    """Drop the tasks of logs finished with the same input, method and parameters; an
-    earlier result that does not match is an error unless ``overwrite``."""
-    from scanlines.io.outputs import OutputError
+    """Drop the tasks of logs finished with the same input, method and parameters. A log
+    begun with them and interrupted (``_logs/NAME.pending.json``) starts again; rows of a
+    log written from another input or with other options are an error unless
+    ``overwrite``. Each log to run gets its pending record."""
+    from scanlines.io.outputs import OutputError, write_text_atomically
     from scanlines.io.parquet import remove_log
 
     kept, skipped, decided = [], [], {}
     for task in tasks:
         if task.log not in decided:
-            record = dataset / "_logs" / f"{task.log}.json"
             wanted = _fingerprint(task, checksum(Path(task.path)))
-            if record.exists() and json.loads(record.read_text()).get("fingerprint") == wanted:
+            done, pending = _records(dataset, task.log)
+            if done.get("fingerprint") == wanted:
                 decided[task.log] = "skip"
-                previous = json.loads(record.read_text())
-                skipped.append(
-                    LogOutcome(
-                        task.log,
-                        task.path,
-                        "skipped",
-                        "done before",
-                        previous.get("scans", 0),
-                        previous.get("segments", 0),
-                    )
+                outcome = LogOutcome(task.log, task.path, "skipped", "done before")
+                outcome.scans, outcome.segments = done.get("scans", 0), done.get("segments", 0)
+                skipped.append(outcome)
+                continue
+            written_otherwise = pending.get("fingerprint") != wanted
+            if _has_rows(dataset, task.log) and written_otherwise and not overwrite:
+                raise OutputError(
+                    f"{dataset}: log {task.log} was written before from another input "
+                    "or with other options; pass --overwrite to replace it"
                 )
-            elif record.exists() or any(
-                (dataset / t).joinpath(f"log={task.log}").exists()
-                for t in ("segments", "events", "scans")
-            ):
-                if not overwrite:
-                    raise OutputError(
-                        f"{dataset}: log {task.log} was written before from another input "
-                        "or with other parameters; pass --overwrite to replace it"
-                    )
-                remove_log(dataset, task.log)
-                decided[task.log] = "run"
-            else:
-                decided[task.log] = "run"
+            remove_log(dataset, task.log)
+            (dataset / "_logs").mkdir(exist_ok=True)
+            write_text_atomically(
+                dataset / "_logs" / f"{task.log}.pending.json",
+                json.dumps({"log": task.log, "input": task.path, "fingerprint": wanted}),
+            )
+            decided[task.log] = "run"
         if decided[task.log] == "run":
             kept.append(task)
     return kept, skipped
+
+
+def _records(dataset: Path, log: str) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The finished and the pending record of ``log`` (empty when absent or unreadable)."""
+    found = []
+    for name in (f"{log}.json", f"{log}.pending.json"):
+        try:
+            found.append(json.loads((dataset / "_logs" / name).read_text()))
+        except (OSError, ValueError):
+            found.append({})
+    return found[0], found[1]
+
+
+def _has_rows(dataset: Path, log: str) -> bool:
+    return (dataset / "_logs" / f"{log}.json").exists() or any(
+        (dataset / table / f"log={log}").exists() for table in ("segments", "events", "scans")
+    )
 
 
 class _executor:
@@ -486,6 +498,7 @@ def _finish_logs(dataset: Path, tasks: list[ChunkTask], outcomes: dict[str, LogO
                   "fingerprint": _fingerprint(task, checksum(Path(task.path)))}  # fmt: skip
         (dataset / "_logs").mkdir(exist_ok=True)
         write_text_atomically(dataset / "_logs" / f"{name}.json", json.dumps(record, indent=2))
+        (dataset / "_logs" / f"{name}.pending.json").unlink(missing_ok=True)
 
 
 def fleet_tasks(inputs: Iterable[str | Path], dataset: str | Path, **options: Any) -> list[Any]:

@@ -216,3 +216,4 @@ def remove_log(dataset: Path, log: str) -> None:
     for name in TABLES:
         shutil.rmtree(dataset / name / f"log={log}", ignore_errors=True)
     (dataset / "_logs" / f"{log}.json").unlink(missing_ok=True)
+    (dataset / "_logs" / f"{log}.pending.json").unlink(missing_ok=True)
