@@ -74,13 +74,28 @@ def test_rows_equal_those_of_single_log_runs(logs, local_dataset, tmp_path) -> N
     ):
         out = cli("run", logs / name, "--out", tmp_path / f"{log}.jsonl")
         assert out.returncode == 0, out.stderr
+        records = [
+            json.loads(line) for line in (tmp_path / f"{log}.jsonl").read_text().splitlines()
+        ]
         expected = [
             (log, record["scan"], k, s["first"], s["last"], s["rho"], s["alpha"],
              s["covariance"][0][0], s["start_kind"], s["end_kind"])
-            for record in map(json.loads, (tmp_path / f"{log}.jsonl").read_text().splitlines())
+            for record in records
             for k, s in enumerate(record["segments"])
         ]  # fmt: skip
         assert [row for row in rows if row[0] == log] == expected
+        events = duckdb.connect().execute(
+            f"select scan, kind, beam from read_parquet('{local_dataset}/events/log={log}/"
+            "*.parquet') order by scan, kind, beam"
+        ).fetchall()  # fmt: skip
+        expected_events = sorted(
+            (record["scan"], kind[:-1], beam)
+            for record in records
+            for kind in ("breakpoints", "corners")
+            for beam in record[kind]
+        )
+        assert events == expected_events
+        assert len(events) > 100
 
 
 def test_a_local_cluster_gives_the_same_rows(logs, local_dataset, tmp_path) -> None:

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from scanlines import Extractor, LogFormatError, Scan, ScanError, extract
+from scanlines import Extractor, LogFormatError, Scan, ScanError
 from scanlines.data import sample
 from scanlines.io import open_log, open_writer
 from scanlines.io.outputs import OutputError, remove_stale_temps, temp_path
@@ -26,15 +26,7 @@ from scanlines.io.outputs import OutputError, remove_stale_temps, temp_path
 sys.path.insert(0, str(Path(__file__).parent / "io"))
 from io_helpers import make_extraction
 
-
-def cli(*args: object, cwd: Path | None = None) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, "-m", "scanlines", *map(str, args)],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        cwd=cwd,
-    )
+from test_cli_logs import run as cli
 
 
 def one_error_line(out: subprocess.CompletedProcess, *needles: str) -> str:
@@ -377,10 +369,6 @@ def test_n_plot_pages_a_long_selection(tmp_path) -> None:
         "plot", sample("intel"), "--scans", "::2", "--max-pages", "1", "-o", tmp_path / "q.png"
     )
     assert "138 more selected, past --max-pages" in out.stdout
-
-
-def test_n_extract_is_documented() -> None:
-    assert "ParameterError" in extract.__doc__
 
 
 def test_angle_min_in_degrees_is_caught() -> None:

@@ -186,10 +186,11 @@ def estimated_records(path: Path, reader_options: dict[str, Any]) -> int:
             return reader.n_scans
         if isinstance(reader, RosbagReader):
             return reader.topics[reader.topic][1]
+        lines = (line.lstrip() for _, line in iter_lines(reader.path, 1 << 16))
         if isinstance(reader, CarmenReader):
             name = reader.message + " "
-            return sum(line.startswith(name) for _, line in iter_lines(reader.path, 1 << 16))
-        return sum(1 for _, line in iter_lines(reader.path, 1 << 16) if line.strip()[:1] not in "#")
+            return sum(line.startswith(name) for line in lines)
+        return sum(1 for line in lines if line and not line.startswith("#"))
 
 
 def plan(
@@ -227,46 +228,46 @@ def plan(
 
 def extract_chunk(task: ChunkTask) -> ChunkResult:
     """Extract the task's records and write them as one part of each table."""
-    import numpy as np
+    import os
+    import resource
 
     from scanlines.extraction import ExtractionTable
     from scanlines.extractor import Extractor
     from scanlines.io import open_log
     from scanlines.io.parquet import write_parts
     from scanlines.runner import CHUNK_SCANS, chunk_scans, select
-    from scanlines.sensor_profile import ProfileError, read_profile
+    from scanlines.runner import extract_chunk as extract_piece
 
     started = time.perf_counter()
-    if task.sensor_profile is not None:
-        profile = read_profile(task.sensor_profile)
-    else:
-        from scanlines.runner import log_profile
-
-        try:
-            profile = log_profile(task.path, task.reader_options)
-        except ProfileError:
-            profile = None
+    profile = _task_profile(task)
     extractor = Extractor(task.method, task.preset, sensor_profile=profile, **task.params)
     indices, scans, tables = [], [], []
     with open_log(task.path, **task.reader_options) as reader:
         selected = select(reader.enumerate(), slice(task.start, task.stop))
         for piece in chunk_scans(selected, CHUNK_SCANS):
-            first = piece.scans[0]
-            stack = np.stack([scan.ranges for scan in piece.scans])
-            tables.append(extractor.batch(stack, first.angle_min, first.angle_increment,
-                                          first.range_min, first.range_max))  # fmt: skip
+            tables.append(extract_piece(piece, extractor).table)
             indices += piece.indices
             scans += piece.scans
-        ended = task.stop is None
-        skipped = reader.bad_scans if ended else None
+        skipped = reader.bad_scans if task.stop is None else None  # the whole log was read
     table = ExtractionTable.join(tables) if tables else _empty_table(extractor)
     write_parts(Path(task.dataset), task.log, task.start, indices, scans, table)
-    import os
-    import resource
-
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     return ChunkResult(task.log, task.start, len(scans), len(table.first), skipped,
                        time.perf_counter() - started, peak_mb, os.getpid())  # fmt: skip
+
+
+def _task_profile(task: ChunkTask) -> Any:
+    """The sensor profile file given, else the log's own, measured from its first scans
+    as ``scanlines run`` does (the same for every chunk of the log)."""
+    from scanlines.runner import log_profile
+    from scanlines.sensor_profile import ProfileError, read_profile
+
+    if task.sensor_profile is not None:
+        return read_profile(task.sensor_profile)
+    try:
+        return log_profile(task.path, task.reader_options)
+    except ProfileError:
+        return None
 
 
 def _empty_table(extractor: Any) -> Any:

@@ -29,6 +29,7 @@ __all__ = [
     "chunk_scans",
     "default_jobs",
     "describe_log",
+    "extract_chunk",
     "log_profile",
     "parse_slice",
     "run_log",
@@ -308,8 +309,9 @@ def _geometry(scan: Scan) -> tuple[int, float, float, float, float]:
     return (len(scan), scan.angle_min, scan.angle_increment, scan.range_min, scan.range_max)
 
 
-def _process(piece: _Chunk, extractor: Extractor, writer: Any | None) -> _Chunk:
-    """Extract a chunk of same-geometry scans at once, and encode it for the writer."""
+def extract_chunk(piece: _Chunk, extractor: Extractor) -> _Chunk:
+    """Extract a chunk of same-geometry scans (from :func:`chunk_scans`) at once: sets its
+    ``table`` and the ``seconds`` it took."""
     first = piece.scans[0]
     before = time.perf_counter()
     piece.table = extractor.batch(
@@ -320,6 +322,12 @@ def _process(piece: _Chunk, extractor: Extractor, writer: Any | None) -> _Chunk:
         first.range_max,
     )
     piece.seconds = time.perf_counter() - before
+    return piece
+
+
+def _process(piece: _Chunk, extractor: Extractor, writer: Any | None) -> _Chunk:
+    """Extract a chunk of same-geometry scans at once, and encode it for the writer."""
+    extract_chunk(piece, extractor)
     if hasattr(writer, "encode_chunk"):
         piece.encoded = writer.encode_chunk(piece.indices, piece.scans, piece.table)
     return piece

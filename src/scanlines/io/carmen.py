@@ -347,10 +347,11 @@ class CarmenReader(LogReader):
                 self.skipped[_skip_kind(name)] += 1
 
     def _record_kind(self, name: str, line: str, line_number: int) -> str:
-        """``"scan"`` (a record of the laser message read), ``"other"`` (ODOM, PARAM) or
-        ``"ignored"``. A line under an unknown name whose fields make a record of the
-        laser message is a scan record with a damaged name, so it keeps its place in the
-        scan numbering and is reported, not ignored."""
+        """``"scan"`` (a record of the laser message read), ``"other"`` (ODOM, PARAM),
+        ``"ignored"``, or ``"damaged scan"``: a line under an unknown name whose fields make
+        a record of the laser message is a scan record with a damaged name, so it keeps
+        its place in the scan numbering and is reported (raised or counted here), not
+        ignored."""
         if name == self.message:
             return "scan"
         if name in ("ODOM", "PARAM"):
