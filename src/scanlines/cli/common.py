@@ -148,6 +148,14 @@ def _method_names() -> tuple[str, ...]:
 #: The registered methods, as choices of ``--method``.
 MethodName = Literal[_method_names()]  # type: ignore[valid-type]
 
+#: ``--method`` of a command that takes ``--config``: ``None`` when not given.
+ConfigMethodOption = Annotated[
+    MethodName | None,
+    typer.Option(
+        "--method", help="Extraction method.", show_default="the --config file's, else adaptive"
+    ),
+]
+
 OverwriteOption = Annotated[
     bool, typer.Option("--overwrite", help="Replace output files that exist already.")
 ]
@@ -163,6 +171,55 @@ def writable(path: Path | None, overwrite: bool, *, with_meta: bool = False) -> 
 
     companions = [meta_path_for(path)] if with_meta else []
     return check_output(path, overwrite=overwrite, companions=companions)
+
+
+CONFIG_HELP = (
+    "Extraction configuration: a TOML file of method, preset and a params table (as the "
+    "viewer saves it). "
+    "--method, --preset and --param given too override it."
+)
+ConfigOption = Annotated[
+    Path | None, typer.Option("--config", metavar="FILE", help=CONFIG_HELP, show_default=False)
+]
+
+
+def method_options(
+    method: str | None, preset: str | None, param: list[str] | None, config: Path | None
+) -> tuple[str, str | None, dict[str, Any]]:
+    """The method, preset and parameter overrides of a command: those of ``--config FILE``
+    (:func:`scanlines.config.load_config`), overridden by ``--method``, ``--preset`` and
+    each ``--param`` given (``None``: not given). Without a configuration, ``--method``
+    defaults to ``adaptive``.
+
+    Raises
+    ------
+    ParameterError
+        For a configuration that cannot be read or is not valid (naming the file), or
+        a ``--method`` other than the configuration's while the configuration sets a
+        preset or parameters (they belong to its method).
+    """
+    from scanlines.config import DEFAULT_METHOD, load_config
+
+    params = parse_params(param)
+    if config is None:
+        return method or DEFAULT_METHOD, preset, params
+    loaded = load_config(config)
+    if method is not None and method != loaded.method:
+        owned = [
+            what
+            for what, given in (
+                (f"preset {loaded.preset!r}", loaded.preset is not None and preset is None),
+                (f"parameters {', '.join(loaded.params)}", bool(loaded.params)),
+            )
+            if given
+        ]
+        if owned:
+            raise ParameterError(
+                f"--method {method} differs from method {loaded.method!r} of {config}, whose "
+                f"{' and '.join(owned)} belong to {loaded.method!r}; drop --method or --config"
+            )
+        return method, preset, params
+    return loaded.method, loaded.preset if preset is None else preset, {**loaded.params, **params}
 
 
 def parse_params(pairs: list[str] | None) -> dict[str, Any]:

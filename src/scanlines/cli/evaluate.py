@@ -23,6 +23,12 @@ SPEC_HELP = (
     "with the true breakpoints and corners; the best any segmentation can do with exact "
     "boundaries: the ceiling of the segment metrics."
 )
+CONFIG_HELP = (
+    "Extraction configuration (a TOML file of method, preset and a params table, as "
+    "`scanlines run --config` takes): one more method row, labelled by the file name. "
+    "Repeatable. Without --method, "
+    "the configurations are the methods of the run (no default adaptive row)."
+)
 
 
 def register(app: typer.Typer) -> None:
@@ -36,6 +42,9 @@ def register(app: typer.Typer) -> None:
 
 def eval_command(
     method: Annotated[list[str] | None, typer.Option("--method", "-m", help=SPEC_HELP)] = None,
+    config: Annotated[
+        list[Path] | None, typer.Option("--config", metavar="FILE", help=CONFIG_HELP)
+    ] = None,
     sensor: Annotated[
         list[str] | None,
         typer.Option("--sensor", "-s", help="Sensor preset, repeatable; default all four."),
@@ -145,7 +154,8 @@ def eval_command(
     from scanlines.evaluation.specs import TRUTH, parse_specs
     from scanlines.sensor_profile import read_profile
 
-    specs = parse_specs(method or ["adaptive"])
+    configured = _config_specs(config or [])
+    specs = parse_specs([*configured, *(method or ([] if configured else ["adaptive"]))])
     profile = None if sensor_profile is None else read_profile(sensor_profile)
     if labels:
         _check_real_options(sensor, scenes_per_sensor, seed, scenes, save_scenes, noise, specs)
@@ -201,6 +211,20 @@ def eval_command(
         paths.append(save_scenes)
     for path in paths:
         typer.echo(f"wrote {path}")
+
+
+def _config_specs(paths: list[Path]) -> list:
+    """One method spec per ``--config`` file: its method, preset and parameters (spelled
+    as a spec writes them), labelled by the file name."""
+    from scanlines.config import load_config
+    from scanlines.evaluation.specs import MethodSpec
+
+    specs = []
+    for path in paths:
+        loaded = load_config(path)
+        params = tuple(loaded.cli_values().items())
+        specs.append(MethodSpec(loaded.method, loaded.preset, params, label=path.name))
+    return specs
 
 
 def _jobs(jobs: int | None, workers: int | None) -> int:

@@ -9,7 +9,7 @@ from typing import Annotated
 
 import typer
 
-from scanlines.cli.common import guarded, parse_params
+from scanlines.cli.common import ConfigOption, guarded, method_options
 from scanlines.errors import LogFormatError
 
 FILE_HELP = "One scan: CSV (one row of ranges) or NPZ (ranges, angle_min, angle_increment)."
@@ -23,11 +23,15 @@ def register(app: typer.Typer) -> None:
 
 def extract_command(
     file: Annotated[Path, typer.Argument(help=FILE_HELP)],
-    method: Annotated[str, typer.Option(help="Extraction method.")] = "adaptive",
+    method: Annotated[
+        str | None,
+        typer.Option(help="Extraction method.", show_default="the --config file's, else adaptive"),
+    ] = None,
     preset: Annotated[str | None, typer.Option(help="Named parameter set, e.g. paper.")] = None,
     param: Annotated[
         list[str] | None, typer.Option("--param", help="NAME=VALUE, repeatable.")
     ] = None,
+    config: ConfigOption = None,
     angle_min: Annotated[
         float | None, typer.Option("--angle-min", help="CSV: first bearing, degrees.")
     ] = None,
@@ -49,7 +53,8 @@ def extract_command(
 ) -> None:
     from scanlines.extractor import Extractor
 
-    extractor = Extractor(method, preset, sensor_profile=sensor_profile, **parse_params(param))
+    method, preset, params = method_options(method, preset, param, config)
+    extractor = Extractor(method, preset, sensor_profile=sensor_profile, **params)
     scan = load_one_scan(file, angle_min, angle_increment, range_max)
     result = extractor(scan)
     if plot is not None:
