@@ -10,11 +10,12 @@ from typing import Annotated, Any, Literal
 import typer
 
 from scanlines.cli.common import (
-    MethodName,
+    ConfigMethodOption,
+    ConfigOption,
     OverwriteOption,
     guarded,
     jobs_option,
-    parse_params,
+    method_options,
     writable,
 )
 
@@ -33,7 +34,6 @@ AngleMinOption = Annotated[
 AngleStepOption = Annotated[
     float | None, typer.Option("--angle-increment", help="CSV: bearing step, degrees.")
 ]
-MethodOption = Annotated[MethodName, typer.Option(help="Extraction method.")]
 OnErrorOption = Annotated[
     Literal["fail", "skip"],
     typer.Option("--on-error", help="Stop at a malformed record, or skip and count it."),
@@ -190,12 +190,14 @@ def run_command(
             metavar="LOG...",
         ),
     ],
-    method: MethodOption = "adaptive",
+    method: ConfigMethodOption = None,
     preset: PresetOption = None,
     param: ParamOption = None,
+    config: ConfigOption = None,
     scans: ScansOption = None,
     out: Annotated[
-        Path | None, typer.Option(help="Output: .jsonl, .csv, .mcap, or a ROS 2 bag directory.")
+        Path | None,
+        typer.Option(help="Output: .jsonl, .csv, .mcap, .rrd (Rerun), or a ROS 2 bag directory."),
     ] = None,
     overwrite: OverwriteOption = False,
     frame: Annotated[
@@ -238,6 +240,7 @@ def run_command(
     from scanlines.io import open_log
     from scanlines.runner import parse_slice
 
+    method, preset, params = method_options(method, preset, param, config)
     if _many(logs, out, output_format):
         from scanlines.cli.fleet import run_many
 
@@ -245,7 +248,7 @@ def run_command(
             fov, angle_convention, topic, angle_min, angle_increment, on_error, max_beams
         )
         run_many(logs, out, output_format, method=method, preset=preset,
-                 params=parse_params(param), options=options, sensor_profile=sensor_profile,
+                 params=params, options=options, sensor_profile=sensor_profile,
                  jobs=jobs_option(jobs), scheduler=scheduler, chunk_records=chunk_records,
                  overwrite=overwrite, scans=scans, frame=frame)  # fmt: skip
         return
@@ -256,10 +259,13 @@ def run_command(
         raise ParameterError(f"--frame must be sensor or world, got {frame!r}")
     if on_error not in ("fail", "skip"):
         raise ParameterError(f"--on-error must be fail or skip, got {on_error!r}")
-    params = parse_params(param)
     Extractor(method, preset, **params)  # bad parameters fail before the log is read
     selection = parse_slice(scans)
     writable(out, overwrite, with_meta=True)  # and a taken output before any work
+    if out is not None and out.suffix.lower() == ".rrd":
+        from scanlines.io.rerun_writer import require_rerun
+
+        require_rerun()  # and a missing Rerun SDK
     options = reader_options(
         fov, angle_convention, topic, angle_min, angle_increment, on_error, max_beams
     )
@@ -459,9 +465,10 @@ def plot_command(
         int, typer.Option("--max-pages", help="Most pages (grids of 12 scans) drawn.", min=1)
     ] = 10,
     overwrite: OverwriteOption = False,
-    method: MethodOption = "adaptive",
+    method: ConfigMethodOption = None,
     preset: PresetOption = None,
     param: ParamOption = None,
+    config: ConfigOption = None,
     fov: FovOption = None,
     angle_convention: ConventionOption = None,
     topic: TopicOption = None,
@@ -478,7 +485,8 @@ def plot_command(
     if (scan is None) == (scans is None):
         raise ParameterError("give exactly one of --scan N or --scans START:STOP[:STEP]")
     selection = slice(scan, scan + 1) if scan is not None else parse_slice(scans)
-    extractor = Extractor(method, preset, **parse_params(param))
+    method, preset, params = method_options(method, preset, param, config)
+    extractor = Extractor(method, preset, **params)
     writable(output, overwrite)
     options = reader_options(fov, angle_convention, topic, angle_min, angle_increment)
     with open_log(log, **options) as reader:

@@ -31,9 +31,9 @@ file, line and field) or ``"skip"`` (drop and count malformed records: see
 
 Writing
 -------
-:func:`open_writer` writes ``.jsonl``, ``.csv``, ``.mcap`` or a ROS 2 bag
-directory, atomically, with ``<output>.meta.json`` beside it (see
-:mod:`scanlines.io.writers`)::
+:func:`open_writer` writes ``.jsonl``, ``.csv``, ``.mcap``, a ROS 2 bag
+directory or a Rerun recording (``.rrd``), atomically, with ``<output>.meta.json``
+beside it (see :mod:`scanlines.io.writers`)::
 
     with open_writer("out.jsonl", meta={"input": str(path)}) as writer:
         for index, scan in reader.enumerate():
@@ -42,7 +42,7 @@ directory, atomically, with ``<output>.meta.json`` beside it (see
 :func:`to_world` moves an extraction into the log's world frame.
 
 ``import scanlines.io`` needs only numpy; rosbags is imported when a bag is
-read or written.
+read or written, the Rerun SDK when a ``.rrd`` is written.
 """
 
 from __future__ import annotations
@@ -59,6 +59,7 @@ from scanlines.io.carmen import CarmenReader
 from scanlines.io.coreslam import CoreSlamReader
 from scanlines.io.detect import FORMAT_DESCRIPTIONS, detect_format
 from scanlines.io.npz import NpzReader
+from scanlines.io.rerun_writer import RerunWriter
 from scanlines.io.rosbag import RosbagReader
 from scanlines.io.tabular import CsvReader
 from scanlines.io.transform import points_to_world, to_world
@@ -82,6 +83,7 @@ __all__ = [
     "JsonlWriter",
     "LogReader",
     "NpzReader",
+    "RerunWriter",
     "ResultWriter",
     "Ros2BagWriter",
     "RosbagReader",
@@ -159,6 +161,7 @@ WRITERS: dict[str, type[ResultWriter]] = {
     ".jsonl": JsonlWriter,
     ".csv": CsvWriter,
     ".mcap": Ros2BagWriter,
+    ".rrd": RerunWriter,
 }
 
 
@@ -175,8 +178,8 @@ def open_writer(
     Parameters
     ----------
     path:
-        ``*.jsonl``, ``*.csv``, ``*.mcap``, or a path without suffix (or an
-        existing ROS 2 bag directory) for a ROS 2 bag directory.
+        ``*.jsonl``, ``*.csv``, ``*.mcap``, ``*.rrd`` (Rerun), or a path without
+        suffix (or an existing ROS 2 bag directory) for a ROS 2 bag directory.
     meta:
         Metadata for ``<path>.meta.json``: typically ``input``, ``method``,
         ``params``, ``reader`` (the reader's :meth:`~scanlines.io.base.LogReader.options`).
@@ -210,8 +213,8 @@ def open_writer(
         cls = Ros2BagWriter
     else:
         raise ParameterError(
-            f"{path}: unknown output format {suffix!r}; use .jsonl, .csv, .mcap or a directory "
-            f"path without suffix (ROS 2 bag)"
+            f"{path}: unknown output format {suffix!r}; use .jsonl, .csv, .mcap, .rrd or a "
+            f"directory path without suffix (ROS 2 bag)"
         )
     if options and cls is not Ros2BagWriter:
         raise ParameterError(f"{path}: options {sorted(options)} apply only to ROS 2 bag output")

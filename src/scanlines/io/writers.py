@@ -1,12 +1,15 @@
-"""Writing extraction results: JSON Lines, CSV, and ROS 2 bags with markers.
+"""Writing extraction results: JSON Lines, CSV, ROS 2 bags with markers, Rerun.
 
 Use :func:`scanlines.io.open_writer`; it picks the format from the output path
-(the ROS 2 writer is :mod:`scanlines.io.bag_writer`):
+(the ROS 2 writer is :mod:`scanlines.io.bag_writer`, the Rerun writer
+:mod:`scanlines.io.rerun_writer`):
 
 ============================  =================================================
 ``*.jsonl``                   one JSON object per written scan
 ``*.csv``                     one row per segment
 ``*.mcap``                    a single MCAP file (ROS 2 messages)
+``*.rrd``                     a Rerun recording (entities and timelines: see
+                              :mod:`scanlines.io.rerun_writer`)
 a path without suffix         a ROS 2 bag directory (``storage="mcap"`` or
                               ``"sqlite3"``)
 ============================  =================================================
@@ -68,7 +71,10 @@ stamped with the scan time (``index * 0.1`` s when the scan has none):
 Bag readers return messages in time order, so scans whose timestamps go
 backwards (the Intel raw log) come back sorted by time from the bag. The
 ``.mcap`` file and the bag directory get the usual permissions (``0o666``
-less the umask); so do the text outputs and the ``.meta.json``.
+less the umask); so do the text outputs, the ``.rrd`` file and the ``.meta.json``.
+
+Rerun: per scan, the returns, segments, breakpoints, corners and outliers on the
+timelines ``scan`` and ``time`` (:mod:`scanlines.io.rerun_writer`).
 """
 
 from __future__ import annotations
@@ -155,9 +161,10 @@ class ScanFeatures:
         Record index in the log and the scan itself.
     extraction:
         Features, transformed to the output frame.
-    breakpoint_points, corner_points:
-        ``K x 2`` positions of the breakpoint and corner beams in the output frame
-        (computed on first access: only the bag writer draws them).
+    breakpoint_points, corner_points, outlier_points, return_points:
+        ``K x 2`` positions of the breakpoint, corner and outlier beams and of every
+        beam with a return, in the output frame (computed on first access: only the
+        bag and Rerun writers draw them).
     """
 
     def __init__(self, index: int, scan: Scan, extraction: Extraction, frame: Frame) -> None:
@@ -176,6 +183,14 @@ class ScanFeatures:
     @cached_property
     def corner_points(self) -> np.ndarray:
         return self._points(self._sensor_extraction.corners)
+
+    @cached_property
+    def outlier_points(self) -> np.ndarray:
+        return self._points(self._sensor_extraction.outliers)
+
+    @cached_property
+    def return_points(self) -> np.ndarray:
+        return self._points(np.flatnonzero(self.scan.valid))
 
     def _points(self, beams: np.ndarray) -> np.ndarray:
         points = _beam_points(self.scan, beams)
