@@ -38,8 +38,15 @@ from typing import Any
 import numpy as np
 
 from scanlines.errors import ScanlinesError
+from scanlines.interrupts import kernel_calls
 from scanlines.scan import Scan
-from scanlines.steps.noise import MIN_NOISE_SIGMA, NoiseLine, local_residuals, noise_at
+from scanlines.steps.noise import (
+    MIN_NOISE_SIGMA,
+    NoiseLine,
+    local_residuals,
+    noise_at,
+    scan_noise,
+)
 from scanlines.steps.returns import beam_gaps, valid_returns
 
 __all__ = [
@@ -49,6 +56,7 @@ __all__ = [
     "SensorProfile",
     "estimate_profile",
     "read_profile",
+    "scan_noise_line",
 ]
 
 PROFILE_FORMAT = "scanlines-sensor-profile/1"
@@ -289,6 +297,13 @@ def estimate_profile(
     )
 
 
+def scan_noise_line(scan: Scan) -> NoiseLine:
+    """The range noise measured from ``scan`` alone (what an extractor without a sensor
+    profile takes for that scan)."""
+    with kernel_calls:
+        return NoiseLine(*(float(v) for v in scan_noise(*_returns_of(scan))))
+
+
 def _returns_of(scan: Scan):
     n = len(scan)
     local = scan.angle_increment * np.arange(n)
@@ -331,6 +346,7 @@ def _noise_bins(samples: list[np.ndarray], at: list[np.ndarray]) -> list[NoiseBi
     scan_of = np.repeat(np.arange(len(samples)), [s.size for s in samples])
     rng = np.random.default_rng(0)
     rounds = [rng.integers(0, len(samples), len(samples)) for _ in range(BOOTSTRAP_ROUNDS)]
+    times_drawn = [np.bincount(chosen, minlength=len(samples)) for chosen in rounds]
     bins = []
     for low, high in itertools.pairwise(edges):
         inside = (where >= low) & (where < high)
@@ -338,20 +354,22 @@ def _noise_bins(samples: list[np.ndarray], at: list[np.ndarray]) -> list[NoiseBi
             continue
         part = sample[inside]
         sigma = float(np.median(part) / 0.6745)
+        order = np.argsort(part, kind="stable")  # once for every round's weighted median
+        ordered, owners = part[order], scan_of[inside][order]
         redraws = []
-        for chosen in rounds:
-            times = np.bincount(chosen, minlength=len(samples))[scan_of[inside]]
-            if times.sum():
-                redraws.append(_weighted_median(part, times) / 0.6745)
+        for times in times_drawn:
+            weights = times[owners]
+            if weights.any():
+                redraws.append(_weighted_median(ordered, weights) / 0.6745)
         error = float(np.std(redraws)) if redraws else math.nan
         bins.append(NoiseBin(float(np.median(where[inside])), sigma, error, int(part.size)))
     return bins
 
 
-def _weighted_median(values: np.ndarray, weights: np.ndarray) -> float:
-    order = np.argsort(values, kind="stable")
-    cumulative = np.cumsum(weights[order])
-    return float(values[order][np.searchsorted(cumulative, 0.5 * cumulative[-1])])
+def _weighted_median(ordered: np.ndarray, weights: np.ndarray) -> float:
+    """The weighted median of ``ordered`` (sorted ascending), weights non-negative."""
+    cumulative = np.cumsum(weights)
+    return float(ordered[np.searchsorted(cumulative, 0.5 * cumulative[-1])])
 
 
 def _noise_line(bins: list[NoiseBin]) -> tuple[float, float]:

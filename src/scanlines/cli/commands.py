@@ -6,7 +6,7 @@ from typing import Annotated
 
 import typer
 
-from scanlines.cli import bench, compile, evaluate, extract, logs, reproduce
+from scanlines.cli import bench, compile, evaluate, extract, logs, reproduce, view
 
 app = typer.Typer(
     name="scanlines",
@@ -46,3 +46,4 @@ evaluate.register(app)
 bench.register(app)
 reproduce.register(app)
 compile.register(app)
+view.register(app)

@@ -1,0 +1,238 @@
+"""What the viewer shows, computed through the library: a scan's features under one or two
+configurations (with their differences), a stretch of the log in the world frame, and the
+methods with their parameter domains.
+
+A configuration is ``{"method": ..., "preset": ..., "params": {...}}`` (the parameters the
+user changed; :class:`scanlines.config.ExtractionConfig`). Scans are extracted as
+``scanlines run`` extracts them: with the sensor profile given, else the one measured from
+the log's first scans.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections import OrderedDict
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from scanlines.config import ExtractionConfig
+from scanlines.errors import ParameterError
+from scanlines.extraction import END_KINDS, Extraction
+from scanlines.extractor import Extractor, method_info, method_names
+from scanlines.io.transform import points_to_world, to_world
+from scanlines.runner import log_profile
+from scanlines.scan import Scan
+from scanlines.sensor_profile import ProfileError, SensorProfile, scan_noise_line
+from scanlines.viewer.scan_store import ScanStore
+
+__all__ = ["MAX_WORLD_SCANS", "ViewerSession", "methods"]
+
+#: Most scans a world view extracts (a longer stretch is sampled evenly).
+MAX_WORLD_SCANS = 600
+_CACHED_EXTRACTORS = 16
+
+
+def methods() -> list[dict[str, Any]]:
+    """Every method with its parameters (default, doc, allowed values, domain) and presets:
+    what the viewer builds its controls from."""
+    described = []
+    for name in method_names():
+        info = method_info(name)
+        params = [
+            {"name": key, "default": p.default, "doc": p.doc, "allowed": p.allowed,
+             "domain": p.domain}
+            for key, p in info.params.items()
+        ]  # fmt: skip
+        described.append({"name": name, "doc": info.doc, "params": params,
+                          "presets": info.presets})  # fmt: skip
+    return described
+
+
+class ViewerSession:
+    """A log open in the viewer.
+
+    Parameters
+    ----------
+    store:
+        The log's scans.
+    sensor_profile:
+        The profile every extraction takes; ``None``: measured from the log's first
+        scans when first needed, as ``scanlines run`` measures it
+        (:func:`scanlines.runner.log_profile`).
+    config:
+        The configuration the page opens with (default: the default method).
+    """
+
+    def __init__(
+        self, store: ScanStore, sensor_profile: SensorProfile | None = None,
+        config: ExtractionConfig | None = None,
+    ) -> None:  # fmt: skip
+        self.store = store
+        self.config = config or ExtractionConfig()
+        self._profile = sensor_profile
+        self._profile_note = "given" if sensor_profile is not None else None
+        self._profile_lock = threading.Lock()
+        self._extractors: OrderedDict[str, Extractor] = OrderedDict()
+        self._extractors_lock = threading.Lock()
+        self.first_frame = threading.Event()
+        """Set once a frame has been served (background work may wait for it)."""
+        self._prepare_lock = threading.Lock()
+        self.ready = threading.Event()
+        """Set once the first configuration's kernels are loaded and the profile measured
+        (:meth:`prepare`); the page says it is preparing until then."""
+
+    # -- the log --------------------------------------------------------------------------
+
+    def log(self) -> dict[str, Any]:
+        """The log's name, format, scans read so far, poses, reading state and profile."""
+        store = self.store
+        return {
+            "path": str(store.path), "name": store.path.name, "format": store.format_name,
+            "scans": store.count, "finished": store.finished, "error": store.error,
+            "poses": store.with_pose, "reader": store.reader_info if store.finished else {},
+            "profile": self._profile_note, "config": self.config.to_dict(),
+            "ready": self.ready.is_set(),
+        }  # fmt: skip
+
+    def prepare(self) -> None:
+        """Measure the profile and load the first configuration's kernels (by extracting
+        the first scan), then let the log be read on (see :meth:`ScanStore.hold`). Once:
+        a second call waits for the first."""
+        with self._prepare_lock:
+            if self.ready.is_set():
+                return
+            try:
+                self.extractor(self.config.to_dict())(self.store.scan(0))
+            finally:
+                self.ready.set()
+                self.store.resume()
+
+    def profile(self) -> SensorProfile | None:
+        """The sensor profile of the extractions (measured once, on first use)."""
+        with self._profile_lock:
+            if self._profile_note is None:
+                self._profile, self._profile_note = self._measure_profile()
+            return self._profile
+
+    def _measure_profile(self) -> tuple[SensorProfile | None, str]:
+        # From the log itself, as `scanlines run` measures it (not from the store's
+        # float32 copy): the same profile, so the same features as a run.
+        try:
+            profile = log_profile(self.store.path, self.store.reader_options)
+        except ProfileError as error:
+            return None, f"not measured ({error}): each scan's noise is measured from itself"
+        return profile, (
+            f"measured from the first {profile.scans} scans: noise "
+            f"{1000 * profile.noise_sigma0:.1f} mm + {100 * profile.noise_per_metre:.2f} % of range"
+        )
+
+    # -- extraction -----------------------------------------------------------------------
+
+    def extractor(self, config: Mapping[str, Any]) -> Extractor:
+        """The extractor of a configuration (checked: a bad one is a ParameterError)."""
+        checked = ExtractionConfig.from_dict(config, source="configuration")
+        key = repr((checked.method, checked.preset, sorted(checked.params.items())))
+        with self._extractors_lock:
+            extractor = self._extractors.get(key)
+            if extractor is not None:
+                self._extractors.move_to_end(key)
+                return extractor
+        profile = self.profile()
+        extractor = Extractor(
+            checked.method, checked.preset, sensor_profile=profile, **checked.params
+        )
+        with self._extractors_lock:
+            self._extractors[key] = extractor
+            while len(self._extractors) > _CACHED_EXTRACTORS:
+                self._extractors.popitem(last=False)
+        return extractor
+
+    def frame(self, index: int, configs: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
+        """Scan ``index`` and its features under each of ``configs`` (one or two)."""
+        if not 1 <= len(configs) <= 2:
+            raise ParameterError(f"a frame takes one or two configurations, got {len(configs)}")
+        extractors = [self.extractor(config) for config in configs]
+        scan = self.store.scan(index)
+        results = [_result(extractor, scan) for extractor in extractors]
+        if len(results) == 2:
+            _mark_differences(*results)
+        noise = scan_noise_line(scan)
+        points = scan.points
+        self.first_frame.set()
+        return {
+            "index": index, "record": self.store.record(index), "timestamp": scan.timestamp,
+            "pose": scan.pose, "beams": len(scan), "returns": int(scan.valid.sum()),
+            "x": points[:, 0], "y": points[:, 1],
+            "noise": {"sigma0": noise.sigma0, "per_metre": noise.per_metre},
+            "results": results,
+        }  # fmt: skip
+
+    def world(self, first: int, last: int, config: Mapping[str, Any]) -> dict[str, Any]:
+        """Scans ``first..last`` (at most :data:`MAX_WORLD_SCANS`, evenly sampled) in the
+        world frame: their segments, a sample of their returns, and the sensor's path."""
+        self.store.wait_for(1)
+        if not self.store.with_pose:
+            raise ParameterError(f"{self.store.path.name} has no poses: no world view")
+        if first < 0 or last < first:
+            raise ParameterError(f"world view takes 0 <= first <= last, got {first}..{last}")
+        extractor = self.extractor(config)
+        self.store.scan(last)  # waits for it; out of range is an error naming the log
+        indices = np.unique(np.linspace(first, last, min(last - first + 1, MAX_WORLD_SCANS)))
+        segments, xs, ys, path = [], [], [], []
+        for index in indices.astype(int).tolist():
+            scan = self.store.scan(index)
+            world = to_world(extractor(scan), scan.pose)
+            segments.append(world.lines[:, 2:6])
+            returns = scan.points[scan.valid][:: max(1, len(scan) // 180)]
+            moved = points_to_world(returns, scan.pose)
+            xs.append(moved[:, 0])
+            ys.append(moved[:, 1])
+            path.append(scan.pose)
+        return {
+            "first": first, "last": last, "scans": len(indices),
+            "segments": np.concatenate(segments) if segments else np.zeros((0, 4)),
+            "x": np.concatenate(xs), "y": np.concatenate(ys), "path": np.array(path),
+        }  # fmt: skip
+
+
+def _result(extractor: Extractor, scan: Scan) -> dict[str, Any]:
+    started = time.perf_counter()
+    extraction = extractor(scan)
+    milliseconds = 1000 * (time.perf_counter() - started)
+    return {
+        "method": extractor.method, "preset": extractor.preset,
+        "segments": _segments(extraction),
+        "breakpoints": extraction.breakpoints, "corners": extraction.corners,
+        "outliers": extraction.outliers, "extract_ms": milliseconds,
+    }  # fmt: skip
+
+
+def _segments(extraction: Extraction) -> list[dict[str, Any]]:
+    lines, covariances = extraction.lines, extraction.covariances
+    kinds = extraction.end_kinds
+    return [
+        {"first": int(extraction.first[k]), "last": int(extraction.last[k]),
+         "start": lines[k, 2:4], "end": lines[k, 4:6], "rho": float(lines[k, 0]),
+         "alpha": float(lines[k, 1]), "rms": float(lines[k, 6]),
+         "length": float(np.hypot(*(lines[k, 4:6] - lines[k, 2:4]))),
+         "returns": int(extraction.n_points[k]), "covariance": covariances[k],
+         "ends": [END_KINDS[kinds[k, 0]], END_KINDS[kinds[k, 1]]]}
+        for k in range(len(extraction))
+    ]  # fmt: skip
+
+
+def _mark_differences(a: dict[str, Any], b: dict[str, Any]) -> None:
+    """Mark, in each result, the segments (by beam span) and events the other lacks."""
+    for mine, theirs in ((a, b), (b, a)):
+        spans = {(s["first"], s["last"]) for s in theirs["segments"]}
+        mine["differing_segments"] = [
+            k for k, s in enumerate(mine["segments"]) if (s["first"], s["last"]) not in spans
+        ]
+        for events in ("breakpoints", "corners"):
+            other = set(np.asarray(theirs[events]).tolist())
+            mine[f"differing_{events}"] = [
+                int(beam) for beam in np.asarray(mine[events]).tolist() if beam not in other
+            ]

@@ -1,0 +1,217 @@
+"""The viewer end to end in real headless Chromium (Debian's ``chromium``, driven by
+Playwright): what the page draws is what the library extracts.
+
+In CI (``CI`` set) a missing browser fails these tests; elsewhere they are skipped. The
+browser is ``$SCANLINES_CHROMIUM``, else ``chromium`` on the PATH. Screenshots go to
+``test-artifacts/`` at the top of the repository.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from scanlines import Extractor, method_names
+from scanlines.config import load_config
+from scanlines.data import sample
+from scanlines.runner import log_profile
+from viewer_helpers import serving
+
+ARTIFACTS = Path(__file__).parent.parent / "test-artifacts"
+#: Flags of a headless Chromium on a machine without network: no background connections.
+CHROMIUM_FLAGS = [
+    "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+    "--disable-background-networking", "--disable-component-update", "--disable-sync",
+]  # fmt: skip
+
+
+def chromium_path() -> str | None:
+    return os.environ.get("SCANLINES_CHROMIUM") or shutil.which("chromium")
+
+
+@pytest.fixture(scope="module")
+def browser():
+    executable = chromium_path()
+    if executable is None:
+        message = "no Chromium: install Debian's chromium (or set SCANLINES_CHROMIUM)"
+        if os.environ.get("CI"):
+            pytest.fail(message)
+        pytest.skip(message)
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as playwright:
+        browser = playwright.chromium.launch(executable_path=executable, args=CHROMIUM_FLAGS)
+        yield browser
+        browser.close()
+
+
+@pytest.fixture(scope="module")
+def intel_server():
+    with serving(sample("intel")) as server:
+        yield server
+
+
+@pytest.fixture
+def page(browser, intel_server):
+    context = browser.new_context(viewport={"width": 1400, "height": 900}, accept_downloads=True)
+    page = context.new_page()
+    errors: list[str] = []
+    page.on("pageerror", lambda error: errors.append(str(error)))
+    page.goto(intel_server.url)
+    page.wait_for_function("window.viewer && window.viewer.stats.frames > 0")
+    yield page
+    context.close()
+    assert not errors, errors
+
+
+def frames(page) -> int:
+    return page.evaluate("window.viewer.stats.frames")
+
+
+def redrawn(page, before: int) -> dict:
+    """Wait for a frame after ``before`` to be drawn; what it drew."""
+    page.wait_for_function(f"window.viewer.stats.frames > {before}", timeout=60_000)
+    page.wait_for_function("window.viewer.state.requested === window.viewer.state.drawn")
+    return page.evaluate("window.viewer.stats.drawn")
+
+
+def fact(page, key: str) -> str:
+    return page.locator(f'#facts [data-fact="{key}"]').inner_text()
+
+
+def param_input(page, panel: int, name: str):
+    return page.locator(f'#config-{panel} input[aria-label="{name}"]')
+
+
+@pytest.fixture(scope="module")
+def intel_profile():
+    return log_profile(sample("intel"), {})
+
+
+def library_segments(scan_index: int, profile, method: str, **params) -> int:
+    from scanlines.io import open_log
+
+    with open_log(sample("intel")) as reader:
+        scan = next(s for i, s in reader.enumerate() if i == scan_index)
+    return len(Extractor(method, sensor_profile=profile, **params)(scan))
+
+
+def test_page_loads_a_shipped_log_and_draws_its_first_scan(page, intel_profile):
+    assert page.locator("#log-name").inner_text() == "intel_excerpt.clf.gz"
+    page.wait_for_function("document.querySelector('#scan-count').textContent === '300'")
+    drawn = page.evaluate("window.viewer.stats.drawn")
+    assert drawn["index"] == 0
+    assert drawn["segments"] == [library_segments(0, intel_profile, "adaptive")]
+    assert page.locator("#legend").inner_text().count("\n") >= 4
+    ARTIFACTS.mkdir(exist_ok=True)
+    page.screenshot(path=ARTIFACTS / "viewer-first-scan.png")
+
+
+def test_moving_the_slider_changes_the_scan_shown(page):
+    first = page.evaluate("window.viewer.state.frame.x")
+    before = frames(page)
+    page.locator("#scan-slider").fill("150")
+    drawn = redrawn(page, before)
+    assert drawn["index"] == 150
+    assert page.locator("#scan-index").input_value() == "150"
+    assert fact(page, "segments-0") == str(drawn["segments"][0])
+    assert page.evaluate("window.viewer.state.frame.x") != first
+
+
+def test_parameter_changes_redraw_what_extract_returns_for_every_method(page, intel_profile):
+    method_select = page.locator("#config-0 .method")
+    for method in method_names():
+        before = frames(page)
+        method_select.select_option(method)
+        redrawn(page, before)
+        before = frames(page)
+        param_input(page, 0, "min_points").fill("9")
+        drawn = redrawn(page, before)
+        expected = library_segments(0, intel_profile, method, min_points=9)
+        assert drawn["segments"] == [expected], method
+        assert fact(page, "segments-0") == str(expected)
+
+
+def test_two_configurations_mark_their_differences(page, intel_profile):
+    before = frames(page)
+    page.locator("#compare").check()
+    drawn = redrawn(page, before)
+    assert drawn["differences"] == 0  # B starts as a copy of A
+    before = frames(page)
+    page.locator("#config-1 .method").select_option("split_merge")
+    drawn = redrawn(page, before)
+    assert drawn["segments"] == [
+        library_segments(0, intel_profile, "adaptive"),
+        library_segments(0, intel_profile, "split_merge"),
+    ]
+    assert drawn["differences"] > 0
+    assert int(fact(page, "differing-0")) + int(fact(page, "differing-1")) == drawn["differences"]
+    assert "differs between A and B" in page.locator("#legend").inner_text()
+    ARTIFACTS.mkdir(exist_ok=True)
+    page.screenshot(path=ARTIFACTS / "viewer-compare-overlay.png")
+    before = frames(page)
+    page.locator("#compare-mode").select_option("side")
+    drawn = redrawn(page, before)
+    assert page.locator("#view-1").is_visible()
+    assert drawn["differences"] > 0
+    page.screenshot(path=ARTIFACTS / "viewer-compare-side-by-side.png")
+
+
+def test_clicking_a_segment_shows_its_numbers(page):
+    segment = page.evaluate("window.viewer.state.frame.results[0].segments[0]")
+    transform = page.evaluate("window.viewer.state.transform")
+    box = page.locator("#view-0 canvas").bounding_box()
+    middle = (np.array(segment["start"]) + np.array(segment["end"])) / 2
+    x = box["x"] + transform["x"] + middle[0] * transform["scale"]
+    y = box["y"] + transform["y"] - middle[1] * transform["scale"]
+    page.mouse.click(x, y)
+    details = page.locator("#selection").inner_text()
+    assert f"{segment['rho']:.4f} m" in details
+    assert f"{segment['first']}..{segment['last']}" in details
+    assert "var alpha" in details
+
+
+def test_world_view_accumulates_the_scans_before(page):
+    page.locator("#world-span").fill("300")
+    before = frames(page)
+    page.locator("#scan-slider").fill("299")
+    redrawn(page, before)
+    before = frames(page)
+    page.locator("#world-radio").check()
+    drawn = redrawn(page, before)
+    assert drawn["world"] == 300
+    assert drawn["segments"][0] > 300
+
+
+def test_copy_as_command_and_save_config_give_the_chosen_configuration(page, tmp_path):
+    before = frames(page)
+    page.locator("#config-0 .method").select_option("split_merge")
+    redrawn(page, before)
+    before = frames(page)
+    param_input(page, 0, "min_length").fill("0.8")
+    redrawn(page, before)
+    page.locator("#config-0 .copy").click()
+    command = page.locator("#config-0 .command")
+    command.wait_for(state="visible")
+    assert "--method split_merge" in command.inner_text()
+    assert "--param min_length=0.8" in command.inner_text()
+    with page.expect_download() as download:
+        page.locator("#config-0 .save").click()
+    saved = tmp_path / download.value.suggested_filename
+    download.value.save_as(saved)
+    config = load_config(saved)
+    assert (config.method, dict(config.params)) == ("split_merge", {"min_length": 0.8})
+
+
+def test_a_value_outside_the_domain_is_marked_and_not_sent(page):
+    requested = page.evaluate("window.viewer.state.requested")
+    field = param_input(page, 0, "k")
+    field.fill("-2")
+    assert "invalid" in (field.get_attribute("class") or "")
+    page.wait_for_timeout(300)
+    assert page.evaluate("window.viewer.state.requested") == requested
+    assert page.locator("#error").is_hidden()
