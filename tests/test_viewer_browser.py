@@ -215,3 +215,20 @@ def test_a_value_outside_the_domain_is_marked_and_not_sent(page):
     page.wait_for_timeout(300)
     assert page.evaluate("window.viewer.state.requested") == requested
     assert page.locator("#error").is_hidden()
+
+
+def test_a_malformed_record_stops_reading_with_a_message_on_the_page(browser):
+    log = Path(__file__).parent / "io" / "fixtures" / "carmen_not_a_number.log"
+    with serving(log) as server:
+        page = browser.new_page()
+        page.goto(server.url)
+        page.wait_for_function("window.viewer && window.viewer.stats.frames > 0")
+        state = page.locator("#log-state")
+        page.wait_for_function(
+            "document.querySelector('#log-state').textContent.includes('1 scans')"
+        )
+        assert "reading stopped" in state.inner_text()
+        assert "carmen_not_a_number.log" in state.inner_text()
+        assert "line 3" in state.inner_text()
+        assert page.evaluate("window.viewer.stats.drawn.index") == 0
+        page.close()

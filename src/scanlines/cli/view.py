@@ -44,9 +44,9 @@ def view_command(
     param: ParamOption = None,
     config: ConfigOption = None,
     sensor_profile: ProfileOption = None,
-    host: Annotated[str, typer.Option(help="Address to serve on (only this machine's).")] = (
-        "127.0.0.1"
-    ),
+    host: Annotated[
+        str, typer.Option(help="Address to serve on (the default: this machine only; no login).")
+    ] = "127.0.0.1",
     port: Annotated[int, typer.Option(help="Port (0: a free one).", min=0, max=65535)] = 0,
     no_browser: Annotated[
         bool, typer.Option("--no-browser", help="Print the address; do not open a browser.")

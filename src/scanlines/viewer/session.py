@@ -19,13 +19,13 @@ from typing import Any
 import numpy as np
 
 from scanlines.config import ExtractionConfig
-from scanlines.errors import ParameterError
+from scanlines.errors import ParameterError, ScanlinesError, one_line
 from scanlines.extraction import END_KINDS, Extraction
 from scanlines.extractor import Extractor, method_info, method_names
 from scanlines.io.transform import points_to_world, to_world
 from scanlines.runner import log_profile
 from scanlines.scan import Scan
-from scanlines.sensor_profile import ProfileError, SensorProfile, scan_noise_line
+from scanlines.sensor_profile import SensorProfile, scan_noise_line
 from scanlines.viewer.scan_store import ScanStore
 
 __all__ = ["MAX_WORLD_SCANS", "ViewerSession", "methods"]
@@ -122,8 +122,8 @@ class ViewerSession:
         # float32 copy): the same profile, so the same features as a run.
         try:
             profile = log_profile(self.store.path, self.store.reader_options)
-        except ProfileError as error:
-            return None, f"not measured ({error}): each scan's noise is measured from itself"
+        except ScanlinesError as error:  # too few returns, or a malformed record among them
+            return None, f"not measured ({one_line(str(error))}): each scan's noise is its own"
         return profile, (
             f"measured from the first {profile.scans} scans: noise "
             f"{1000 * profile.noise_sigma0:.1f} mm + {100 * profile.noise_per_metre:.2f} % of range"
