@@ -250,3 +250,15 @@ def test_importing_scanlines_io_does_not_import_rerun() -> None:
     code = "import sys, scanlines.io; print('rerun' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+def test_several_logs_give_one_recording_each(tmp_path) -> None:
+    (tmp_path / "recordings").mkdir()
+    out = run(
+        "run", sample("intel"), sample("urg"), "--scans", "0:5", "--format", "rrd",
+        "--out", tmp_path / "recordings", "-j", "1",
+    )  # fmt: skip
+    assert out.returncode == 0, out.stderr
+    for name in ("intel_excerpt.clf.gz", "urg_excerpt.dat.gz"):
+        recorded = read_rrd(tmp_path / "recordings" / f"{name}.rrd")
+        assert sorted(recorded["segments"]) == list(range(5)), name

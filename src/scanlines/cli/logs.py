@@ -214,7 +214,7 @@ def run_command(
     sensor_profile: ProfileOption = None,
     jobs: JobsOption = None,
     output_format: Annotated[
-        Literal["jsonl", "csv", "mcap", "parquet"] | None,
+        Literal["jsonl", "csv", "mcap", "rrd", "parquet"] | None,
         typer.Option(
             "--format",
             help="Output format for several logs or a dataset (parquet: one dataset "
