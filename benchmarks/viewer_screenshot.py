@@ -11,7 +11,7 @@ import os
 import shutil
 from pathlib import Path
 
-from viewer import FLAGS, frames, redrawn
+from viewer import FEATURES_DRAWN, FLAGS, frames, redrawn
 
 from scanlines.data import sample
 from scanlines.viewer import ScanStore, ViewerServer, ViewerSession
@@ -46,7 +46,7 @@ def main() -> None:
             browser = playwright.chromium.launch(executable_path=executable, args=FLAGS)
             page = browser.new_page(viewport={"width": 1500, "height": 860})
             page.goto(server.url)
-            page.wait_for_function("window.viewer && window.viewer.stats.frames > 0")
+            page.wait_for_function(FEATURES_DRAWN)
             before = frames(page)
             page.locator("#scan-index").fill(str(args.scan))
             page.locator("#scan-index").dispatch_event("change")

@@ -129,6 +129,17 @@ def test_two_configurations_mark_what_only_one_has():
     } == (spans_a - spans_b)
 
 
+def test_a_frame_without_configurations_is_the_scan_alone():
+    with ScanStore(sample("intel")) as store:
+        session = ViewerSession(store)
+        alone = session.frame(3, [])
+        scan = store.scan(3)
+    assert alone["results"] == []
+    assert alone["noise"] is None
+    np.testing.assert_array_equal(alone["x"], scan.points[:, 0])
+    assert not session.first_frame.is_set()  # no kernel has run for the page yet
+
+
 def test_world_view_moves_the_features_by_the_poses():
     with ScanStore(sample("intel")) as store:
         world = ViewerSession(store).world(0, 299, {"method": "adaptive"})

@@ -22,6 +22,11 @@ from scanlines.runner import log_profile
 from viewer_helpers import serving
 
 ARTIFACTS = Path(__file__).parent.parent / "test-artifacts"
+#: The first scan's features are drawn (its returns come first, alone).
+FEATURES_DRAWN = (
+    "window.viewer && window.viewer.state.frame && window.viewer.state.frame.results.length > 0"
+    " && window.viewer.stats.frames > 1"
+)
 #: Flags of a headless Chromium on a machine without network: no background connections.
 CHROMIUM_FLAGS = [
     "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
@@ -62,7 +67,7 @@ def page(browser, intel_server):
     errors: list[str] = []
     page.on("pageerror", lambda error: errors.append(str(error)))
     page.goto(intel_server.url)
-    page.wait_for_function("window.viewer && window.viewer.stats.frames > 0")
+    page.wait_for_function(FEATURES_DRAWN)
     yield page
     context.close()
     assert not errors, errors
@@ -222,7 +227,7 @@ def test_a_malformed_record_stops_reading_with_a_message_on_the_page(browser):
     with serving(log) as server:
         page = browser.new_page()
         page.goto(server.url)
-        page.wait_for_function("window.viewer && window.viewer.stats.frames > 0")
+        page.wait_for_function(FEATURES_DRAWN)
         state = page.locator("#log-state")
         page.wait_for_function(
             "document.querySelector('#log-state').textContent.includes('1 scans')"

@@ -151,23 +151,23 @@ class ViewerSession:
         return extractor
 
     def frame(self, index: int, configs: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
-        """Scan ``index`` and its features under each of ``configs`` (one or two)."""
-        if not 1 <= len(configs) <= 2:
+        """Scan ``index`` and its features under each of ``configs`` (one or two; none: the
+        scan alone, which needs no kernel, for the page to draw while they load)."""
+        if len(configs) > 2:
             raise ParameterError(f"a frame takes one or two configurations, got {len(configs)}")
         extractors = [self.extractor(config) for config in configs]
         scan = self.store.scan(index)
         results = [_result(extractor, scan) for extractor in extractors]
         if len(results) == 2:
             _mark_differences(*results)
-        noise = scan_noise_line(scan)
+        noise = scan_noise_line(scan)._asdict() if results else None
         points = scan.points
-        self.first_frame.set()
+        if results:
+            self.first_frame.set()
         return {
             "index": index, "record": self.store.record(index), "timestamp": scan.timestamp,
             "pose": scan.pose, "beams": len(scan), "returns": int(scan.valid.sum()),
-            "x": points[:, 0], "y": points[:, 1],
-            "noise": {"sigma0": noise.sigma0, "per_metre": noise.per_metre},
-            "results": results,
+            "x": points[:, 0], "y": points[:, 1], "noise": noise, "results": results,
         }  # fmt: skip
 
     def world(self, first: int, last: int, config: Mapping[str, Any]) -> dict[str, Any]:

@@ -220,6 +220,16 @@ function inDomain(domain, value) {
 
 // -- frames: ask, then draw ------------------------------------------------------------------
 
+// The first scan's returns, drawn at once: they need no kernel, while the extractor's load.
+async function drawReturnsFirst() {
+  try {
+    state.frame = await api("/api/frame", { index: 0, configs: [] });
+    draw();
+    showFacts();
+    stats.frames += 1;
+  } catch (error) { showError(error); }
+}
+
 function configs() {
   return state.panels.slice(0, state.compare ? 2 : 1).map((panel) => panel.config());
 }
@@ -437,7 +447,8 @@ function showFacts() {
     rows.push(["scan (log record)", `${f.index} (${f.record})`],
               ["time", f.timestamp === null ? "-" : `${f.timestamp.toFixed(3)} s`],
               ["beams / returns", `${f.beams} / ${f.returns}`],
-              ["noise (this scan)", `${(1000 * f.noise.sigma0).toFixed(1)} mm + ${(100 * f.noise.per_metre).toFixed(2)} % r`]);
+              ["noise (this scan)", f.noise === null ? "-" : `${(1000 * f.noise.sigma0).toFixed(1)} mm + ${(100 * f.noise.per_metre).toFixed(2)} % r`]);
+    if (f.results.length === 0) rows.push(["features", "extracting…"]);
     f.results.forEach((r, i) => {
       const tag = f.results.length === 2 ? ` ${"AB"[i]}` : "";
       rows.push([`segments${tag}`, r.segments.length, `segments-${i}`],
@@ -582,6 +593,7 @@ async function start() {
     if (event.key === " ") { event.preventDefault(); togglePlay(); }
   });
   window.addEventListener("resize", () => draw());
+  await drawReturnsFirst();
   await refresh();
 }
 
