@@ -265,6 +265,24 @@ def test_view_command_serves_the_log_until_interrupted():
         process.kill()
 
 
+def test_a_port_in_use_is_refused_in_one_line():
+    import socket
+
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        out = subprocess.run(
+            [sys.executable, "-m", "scanlines", "view", str(sample("intel")), "--no-browser",
+             "--port", str(port)],
+            capture_output=True, text=True, timeout=120,
+        )  # fmt: skip
+    assert out.returncode == 2, out.stderr
+    assert out.stderr.strip() == (
+        f"scanlines: error: cannot serve the viewer on 127.0.0.1:{port}: Address already in use"
+    )
+
+
 @pytest.mark.parametrize(
     ("args", "needle"),
     [

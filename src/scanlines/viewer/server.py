@@ -9,6 +9,7 @@ import time
 
 import uvicorn
 
+from scanlines.errors import ParameterError
 from scanlines.viewer.app import create_app
 from scanlines.viewer.session import ViewerSession
 
@@ -26,7 +27,12 @@ class ViewerServer:
         self.session = session
         self.socket = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         self.socket.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        self.socket.bind((host, port))
+        try:
+            self.socket.bind((host, port))
+        except OSError as error:
+            self.socket.close()
+            reason = error.strerror or str(error)
+            raise ParameterError(f"cannot serve the viewer on {host}:{port}: {reason}") from None
         self.socket.listen(128)  # connections wait from now on, not only once serving
         bound_host, bound_port = self.socket.getsockname()[:2]
         self.url = f"http://{bound_host}:{bound_port}/"
