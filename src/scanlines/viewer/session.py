@@ -20,7 +20,6 @@ import numpy as np
 
 from scanlines.config import ExtractionConfig
 from scanlines.errors import ParameterError, ScanlinesError, one_line
-from scanlines.extraction import END_KINDS, Extraction
 from scanlines.extractor import Extractor, method_info, method_names
 from scanlines.io.transform import points_to_world, to_world
 from scanlines.runner import log_profile
@@ -204,24 +203,10 @@ def _result(extractor: Extractor, scan: Scan) -> dict[str, Any]:
     milliseconds = 1000 * (time.perf_counter() - started)
     return {
         "method": extractor.method, "preset": extractor.preset,
-        "segments": _segments(extraction),
+        "segments": extraction.to_dict()["segments"],
         "breakpoints": extraction.breakpoints, "corners": extraction.corners,
         "outliers": extraction.outliers, "extract_ms": milliseconds,
     }  # fmt: skip
-
-
-def _segments(extraction: Extraction) -> list[dict[str, Any]]:
-    lines, covariances = extraction.lines, extraction.covariances
-    kinds = extraction.end_kinds
-    return [
-        {"first": int(extraction.first[k]), "last": int(extraction.last[k]),
-         "start": lines[k, 2:4], "end": lines[k, 4:6], "rho": float(lines[k, 0]),
-         "alpha": float(lines[k, 1]), "rms": float(lines[k, 6]),
-         "length": float(np.hypot(*(lines[k, 4:6] - lines[k, 2:4]))),
-         "returns": int(extraction.n_points[k]), "covariance": covariances[k],
-         "ends": [END_KINDS[kinds[k, 0]], END_KINDS[kinds[k, 1]]]}
-        for k in range(len(extraction))
-    ]  # fmt: skip
 
 
 def _mark_differences(a: dict[str, Any], b: dict[str, Any]) -> None:

@@ -431,8 +431,7 @@ function drawLegend(results) {
                [dot(COLOURS.outlier, 2), "outliers"]);
     if (results === 2) items.push([line(COLOURS.difference), "differs between A and B"]);
   } else items.push([line(COLOURS.path), "sensor path"]);
-  const scale = $("#legend");
-  scale.innerHTML = items.map(([icon, text]) => `<li>${icon}${text}</li>`).join("");
+  $("#legend").innerHTML = items.map(([icon, text]) => `<li>${icon}${text}</li>`).join("");
 }
 
 // -- facts and the selected segment ----------------------------------------------------------
@@ -472,7 +471,7 @@ function showSelection() {
   const c = s.covariance;
   const rows = [["configuration", "AB"[state.selected.which]], ["beams", `${s.first}..${s.last}`],
     ["rho", `${s.rho.toFixed(4)} m`], ["alpha", `${deg(s.alpha)} deg`], ["length", `${s.length.toFixed(3)} m`],
-    ["returns", s.returns], ["rms", `${(1000 * s.rms).toFixed(1)} mm`], ["ends", s.ends.join(", ")],
+    ["returns", s.n_points], ["rms", `${(1000 * s.rms).toFixed(1)} mm`], ["ends", `${s.start_kind}, ${s.end_kind}`],
     ["var rho", `${c[0][0].toExponential(2)} m²`], ["cov rho alpha", c[0][1].toExponential(2)],
     ["var alpha", `${c[1][1].toExponential(2)} rad²`]];
   box.innerHTML = `<table>${rows.map(([a, b]) => `<tr><td>${a}</td><td>${b}</td></tr>`).join("")}</table>`;
