@@ -74,3 +74,32 @@ def test_the_compiled_methods_are_one_kernel(method):
     assert issubclass(method_class(method), CompiledMethod)
     scan = next(iter(open_log(sample("intel"))))
     assert len(Extractor(method)(scan)) > 0
+
+
+def test_compilation_is_watched_from_before_numba_loads():
+    # Commands watch compilation from their start without importing numba for it.
+    code = (
+        "import sys\n"
+        "from scanlines._compile_watch import watch_compilation\n"
+        "seen, done = [], []\n"
+        "with watch_compilation(seen.append, lambda: done.append(True)):\n"
+        "    loaded_before = 'numba' in sys.modules\n"
+        "    import numba, scanlines._jit\n"
+        "    twice = numba.njit(lambda x: 2 * x)\n"
+        "    twice(3)\n"
+        "twice(4.0)  # compiled after the watch: not seen\n"
+        "print(loaded_before, seen, len(done))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.stdout.strip().split(maxsplit=1) == ["False", "['<lambda>'] 1"], out.stderr
+
+
+def test_the_command_line_names_the_registered_methods_without_loading_them():
+    from scanlines.builtin_methods import BUILTIN_METHODS
+    from scanlines.methods import REGISTRY
+
+    shipped = [n for n, method in REGISTRY.items() if method.__module__.startswith("scanlines.")]
+    assert tuple(shipped) == BUILTIN_METHODS
+    code = "import sys, scanlines.cli.commands; print('numba' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert out.stdout.strip() == "False", out.stderr

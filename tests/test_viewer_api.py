@@ -140,6 +140,49 @@ def test_a_frame_without_configurations_is_the_scan_alone():
     assert not session.first_frame.is_set()  # no kernel has run for the page yet
 
 
+def test_a_configuration_given_later_is_waited_for_and_a_refused_one_fails():
+    import threading
+
+    with ScanStore(sample("intel")) as store:
+        later = ViewerSession(store, config_later=True)
+        assert later.frame(0, [])["returns"] > 0  # the returns need no configuration
+        answers = []
+        asking = threading.Thread(target=lambda: answers.append(later.log()["config"]))
+        asking.start()
+        asking.join(timeout=0.3)
+        assert asking.is_alive()
+        assert answers == []
+        later.configure(ExtractionConfig("iepf"))
+        asking.join(timeout=10)
+        assert answers == [{"method": "iepf", "preset": None, "params": {}}]
+
+        refused = ViewerSession(store, config_later=True)
+        refused.refuse()
+        with pytest.raises(ParameterError, match="configuration was refused"):
+            refused.log()
+
+
+def test_the_page_is_served_without_loading_numba():
+    # Importing numba takes most of a second: ``scanlines view`` serves the page (and the
+    # first scan's returns) while it loads on another thread.
+    code = (
+        "import sys\n"
+        "import scanlines.cli.commands, scanlines.cli.view\n"
+        "from scanlines.data import sample\n"
+        "from scanlines.viewer import ScanStore, ViewerSession\n"
+        "from scanlines.viewer.server import ViewerServer\n"
+        "import urllib.request, json\n"
+        "store = ScanStore(sample('intel'))\n"
+        "server = ViewerServer(ViewerSession(store, config_later=True)).start()\n"
+        "request = urllib.request.Request(server.url + 'api/frame', method='POST',\n"
+        "    data=json.dumps({'index': 0, 'configs': []}).encode())\n"
+        "frame = json.loads(urllib.request.urlopen(request, timeout=60).read())\n"
+        "print(frame['returns'] > 0, 'numba' in sys.modules)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.stdout.split() == ["True", "False"], out.stderr
+
+
 def test_world_view_moves_the_features_by_the_poses():
     with ScanStore(sample("intel")) as store:
         world = ViewerSession(store).world(0, 299, {"method": "adaptive"})

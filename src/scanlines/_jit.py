@@ -21,9 +21,10 @@ import os
 import threading
 import time
 from collections.abc import Callable
-from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, TypeVar
+
+from scanlines._compile_watch import compile_ended, compile_started
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -32,7 +33,7 @@ try:
 except ImportError:  # pragma: no cover - exercised only without numba
     numba = None
 
-__all__ = ["COMPILED", "kernel", "kernel_seconds", "watch_compilation"]
+__all__ = ["COMPILED", "kernel", "kernel_seconds"]
 
 COMPILED = numba is not None and not numba.config.DISABLE_JIT
 
@@ -70,20 +71,17 @@ if numba is not None:
             _CLOCK.on_end(event)
 
     class _CompileListener(numba.core.event.Listener):
-        def __init__(self, on_compile: Callable[[str], None], on_done: Callable[[], None]):
-            self.on_compile, self.on_done = on_compile, on_done
-            self.depth = 0
+        """Forwards compile events to the watchers of :mod:`scanlines._compile_watch`."""
 
         def on_start(self, event: Any) -> None:
-            self.depth += 1
-            self.on_compile(event.data["dispatcher"].py_func.__name__)
+            compile_started(event.data["dispatcher"].py_func.__name__)
 
         def on_end(self, event: Any) -> None:
-            self.depth -= 1
-            if self.depth == 0:
-                self.on_done()
+            compile_ended()
 
     numba.core.event.register("numba:compiler_lock", _ClockListener())
+    if not numba.config.DISABLE_JIT:
+        numba.core.event.register("numba:compile", _CompileListener())
 
 
 class _KernelClock:
@@ -131,21 +129,6 @@ def kernel_seconds(wall: bool = False) -> float:
     summed over threads, or with ``wall`` the wall time during which any thread did.
     Take the difference around a call to leave them out of its timing."""
     return _CLOCK.wall_seconds if wall else _CLOCK.seconds
-
-
-@contextmanager
-def watch_compilation(on_compile: Callable[[str], None], on_done: Callable[[], None]):
-    """Call ``on_compile(name)`` whenever a kernel starts compiling (not on cache loads),
-    and ``on_done()`` when the outermost compilation in progress ends."""
-    if numba is None or not COMPILED:
-        yield
-        return
-    listener = _CompileListener(on_compile, on_done)
-    numba.core.event.register("numba:compile", listener)
-    try:
-        yield
-    finally:
-        numba.core.event.unregister("numba:compile", listener)
 
 
 def kernel(function: F) -> F:

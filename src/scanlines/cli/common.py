@@ -13,6 +13,7 @@ from typing import Annotated, Any, Literal, TypeVar
 
 import typer
 
+from scanlines.builtin_methods import BUILTIN_METHODS
 from scanlines.errors import ParameterError, ScanlinesError
 from scanlines.interrupts import Terminated, any_terminated, is_interrupt
 
@@ -122,7 +123,7 @@ class CompileProgress:
 
 def compile_progress() -> Any:
     """A context in which kernel compilation is shown on stderr (:class:`CompileProgress`)."""
-    from scanlines._jit import watch_compilation
+    from scanlines._compile_watch import watch_compilation
 
     progress = CompileProgress()
     return watch_compilation(progress.on_compile, progress.on_done)
@@ -139,14 +140,8 @@ def jobs_option(jobs: int | None) -> int:
     return jobs
 
 
-def _method_names() -> tuple[str, ...]:
-    from scanlines.extractor import method_names
-
-    return tuple(method_names())
-
-
-#: The registered methods, as choices of ``--method``.
-MethodName = Literal[_method_names()]  # type: ignore[valid-type]
+#: The built-in methods, as choices of ``--method`` (named without importing numba).
+MethodName = Literal[BUILTIN_METHODS]  # type: ignore[valid-type]
 
 #: ``--method`` of a command that takes ``--config``: ``None`` when not given.
 ConfigMethodOption = Annotated[

@@ -59,16 +59,17 @@ def view_command(
     angle_min: AngleMinOption = None,
     angle_increment: AngleStepOption = None,
 ) -> None:
-    from scanlines.config import ExtractionConfig
     from scanlines.errors import LogFormatError
-    from scanlines.sensor_profile import read_profile
     from scanlines.viewer.scan_store import ScanStore
+    from scanlines.viewer.server import ViewerServer
     from scanlines.viewer.session import ViewerSession
 
     method, preset, params = method_options(method, preset, param, config)
-    initial = ExtractionConfig(method, preset, params)
-    initial.extractor()  # a bad configuration fails before the log is read
-    profile = None if sensor_profile is None else read_profile(sensor_profile)
+    profile = None
+    if sensor_profile is not None:
+        from scanlines.sensor_profile import read_profile  # loads numba: only when asked
+
+        profile = read_profile(sensor_profile)
     options = reader_options(
         fov, angle_convention, topic, angle_min, angle_increment, on_error, max_beams
     )
@@ -77,38 +78,57 @@ def view_command(
     if not store.wait_for(1, FIRST_SCAN_SECONDS):
         store.close()
         raise LogFormatError(store.error or f"{log}: no scan to show")
-    session = ViewerSession(store, profile, initial)
-    _prepare(session, method)
-    from scanlines.viewer.server import ViewerServer  # while the kernels load
-
+    # The page is served (and the first scan's returns drawn) while the configuration is
+    # checked and the kernels load: both need numba, which takes most of a second to import.
+    session = ViewerSession(store, profile, config_later=True)
     server = ViewerServer(session, host, port)
     typer.echo(f"scanlines view: {log.name} on {server.url} (Ctrl-C stops)")
-    if not no_browser:
-        _open_browser(server.url)
+    preparing = _Preparation(session, server, (method, preset, params), not no_browser)
     try:
-        server.run()
+        server.run(prepare=False)  # _Preparation prepares, showing what compiles
     finally:
         store.close()
+    if preparing.error is not None:
+        raise preparing.error
 
 
-def _prepare(session, method: str) -> None:
-    """In the background, while the browser opens the page: measure the sensor profile and
-    compile (or load) the chosen method's kernels; once the first frame is out, the other
-    methods' too, so that choosing one in the page does not wait for it."""
-    import threading
+class _Preparation:
+    """In the background, while the page is served: check the configuration (a bad one
+    stops the server, and the command fails with it), open the browser, measure the sensor
+    profile and compile (or load) the chosen method's kernels; once the first frame is
+    out, the other methods' too, so that choosing one in the page does not wait for it."""
 
-    from scanlines.extractor import method_names
-    from scanlines.warm import warm_method
+    def __init__(self, session, server, configuration, open_browser: bool) -> None:
+        import threading
 
-    def work() -> None:
+        self.error: Exception | None = None
+        self._session, self._server = session, server
+        self._configuration, self._open_browser = configuration, open_browser
+        threading.Thread(target=self._work, name="prepare", daemon=True).start()
+
+    def _work(self) -> None:
+        from scanlines.config import ExtractionConfig
+        from scanlines.extractor import method_names
+        from scanlines.warm import warm_method
+
+        method, preset, params = self._configuration
+        try:
+            initial = ExtractionConfig(method, preset, params)
+            initial.extractor()
+        except Exception as error:  # raised again by the command, once the server stopped
+            self.error = error
+            self._session.refuse()
+            self._server.shutdown()
+            return
+        self._session.configure(initial)
+        if self._open_browser:
+            _open_browser(self._server.url)
         with compiled_for(method):
-            session.prepare()
-        session.first_frame.wait(FIRST_SCAN_SECONDS)  # loading kernels blocks other loads
+            self._session.prepare()
+        self._session.first_frame.wait(FIRST_SCAN_SECONDS)  # loading kernels blocks others
         for name in method_names():
             if name != method:
                 warm_method(name)
-
-    threading.Thread(target=work, name="prepare", daemon=True).start()
 
 
 def _open_browser(url: str) -> None:

@@ -64,11 +64,13 @@ def create_app(session: ViewerSession) -> Starlette:
     async def page(request: Request) -> Response:
         return FileResponse(str(STATIC / "index.html"), headers={"Cache-Control": "no-store"})
 
+    # Off the event loop: these wait for the configuration and for numba to load, while
+    # the first frame's returns are served.
     async def log(request: Request) -> Response:
-        return JSON(session.log())
+        return JSON(await run_in_threadpool(session.log))
 
     async def method_list(request: Request) -> Response:
-        return JSON(methods())
+        return JSON(await run_in_threadpool(methods))
 
     async def frame(request: Request) -> Response:
         body = await _body(request)

@@ -40,10 +40,12 @@ class ViewerServer:
         self._server = uvicorn.Server(config)
         self._thread: threading.Thread | None = None
 
-    def run(self) -> None:
-        """Serve until Ctrl-C (or :meth:`stop` from another thread), preparing the session
-        (:meth:`ViewerSession.prepare`) in the background meanwhile."""
-        threading.Thread(target=self.session.prepare, name="prepare", daemon=True).start()
+    def run(self, *, prepare: bool = True) -> None:
+        """Serve until Ctrl-C (or :meth:`shutdown` from another thread), preparing the
+        session (:meth:`ViewerSession.prepare`) in the background meanwhile unless not
+        ``prepare``."""
+        if prepare:
+            threading.Thread(target=self.session.prepare, name="prepare", daemon=True).start()
         self._server.run(sockets=[self.socket])
 
     def start(self, timeout: float = 10.0) -> ViewerServer:
@@ -56,6 +58,10 @@ class ViewerServer:
                 raise RuntimeError(f"the viewer did not start on {self.url}")
             time.sleep(0.01)
         return self
+
+    def shutdown(self) -> None:
+        """Ask the server to stop, from any thread: :meth:`run` returns."""
+        self._server.should_exit = True
 
     def stop(self) -> None:
         """Stop serving and close the log."""

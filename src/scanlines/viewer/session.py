@@ -14,18 +14,19 @@ import threading
 import time
 from collections import OrderedDict
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from scanlines.config import ExtractionConfig
 from scanlines.errors import ParameterError, ScanlinesError, one_line
-from scanlines.extractor import Extractor, method_info, method_names
-from scanlines.io.transform import points_to_world, to_world
-from scanlines.runner import log_profile
-from scanlines.scan import Scan
-from scanlines.sensor_profile import SensorProfile, scan_noise_line
 from scanlines.viewer.scan_store import ScanStore
+
+if TYPE_CHECKING:  # the extraction modules load numba: imported on first use, so that
+    # the page is served (and the first scan's returns drawn) while they load
+    from scanlines.extractor import Extractor
+    from scanlines.scan import Scan
+    from scanlines.sensor_profile import SensorProfile
 
 __all__ = ["MAX_WORLD_SCANS", "ViewerSession", "methods"]
 
@@ -37,6 +38,8 @@ _CACHED_EXTRACTORS = 16
 def methods() -> list[dict[str, Any]]:
     """Every method with its parameters (default, doc, allowed values, domain) and presets:
     what the viewer builds its controls from."""
+    from scanlines.extractor import method_info, method_names
+
     described = []
     for name in method_names():
         info = method_info(name)
@@ -63,14 +66,21 @@ class ViewerSession:
         (:func:`scanlines.runner.log_profile`).
     config:
         The configuration the page opens with (default: the default method).
+    config_later:
+        The configuration is given later, by :meth:`configure` (``scanlines view`` serves
+        the page while it checks the configuration, which loads numba); what needs it
+        waits for it.
     """
 
     def __init__(
         self, store: ScanStore, sensor_profile: SensorProfile | None = None,
-        config: ExtractionConfig | None = None,
+        config: ExtractionConfig | None = None, *, config_later: bool = False,
     ) -> None:  # fmt: skip
         self.store = store
-        self.config = config or ExtractionConfig()
+        self._config = config
+        self._configured = threading.Event()
+        if not config_later:
+            self.configure(config or ExtractionConfig())
         self._profile = sensor_profile
         self._profile_note = "given" if sensor_profile is not None else None
         self._profile_lock = threading.Lock()
@@ -82,6 +92,30 @@ class ViewerSession:
         self.ready = threading.Event()
         """Set once the first configuration's kernels are loaded and the profile measured
         (:meth:`prepare`); the page says it is preparing until then."""
+
+    @property
+    def config(self) -> ExtractionConfig:
+        """The configuration the page opens with (waits for :meth:`configure`).
+
+        Raises
+        ------
+        ParameterError
+            If the configuration was refused (:meth:`refuse`).
+        """
+        self._configured.wait()
+        if self._config is None:
+            raise ParameterError("the viewer's configuration was refused")
+        return self._config
+
+    def configure(self, config: ExtractionConfig) -> None:
+        """Set the configuration the page opens with."""
+        self._config = config
+        self._configured.set()
+
+    def refuse(self) -> None:
+        """The configuration given later was not valid: what waits for it fails."""
+        self._config = None
+        self._configured.set()
 
     # -- the log --------------------------------------------------------------------------
 
@@ -119,6 +153,8 @@ class ViewerSession:
     def _measure_profile(self) -> tuple[SensorProfile | None, str]:
         # From the log itself, as `scanlines run` measures it (not from the store's
         # float32 copy): the same profile, so the same features as a run.
+        from scanlines.runner import log_profile
+
         try:
             profile = log_profile(self.store.path, self.store.reader_options)
         except ScanlinesError as error:  # too few returns, or a malformed record among them
@@ -139,6 +175,8 @@ class ViewerSession:
             if extractor is not None:
                 self._extractors.move_to_end(key)
                 return extractor
+        from scanlines.extractor import Extractor
+
         profile = self.profile()
         extractor = Extractor(
             checked.method, checked.preset, sensor_profile=profile, **checked.params
@@ -159,7 +197,7 @@ class ViewerSession:
         results = [_result(extractor, scan) for extractor in extractors]
         if len(results) == 2:
             _mark_differences(*results)
-        noise = scan_noise_line(scan)._asdict() if results else None
+        noise = _noise(scan) if results else None
         points = scan.points
         if results:
             self.first_frame.set()
@@ -177,6 +215,8 @@ class ViewerSession:
             raise ParameterError(f"{self.store.path.name} has no poses: no world view")
         if first < 0 or last < first:
             raise ParameterError(f"world view takes 0 <= first <= last, got {first}..{last}")
+        from scanlines.io.transform import points_to_world, to_world
+
         extractor = self.extractor(config)
         self.store.scan(last)  # waits for it; out of range is an error naming the log
         indices = np.unique(np.linspace(first, last, min(last - first + 1, MAX_WORLD_SCANS)))
@@ -207,6 +247,12 @@ def _result(extractor: Extractor, scan: Scan) -> dict[str, Any]:
         "breakpoints": extraction.breakpoints, "corners": extraction.corners,
         "outliers": extraction.outliers, "extract_ms": milliseconds,
     }  # fmt: skip
+
+
+def _noise(scan: Scan) -> dict[str, float]:
+    from scanlines.sensor_profile import scan_noise_line
+
+    return scan_noise_line(scan)._asdict()
 
 
 def _mark_differences(a: dict[str, Any], b: dict[str, Any]) -> None:

@@ -564,6 +564,7 @@ async function watchLog() {
 }
 
 async function start() {
+  const returnsDrawn = drawReturnsFirst();   // needs neither the methods nor the log's state
   const [methods] = await Promise.all([api("/api/methods"), watchLog()]);
   for (const method of methods) state.methods.set(method.name, method);
   const initial = state.log.config;
@@ -592,7 +593,7 @@ async function start() {
     if (event.key === " ") { event.preventDefault(); togglePlay(); }
   });
   window.addEventListener("resize", () => draw());
-  await drawReturnsFirst();
+  await returnsDrawn;
   await refresh();
 }
 

@@ -1,0 +1,18 @@
+"""The names of the built-in methods, in listing order, known without loading any kernel.
+
+The command line offers them as the choices of ``--method`` before numba is imported,
+so that a command starts (and ``scanlines view`` serves its page) without waiting for
+it. Each name is a module of :mod:`scanlines.methods` whose class registers under that
+name; :data:`scanlines.methods.REGISTRY` lists the same names in the same order (tested).
+"""
+
+BUILTIN_METHODS = (
+    "adaptive",
+    "iepf",
+    "pdbs",
+    "split_merge",
+    "line_tracking",
+    "line_regression",
+    "ransac",
+    "hough",
+)
