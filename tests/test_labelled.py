@@ -43,3 +43,6 @@ def test_eval_labels_command_writes_a_table(tmp_path):
     bad = CliRunner().invoke(app, ["eval", "--labels", "mars", "--out", str(tmp_path)])
     assert bad.exit_code == 2
     assert "no hand labels for mars" in bad.output
+    segments = CliRunner().invoke(app, ["eval", "--labels", "urg", "--tol-alpha", "3"])
+    assert segments.exit_code == 2
+    assert "--tol-alpha do not apply: --labels scores events only" in segments.output

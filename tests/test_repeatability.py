@@ -251,6 +251,7 @@ def test_eval_real_command_on_the_shipped_excerpts(tmp_path):
     [
         (["--seed", "0"], "--seed"),
         (["-m", "truth"], "truth"),
+        (["--tol-rho", "0.1", "--tol-beams", "3"], "--tol-beams, --tol-rho do not apply"),
     ],
 )
 def test_eval_real_refuses_options_of_simulated_scenes(args, message, tmp_path):

@@ -69,14 +69,21 @@ def eval_command(
         str | None, typer.Option(help="realistic (the preset's noise, default) or exact.")
     ] = None,
     tol_beams: Annotated[
-        int, typer.Option("--tol-beams", help="Event match tolerance, beams.")
-    ] = 2,
+        int | None,
+        typer.Option("--tol-beams", help="Event match tolerance, beams.", show_default="2"),
+    ] = None,
     tol_rho: Annotated[
-        float, typer.Option("--tol-rho", help="Segment match |drho| tolerance, metres.")
-    ] = 0.05,
+        float | None,
+        typer.Option(
+            "--tol-rho", help="Segment match |drho| tolerance, metres.", show_default="0.05"
+        ),
+    ] = None,
     tol_alpha: Annotated[
-        float, typer.Option("--tol-alpha", help="Segment match |dalpha| tolerance, degrees.")
-    ] = 4.0,
+        float | None,
+        typer.Option(
+            "--tol-alpha", help="Segment match |dalpha| tolerance, degrees.", show_default="4.0"
+        ),
+    ] = None,
     jobs: Annotated[
         int | None,
         typer.Option("--jobs", "-j", help="Processes scoring scenes (default: every core)."),
@@ -159,10 +166,13 @@ def eval_command(
     profile = None if sensor_profile is None else read_profile(sensor_profile)
     if labels:
         _check_real_options(sensor, scenes_per_sensor, seed, scenes, save_scenes, noise, specs)
-        _labelled(labels, specs, tol_beams, profile, out)
+        _refuse_tolerances("--labels", tol_rho=tol_rho, tol_alpha=tol_alpha)
+        beams = _tolerances(tol_beams, None, None, truth_dont_care=False).event_beams
+        _labelled(labels, specs, beams, profile, out)
         return
     if real:
         _check_real_options(sensor, scenes_per_sensor, seed, scenes, save_scenes, noise, specs)
+        _refuse_tolerances("--real", tol_beams=tol_beams, tol_rho=tol_rho, tol_alpha=tol_alpha)
         results = [_repeatability_with_progress(log, specs, scans, profile) for log in real]
         from scanlines.evaluation.repeatability import write_results
 
@@ -246,17 +256,34 @@ def _family_names(count: int, seed: int) -> tuple[str, ...]:
         raise ParameterError(f"--family-count/--family-seed: {error}") from None
 
 
-def _tolerances(beams: int, rho: float, alpha_deg: float, truth_dont_care: bool) -> Tolerances:
+def _refuse_tolerances(mode: str, **given: float | None) -> None:
+    """Tolerances that ``mode`` does not match with are an error, not ignored."""
+    from scanlines.errors import ParameterError
+
+    named = [f"--{name.replace('_', '-')}" for name, value in given.items() if value is not None]
+    if named:
+        why = (
+            "--labels scores events only (--tol-beams)"
+            if mode == "--labels"
+            else "--real measures repeatability, with its own tolerances"
+        )
+        raise ParameterError(f"{', '.join(named)} do not apply: {why}")
+
+
+def _tolerances(
+    beams: int | None, rho: float | None, alpha_deg: float | None, truth_dont_care: bool
+) -> Tolerances:
     import math
 
     from scanlines.errors import ParameterError
     from scanlines.evaluation.scores import Tolerances
 
+    default = Tolerances()
     try:
         return Tolerances(
-            event_beams=beams,
-            rho=rho,
-            alpha=math.radians(alpha_deg),
+            event_beams=default.event_beams if beams is None else beams,
+            rho=default.rho if rho is None else rho,
+            alpha=default.alpha if alpha_deg is None else math.radians(alpha_deg),
             truth_dont_care=truth_dont_care,
         )
     except ValueError as error:
