@@ -325,3 +325,21 @@ def test_constant_noise_model_changes_little_without_noise_growth():
     assert a.breakpoints.tolist() == b.breakpoints.tolist()
     assert len(a.first) == len(b.first)
     assert np.all(np.abs(a.first - b.first) <= 1)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_wall_with_centimetres_of_noise_is_one_segment(seed):
+    # 3 cm + 3 % of the range (up to 20 cm sigma at 6 m): a fixed 10 cm residual bound
+    # cut this wall into pieces at the noise; the bound follows the noise instead.
+    from scanlines.sensor_profile import SensorProfile
+
+    step = math.radians(0.5)
+    angles = math.radians(20) + step * np.arange(281)  # 20 to 160 deg
+    ranges = cast([((-9.0, 2.0), (9.0, 2.0))], angles)
+    sigma = 0.03 + 0.03 * ranges
+    ranges = ranges + sigma * np.random.default_rng(seed).standard_normal(ranges.size)
+    scan = Scan(ranges, math.radians(20), step)
+    profile = SensorProfile(noise_sigma0=0.03, noise_per_metre=0.03)
+    found = Extractor("adaptive", sensor_profile=profile)(scan)
+    longest = int(np.max(found.last - found.first + 1))
+    assert longest >= 0.9 * ranges.size, (found.first, found.last)

@@ -78,7 +78,7 @@ def test_a_rough_wall_gets_a_wider_covariance_than_a_smooth_one():
 
 @pytest.mark.xfail(
     strict=True,
-    reason="target of the accuracy issue not reached: 142 of 167 (0.85) on 2026-12-01; "
+    reason="target of the accuracy issue not reached: 149 of 167 (0.89) on 2026-12-02; "
     "breakpoints on walls near grazing incidence with 1 % range noise",
 )
 def test_long_walls_of_a_urg_like_log_come_out_whole():

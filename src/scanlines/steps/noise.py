@@ -32,6 +32,7 @@ __all__ = [
     "noise_at",
     "noise_line_of",
     "residual_noise",
+    "residual_tolerances",
     "resolve_noise",
     "return_sigmas",
     "scan_noise",
@@ -59,6 +60,11 @@ SLOPE_SIGNIFICANCE = 2.0
 
 MIN_SAMPLES = 5
 """Fewest samples :func:`noise_line_of` measures a noise from."""
+
+RESIDUAL_SIGMAS = 5.0
+"""Noise sigmas a return may lie from its segment's line before the residual bound cuts
+the segment (:func:`residual_tolerances`): Gaussian noise puts one return in about 1.7
+million farther, so on a noisy sensor the bound cuts at shapes, not at noise."""
 
 MIN_RUN_FOR_NOISE = 8
 """Fewest points of a run that :func:`residual_noise` measures (short runs fit their
@@ -245,6 +251,17 @@ def return_sigmas(r, noise):
     out = np.empty(r.shape[0])
     for i in range(r.shape[0]):
         out[i] = noise_at(noise, r[i])
+    return out
+
+
+@kernel
+def residual_tolerances(r, noise, floor):
+    """How far each return (at ranges ``r``) may lie from its segment's line: ``floor``
+    (metres), or :data:`RESIDUAL_SIGMAS` times the noise sigma at its range where that
+    is more."""
+    out = np.empty(r.shape[0])
+    for i in range(r.shape[0]):
+        out[i] = max(floor, RESIDUAL_SIGMAS * noise_at(noise, r[i]))
     return out
 
 

@@ -9,10 +9,10 @@ and at the corners a sweep chose.
                        interior point farthest from the chord, runs are split depth
                        first, and the split point joins the part whose line (fitted
                        without it) it is nearer, so no point is lost.
-``split_by_residual``  a hard bound: while a point of a run lies farther than
-                       ``max_residual`` from its line, the run is cut at its worst point
-                       (as iterative end-point fit does) and that point is left out of
-                       both parts.
+``split_by_residual``  a hard bound: while a point of a run lies farther than its
+                       tolerance from its line, the run is cut at its worst point (as
+                       iterative end-point fit does) and that point is left out of both
+                       parts.
 ``cut_at``, ``refine_cuts``  the runs of clusters cut at chosen corners, and each cut
                        moved by one position where that fits better.
 
@@ -168,17 +168,19 @@ def split_at_farthest(x, y, moments, a, b, group, threshold, reference):
 
 
 @kernel
-def split_by_residual(x, y, fit, moments, a, b, cluster, max_residual, min_points):
-    """Cut runs at their worst point until every point is within ``max_residual``.
+def split_by_residual(x, y, fit, moments, a, b, cluster, tolerance, min_points):
+    """Cut runs at their worst point until every point is within its ``tolerance``.
 
-    Each run is split recursively, left part first; parts shorter than
-    ``min_points`` are dropped. When the worst point lies in a run's last few points
-    (its cut would only trim an end shorter than ``min_points``) and the run also bends
-    away from the chord of its ends by more than ``max_residual`` (an arc, whose fitted
-    line is farthest from its ends), the run is cut where it is farthest from that chord
-    instead: arcs become chains of segments in O(n log n), rather than losing a point at
-    a time from their ends in O(n^2). A stray end point is still trimmed. Terminates
-    because every cut removes a point or halves a run.
+    ``tolerance`` is per point (metres); the worst point of a run is the one farthest
+    from the run's line relative to its tolerance. Each run is split recursively, left
+    part first; parts shorter than ``min_points`` are dropped. When the worst point lies
+    in a run's last few points (its cut would only trim an end shorter than
+    ``min_points``) and the run also bends away from the chord of its ends by more than
+    the tolerance (an arc, whose fitted line is farthest from its ends), the run is cut
+    where it is farthest from that chord instead: arcs become chains of segments in
+    O(n log n), rather than losing a point at a time from their ends in O(n^2). A stray
+    end point is still trimmed. Terminates because every cut removes a point or halves
+    a run.
     """
     out_a = np.empty(x.shape[0] + 1, dtype=np.int64)
     out_b = np.empty(x.shape[0] + 1, dtype=np.int64)
@@ -197,15 +199,15 @@ def split_by_residual(x, y, fit, moments, a, b, cluster, max_residual, min_point
                 continue
             rho, alpha, _ = fit_run(fit, moments, lo, hi)
             worst, worst_at = _farthest_from_line(
-                x, y, lo, hi, math.cos(alpha), math.sin(alpha), rho
+                x, y, tolerance, lo, hi, math.cos(alpha), math.sin(alpha), rho
             )
-            if worst <= max_residual:
+            if worst <= 1.0:
                 out_a[count], out_b[count], out_cluster[count] = lo, hi, cluster[k]
                 count += 1
                 continue
             if worst_at - lo < shortest or hi - worst_at < shortest:
-                bend, bend_at = _farthest_from_chord(x, y, lo, hi)
-                if bend > max_residual and bend_at - lo >= shortest and hi - bend_at >= shortest:
+                bend, bend_at = _farthest_from_chord(x, y, tolerance, lo, hi)
+                if bend > 1.0 and bend_at - lo >= shortest and hi - bend_at >= shortest:
                     stack_a[top], stack_b[top] = bend_at + 1, hi
                     stack_a[top + 1], stack_b[top + 1] = lo, bend_at
                     top += 2
@@ -217,27 +219,29 @@ def split_by_residual(x, y, fit, moments, a, b, cluster, max_residual, min_point
 
 
 @kernel
-def _farthest_from_line(x, y, lo, hi, c, s, rho):
+def _farthest_from_line(x, y, tolerance, lo, hi, c, s, rho):
     """The largest distance of points ``lo..hi`` from the line ``(rho, alpha)`` (given as
-    ``c = cos alpha, s = sin alpha``), and where; NaN distances never count."""
+    ``c = cos alpha, s = sin alpha``) in units of each point's ``tolerance``, and where;
+    NaN distances never count."""
     worst, worst_at = -1.0, lo
     for p in range(lo, hi + 1):
-        distance = abs(x[p] * c + y[p] * s - rho)
+        distance = abs(x[p] * c + y[p] * s - rho) / tolerance[p]
         if distance > worst:
             worst, worst_at = distance, p
     return worst, worst_at
 
 
 @kernel
-def _farthest_from_chord(x, y, lo, hi):
-    """The largest distance of points ``lo..hi`` from the chord joining the two, and where."""
+def _farthest_from_chord(x, y, tolerance, lo, hi):
+    """The largest distance of points ``lo..hi`` from the chord joining the two, in units
+    of each point's ``tolerance``, and where."""
     dx, dy = x[hi] - x[lo], y[hi] - y[lo]
     length = math.sqrt(dx * dx + dy * dy)
     if length == 0.0:
         return 0.0, lo
     worst, worst_at = -1.0, lo
     for p in range(lo, hi + 1):
-        distance = abs((x[p] - x[lo]) * dy - (y[p] - y[lo]) * dx) / length
+        distance = abs((x[p] - x[lo]) * dy - (y[p] - y[lo]) * dx) / length / tolerance[p]
         if distance > worst:
             worst, worst_at = distance, p
     return worst, worst_at
