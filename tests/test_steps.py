@@ -352,3 +352,23 @@ def test_scan_noise_follows_noise_proportional_to_range():
     line = NoiseLine(*np.median(_noise_on_scenes("urg04lx"), axis=0))
     assert line.per_metre > 0.004
     assert noise_at(line, 3.0) == pytest.approx(0.03, rel=0.25)
+
+
+@pytest.mark.parametrize(("turn_sigma", "corners"), [(0.005, 1), (0.05, 0)])
+def test_a_junction_turning_within_the_noise_of_its_lines_is_no_corner(turn_sigma, corners):
+    from scanlines.steps.events import CORNER_SIGMAS, junction_events
+
+    # two 1 m pieces of wall meeting at a 4 deg turn, 3 m ahead
+    turn = math.radians(4.0)
+    along = np.linspace(-1.0, 1.0, 41)
+    bent = np.where(along < 0.0, along * math.cos(turn), along)
+    side = np.where(along < 0.0, -along * math.sin(turn), 0.0)
+    x, y = np.full(41, 3.0) + side, bent
+    returns = Returns(np.arange(41), np.hypot(x, y), x, y)
+    a, b, owner = np.array([0, 21]), np.array([20, 40]), np.zeros(2, dtype=np.int64)
+    args = (returns, TLS, prefix_moments(x, y), a, b, owner, False, False, 0.01)
+    found, jumps = junction_events(*args, np.full(2, turn_sigma))
+    assert (turn >= CORNER_SIGMAS * math.sqrt(2) * turn_sigma) == bool(corners)
+    assert len(found) == corners
+    assert len(jumps) == 0
+    assert len(junction_events(*args, np.zeros(0))[0]) == 1  # without the test: a corner

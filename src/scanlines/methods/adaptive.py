@@ -75,7 +75,9 @@ brackets, and ``docs/decisions/`` (300 simulated scenes per sensor preset).
     The corner point goes to the side whose fit it suits (among the three beams
     around the peak), collinear neighbours that a global threshold cut apart are
     merged by the same criterion, two segments whose lines do not meet near
-    their facing ends are a depth step (a breakpoint), not a corner, and no point
+    their facing ends are a depth step (a breakpoint), not a corner, two whose lines
+    turn by less than three standard deviations of the turn (from each segment's
+    direction covariance) meet at no corner, since the noise hides the turn, and no point
     of a segment is farther than ``max_residual`` from its line, or than five noise
     sigmas at its range where that is more (a fixed 10 cm cut the walls of sensors
     with centimetres of noise at the noise: on the family's noisiest sensor, 137
@@ -166,7 +168,17 @@ from scanlines.steps.corners import (
 )
 from scanlines.steps.denoise import DENOISE_CODES, denoise
 from scanlines.steps.events import junction_events, sorted_distinct
-from scanlines.steps.fit import FIT_CODES, FITS, PAPER, RunCost, inverse_square_sums, prefix_moments
+from scanlines.steps.fit import (
+    FIT_CODES,
+    FITS,
+    PAPER,
+    TLS,
+    RunCost,
+    fit_many,
+    inverse_square_sums,
+    prefix_moments,
+    run_covariances,
+)
 from scanlines.steps.merge import merge_by_chi_square, merge_by_criterion
 from scanlines.steps.noise import (
     NoiseLine,
@@ -426,8 +438,9 @@ def adaptive_scan(ranges, valid, cos, sin, step, full_circle, angle_min, noise, 
     unit = scale * scale if s.criterion == BIC else typical * typical
     a, b, owner = segments(returns, cost, start, end, corners, unit, s, noise)
     check_sigma = scale * typical if s.corner_check else -1.0
+    turn_sigmas = direction_sigmas(returns, moments, a, b, noise) if s.corner_check else np.zeros(0)
     corner_beams, jumps = junction_events(
-        returns, s.fit, moments, a, b, owner, s.shared_corner, ring, check_sigma
+        returns, s.fit, moments, a, b, owner, s.shared_corner, ring, check_sigma, turn_sigmas
     )
     breakpoints = sorted_distinct(np.concatenate((breakpoints, jumps)))
     sigmas = covariance_sigmas(s.range_sigma, noise, returns, gap)
@@ -435,6 +448,15 @@ def adaptive_scan(ranges, valid, cos, sin, step, full_circle, angle_min, noise, 
     return assemble(
         returns, s.fit, moments, a, b, angle_min, sigmas, events, (n_beams, full_circle)
     )
+
+
+@kernel
+def direction_sigmas(returns, moments, a, b, noise):
+    """Standard deviation of each segment's direction, from the noise and its residuals."""
+    rho, alpha, _ = fit_many(np.int64(TLS), moments, a, b)
+    sigma = return_sigmas(returns.r, noise)
+    covariance = run_covariances(returns, rho, alpha, a, b, sigma, True)
+    return np.sqrt(covariance[:, 1, 1])
 
 
 @kernel

@@ -34,7 +34,8 @@ that, while real corners of indoor walls turn by far more.
 
 ``junction_events`` is the adaptive method's own rule between the segments of one
 cluster: the corner beam nearer the lines' intersection, or a breakpoint where the
-lines do not meet near their facing ends.
+lines do not meet near their facing ends, or no event where their turn is within the
+noise of their directions.
 """
 
 from __future__ import annotations
@@ -180,8 +181,13 @@ def segment_events(returns, n_beams, moments, a, b, group, clustered, wrap, boun
     return sorted_distinct(corners[:n_corners]), sorted_distinct(jumps[:n_jumps])
 
 
+CORNER_SIGMAS = 3.0
+"""Standard deviations of the turn by which two segments' lines must turn to meet at a
+corner (:func:`junction_events`)."""
+
+
 @kernel
-def junction_events(returns, fit, moments, a, b, owner, shared, ring, sigma):
+def junction_events(returns, fit, moments, a, b, owner, shared, ring, sigma, turn_sigma):
     """Beams of the corners where two kept segments of one cluster meet, and of jumps.
 
     A shared corner is its shared point; otherwise the point nearer the two
@@ -190,6 +196,10 @@ def junction_events(returns, fit, moments, a, b, owner, shared, ring, sigma):
     :data:`CORNER_REACH` times the local spacing plus three ``sigma``) are two
     surfaces at different depths joined by a mixed pixel or a small step: the
     junction is reported as a breakpoint (the last beam of the first segment).
+    Given ``turn_sigma`` (the standard deviation of each segment's direction; empty:
+    no test), a junction whose lines turn by less than :data:`CORNER_SIGMAS` times the
+    standard deviation of the turn is not a corner: the noise hides it (the rule by
+    which the simulator's truth makes such a turn don't-care).
     """
     index, _, x, y = returns
     m = a.shape[0]
@@ -220,6 +230,11 @@ def junction_events(returns, fit, moments, a, b, owner, shared, ring, sigma):
             if not max(before, after) <= reach:  # NaN (parallel lines) is not a corner
                 jumps[n_jumps] = index[end]
                 n_jumps += 1
+                continue
+        if turn_sigma.shape[0] > 0:
+            bound = CORNER_SIGMAS * math.sqrt(turn_sigma[k] ** 2 + turn_sigma[right] ** 2)
+            _, turn = hesse_difference(rho_i, alpha_i, rho_j, alpha_j)
+            if not abs(turn) >= bound:  # the noise hides it (or NaN)
                 continue
         corners[n_corners] = index[pick]
         n_corners += 1
