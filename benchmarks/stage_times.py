@@ -63,6 +63,7 @@ def main() -> None:
     )
     corners, scale = ad.choose_corners(cost, start, end, scores, True, s, grid)
     a, b, owner = ad.segments(returns, cost, start, end, corners, scale * scale, s, noise)
+    turn_sigmas = ad.direction_sigmas(returns, moments, a, b, noise)
     sigmas = return_sigmas(returns.r, noise)
     events, scan_shape = (breakpoints, corners, breakpoints), (n_beams, False)
     cut = cut_at(start, end, corners, False)
@@ -108,7 +109,7 @@ def main() -> None:
         ),
         "  of which: refine cuts": lambda: refine_cuts(cost, *cut),
         "corner beams": lambda: junction_events(
-            returns, settings.fit, moments, a, b, owner, False, False, scale * sigma
+            returns, settings.fit, moments, a, b, owner, False, False, scale * sigma, turn_sigmas
         ),
         "assembly (fits, covariances)": lambda: assemble(
             returns, settings.fit, moments, a, b, 0.0, sigmas, events, scan_shape
