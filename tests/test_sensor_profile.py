@@ -230,3 +230,67 @@ def test_extractions_and_extractors_with_a_profile_pickle():
         assert np.array_equal(b.end_kinds, a.end_kinds)
         assert np.array_equal(again(scan).lines, a.lines)
         assert dict(b.params) == dict(a.params)
+
+
+def _robot_logs(tmp_path, mounting):
+    """The Intel excerpt's first scans driven along a curve, logged twice: as FLASER
+    records with the laser's and the robot's pose, and as ODOM + RAWLASER1 records (the
+    robot's pose only)."""
+    from scanlines.poses import compose
+
+    flaser, rawlaser = [], []
+    for k, scan in enumerate(_scans("intel")[:12]):
+        robot = (0.4 * k, 0.1 * k * k, 0.05 * k - 0.3)
+        laser = compose(robot, mounting)
+        ranges = " ".join(f"{r:.3f}" for r in scan.ranges)
+        n, t = len(scan.ranges), 10.0 + k
+        poses = " ".join(f"{v:.9f}" for v in (*laser, *robot))
+        flaser.append(f"FLASER {n} {ranges} {poses} {t} host {t}")
+        odom = " ".join(f"{v:.9f}" for v in robot)
+        rawlaser.append(f"ODOM {odom} 0 0 0 {t} host {t}")
+        step = math.pi / n
+        rawlaser.append(
+            f"RAWLASER1 0 {-math.pi / 2} {math.pi} {step} 80.0 0.01 0 {n} {ranges} 0 {t} host {t}"
+        )
+    (tmp_path / "flaser.log").write_text("\n".join(flaser) + "\n")
+    (tmp_path / "rawlaser.log").write_text("\n".join(rawlaser) + "\n")
+    return tmp_path / "flaser.log", tmp_path / "rawlaser.log"
+
+
+def test_calibrate_measures_the_mounting_and_world_frame_runs_use_it(tmp_path):
+    mounting = (0.25, -0.08, math.radians(4.0))
+    flaser, rawlaser = _robot_logs(tmp_path, mounting)
+    runner = CliRunner()
+    profile_path = tmp_path / "robot.json"
+    result = runner.invoke(app, ["calibrate", str(flaser), "--out", str(profile_path)])
+    assert result.exit_code == 0, result.output
+    profile = read_profile(profile_path)
+    assert profile.mounting == pytest.approx(mounting, abs=1e-6)
+    assert "x 0.250 m, y -0.080 m, theta 4.00 deg" in result.output
+
+    def world_lines(log):
+        out = tmp_path / f"{log.stem}.jsonl"
+        args = ["run", str(log), "--out", str(out), "--frame", "world", "--overwrite"]
+        result = runner.invoke(app, [*args, "--sensor-profile", str(profile_path)])
+        assert result.exit_code == 0, result.output
+        moved = "RAWLASER1 records carry the robot's pose; moved by the laser's mounting"
+        assert (moved in result.output) == (log == rawlaser and profile.mounting is not None)
+        rows = map(json.loads, out.open())
+        return [[*s["start"], *s["end"], s["rho"], s["alpha"]] for r in rows for s in r["segments"]]
+
+    from_flaser = world_lines(flaser)
+    assert len(from_flaser) > 40
+    np.testing.assert_allclose(world_lines(rawlaser), from_flaser, atol=1e-6)
+    profile = SensorProfile(**{**profile.__dict__, "mounting": None})
+    profile.save(profile_path)
+    assert not np.allclose(world_lines(rawlaser), from_flaser, atol=1e-3)
+
+
+def test_a_mounting_is_only_taken_when_the_recorded_ones_agree():
+    from scanlines.sensor_profile import estimate_mounting
+
+    assert estimate_mounting([]) is None
+    steady = [(0.1, 0.0, math.pi - 0.001), (0.1, 0.0, -math.pi + 0.001)] * 10
+    assert estimate_mounting(steady) == pytest.approx((0.1, 0.0, math.pi), abs=2e-3)
+    drifting = [(0.01 * k, 0.0, 0.0) for k in range(20)]
+    assert estimate_mounting(drifting) is None

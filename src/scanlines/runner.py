@@ -11,7 +11,7 @@ import time
 from collections import deque
 from collections.abc import Callable, Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -21,7 +21,12 @@ from scanlines.errors import ParameterError
 from scanlines.extraction import ExtractionTable
 from scanlines.extractor import Extractor
 from scanlines.scan import Scan
-from scanlines.sensor_profile import DEFAULT_SCANS, SensorProfile, estimate_profile
+from scanlines.sensor_profile import (
+    DEFAULT_SCANS,
+    SensorProfile,
+    estimate_mounting,
+    estimate_profile,
+)
 
 __all__ = [
     "LogDescription",
@@ -31,6 +36,7 @@ __all__ = [
     "describe_log",
     "extract_chunk",
     "log_profile",
+    "measure_profile",
     "parse_slice",
     "run_log",
     "run_log_to_file",
@@ -81,8 +87,24 @@ def log_profile(
     from scanlines.io import open_log
 
     with open_log(path, **reader_options) as reader:
-        selected = (scan for _, scan in select(reader.enumerate(), scans))
-        return estimate_profile(selected, max_scans=DEFAULT_SCANS, source=str(path))
+        return measure_profile(reader, scans, max_scans=DEFAULT_SCANS, source=str(path))
+
+
+def measure_profile(
+    reader: Any, scans: slice = slice(None), *, max_scans: int = DEFAULT_SCANS, source: str = ""
+) -> SensorProfile:
+    """The sensor profile of the first ``max_scans`` selected scans of ``reader``, with
+    the laser's mounting on the robot where the log records it."""
+    recorded: list[tuple[float, float, float]] = []
+
+    def selected() -> Iterator[Scan]:
+        for _, scan in select(reader.enumerate(), scans):
+            if reader.recorded_mounting is not None:
+                recorded.append(reader.recorded_mounting)
+            yield scan
+
+    profile = estimate_profile(selected(), max_scans=max_scans, source=source)
+    return replace(profile, mounting=estimate_mounting(recorded[:max_scans]))
 
 
 @dataclass

@@ -158,6 +158,7 @@ def test_reader_options_lists_keywords() -> None:
         "max_range",
         "range_min",
         "pose",
+        "mounting",
         "timestamp",
         "on_error",
         "max_beams",

@@ -272,6 +272,8 @@ def run_command(
     jobs = jobs_option(jobs)
     with compiled_for(method) as compiled:
         profile = _profile_for_run(log, options, selection, sensor_profile)
+        if frame == "world":
+            options = _with_mounting(log, options, profile)
         extractor = Extractor(method, preset, sensor_profile=profile, **params)
         extractor.warm_up()  # before the progress bar: the displays do not overlap
     with open_log(log, **options) as reader:
@@ -302,8 +304,8 @@ def calibrate_command(
 
     from scanlines.errors import ParameterError
     from scanlines.io import open_log
-    from scanlines.runner import parse_slice, select
-    from scanlines.sensor_profile import describe, estimate_profile
+    from scanlines.runner import measure_profile, parse_slice
+    from scanlines.sensor_profile import describe
 
     if max_scans < 1:
         raise ParameterError(f"--max-scans must be at least 1, got {max_scans}")
@@ -312,8 +314,7 @@ def calibrate_command(
     writable(plot, overwrite)
     options = reader_options(fov, angle_convention, topic, angle_min, angle_increment)
     with open_log(log, **options) as reader:
-        selected = (scan for _, scan in select(reader.enumerate(), parse_slice(scans)))
-        profile = estimate_profile(selected, max_scans=max_scans, source=log.name)
+        profile = measure_profile(reader, parse_slice(scans), max_scans=max_scans, source=log.name)
     profile.save(out)
     table = Table(title=f"sensor profile of {log.name}", show_header=False)
     for what, value in describe(profile):
@@ -356,6 +357,29 @@ def _profile_for_run(log, options, selection, given):
         err=True,
     )
     return profile
+
+
+def _with_mounting(log, options, profile):
+    """Reader options that give scans whose log records only the robot's pose the laser's
+    pose, from the profile's mounting (where the reader takes one)."""
+    from scanlines.io import detect_format, open_log
+    from scanlines.io import reader_options as options_of
+
+    if profile is None or profile.mounting is None:
+        return options
+    if "mounting" not in options_of(detect_format(log)):
+        return options
+    options = {**options, "mounting": profile.mounting}
+    with open_log(log, **options) as reader:
+        if reader.moves_robot_poses:
+            x, y, theta = profile.mounting
+            typer.echo(
+                f"world frame: {reader.message} records carry the robot's pose; moved by the "
+                f"laser's mounting (x {x:.3f} m, y {y:.3f} m, theta {math.degrees(theta):.2f} "
+                "deg) of the sensor profile",
+                err=True,
+            )
+    return options
 
 
 def _run_with_progress(reader, extractor, selection, out, frame, log, jobs, overwrite):

@@ -50,6 +50,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from scanlines.poses import IDENTITY, Pose, compose, invert, relative_pose
 from scanlines.scan import Scan
 
 __all__ = [
@@ -64,35 +65,6 @@ __all__ = [
     "relative_pose",
     "transform_points",
 ]
-
-Pose = tuple[float, float, float]
-"""``(x, y, theta)``: maps a point ``p`` of its frame to ``R(theta) p + (x, y)``."""
-
-IDENTITY: Pose = (0.0, 0.0, 0.0)
-
-
-def _wrap(angle: float) -> float:
-    return float(math.remainder(angle, 2.0 * math.pi))
-
-
-def compose(a: Sequence[float], b: Sequence[float]) -> Pose:
-    """``a o b``: the pose that maps a point by ``b``, then by ``a``."""
-    ax, ay, at = (float(v) for v in a)
-    bx, by, bt = (float(v) for v in b)
-    c, s = math.cos(at), math.sin(at)
-    return (ax + c * bx - s * by, ay + s * bx + c * by, _wrap(at + bt))
-
-
-def invert(a: Sequence[float]) -> Pose:
-    """The inverse of pose ``a``."""
-    x, y, t = (float(v) for v in a)
-    c, s = math.cos(t), math.sin(t)
-    return (-(c * x + s * y), -(-s * x + c * y), _wrap(-t))
-
-
-def relative_pose(pose_i: Sequence[float], pose_j: Sequence[float]) -> Pose:
-    """Frame ``j`` in frame ``i``: ``inverse(pose_i) o pose_j`` (both in one world frame)."""
-    return compose(invert(pose_i), pose_j)
 
 
 def transform_points(points: np.ndarray, pose: Sequence[float]) -> np.ndarray:

@@ -98,6 +98,10 @@ class LogReader(ABC):
         The dropped scan records by reason (the field at fault, or the damage).
     scan_count : int or None
         Scans yielded by the last complete iteration, ``None`` before one.
+    recorded_mounting : tuple of float or None
+        The laser's ``(x, y, theta)`` on the robot as recorded with the scan just
+        yielded, where the record holds both the laser's and the robot's pose (CARMEN
+        ``FLASER``, ``ROBOTLASER``); ``None`` elsewhere.
     """
 
     format_name: ClassVar[str] = "log"
@@ -125,6 +129,7 @@ class LogReader(ABC):
         self.bad_other = 0
         self.skip_reasons: Counter[str] = Counter()
         self.scan_count: int | None = None
+        self.recorded_mounting: tuple[float, float, float] | None = None
 
     # -- iteration -------------------------------------------------------------------------
 

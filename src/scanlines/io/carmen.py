@@ -32,7 +32,9 @@ Laser messages
 
     Pose: the first triple, which CARMEN documents as the laser pose (Freiburg
     079's raw log: the odometry pose shifted by the 0.04 m laser offset); with
-    ``pose="robot"`` the second triple (the robot's odometry).
+    ``pose="robot"`` the second triple (the robot's odometry). The laser's pose on
+    the robot (the second triple's inverse composed with the first) is
+    :attr:`~scanlines.io.base.LogReader.recorded_mounting`.
 
 ``ROBOTLASER1`` / ``ROBOTLASER2``
     ``laser_type start_angle fov angular_resolution maximum_range accuracy
@@ -48,7 +50,9 @@ Laser messages
 ``RAWLASER1`` ... ``RAWLASER4``
     The ``ROBOTLASER`` layout up to the remissions, then the timestamps. No
     pose in the record: the pose is the robot pose of the latest ``ODOM`` line
-    before it, or ``None`` when there was none.
+    before it, or ``None`` when there was none. With the ``mounting`` option (the
+    laser's ``(x, y, theta)`` on the robot, e.g. from ``scanlines calibrate`` on a log
+    of the same robot that records it) it is the laser's: ``ODOM`` pose o mounting.
 
 Which laser message is read: the ``message`` option, else the first of
 ``ROBOTLASER1, FLASER, RAWLASER1, ROBOTLASER2, RLASER, RAWLASER2, RAWLASER3,
@@ -78,7 +82,7 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any, Literal
 
@@ -93,6 +97,7 @@ from scanlines.io.base import (
 )
 from scanlines.io.fields import FieldLayout
 from scanlines.io.text import iter_lines, parse_floats, parse_int
+from scanlines.poses import compose, relative_pose
 from scanlines.scan import Scan
 
 __all__ = [
@@ -225,6 +230,10 @@ class CarmenReader(LogReader):
         ``Scan.range_min`` in metres.
     pose:
         ``"laser"`` (default) or ``"robot"`` pose triple of the record.
+    mounting:
+        The laser's ``(x, y, theta)`` on the robot (metres, radians): ``RAWLASER``
+        records, whose only pose is the robot's (from ``ODOM``), get the laser's pose
+        from it. ``None``: they keep the robot's pose.
     timestamp:
         ``"logger"`` (default) or ``"ipc"`` timestamp field.
     on_error:
@@ -250,6 +259,7 @@ class CarmenReader(LogReader):
         max_range: float | None = None,
         range_min: float = 0.0,
         pose: PoseSource = "laser",
+        mounting: Sequence[float] | None = None,
         timestamp: TimestampSource = "logger",
         on_error: ErrorPolicy = "fail",
         max_beams: int = DEFAULT_MAX_BEAMS,
@@ -272,6 +282,7 @@ class CarmenReader(LogReader):
         self.max_range = max_range
         self.range_min = float(range_min)
         self.pose_source: PoseSource = pose
+        self.mounting = None if mounting is None else _as_mounting(mounting)
         self.timestamp_source: TimestampSource = timestamp
         self.params: dict[str, str] = {}
         self._numeric_params: dict[str, float] = {}
@@ -286,6 +297,12 @@ class CarmenReader(LogReader):
             self._message = self._detect_message()
         return self._message
 
+    @property
+    def moves_robot_poses(self) -> bool:
+        """Whether scans get the laser's pose from the robot's and ``mounting``
+        (``RAWLASER`` records with the ``mounting`` option)."""
+        return self.mounting is not None and self.message.startswith("RAWLASER")
+
     def options(self) -> dict[str, Any]:
         """Resolved options (the message type is detected if needed)."""
         return {
@@ -296,6 +313,7 @@ class CarmenReader(LogReader):
             "max_range": self.max_range,
             "range_min": self.range_min,
             "pose": self.pose_source,
+            "mounting": None if self.mounting is None else list(self.mounting),
             "timestamp": self.timestamp_source,
         }
 
@@ -326,6 +344,7 @@ class CarmenReader(LogReader):
         self.params = {}
         self._numeric_params = {}
         self._odom_pose = None
+        self.recorded_mounting = None
         index = 0
         for line_number, line in iter_lines(self.path, self.max_record_bytes):
             name = _record_name(line)
@@ -402,6 +421,7 @@ class CarmenReader(LogReader):
             record=line_number,
         )
         laser_pose, robot_pose = numbers[n : n + 3], numbers[n + 3 : n + 6]
+        self.recorded_mounting = _mounting_between(laser_pose, robot_pose)
         fov = math.radians(self._flaser_fov(side))
         steps = n if self.angle_convention == "step" else n - 1
         return self._make_scan(
@@ -459,8 +479,14 @@ class CarmenReader(LogReader):
         if robot:
             pose_at = after if self.pose_source == "laser" else after + 3
             pose: Any = numbers[pose_at : pose_at + 3]
+            self.recorded_mounting = _mounting_between(
+                numbers[after : after + 3], numbers[after + 3 : after + 6]
+            )
         else:
             pose = self._odom_pose
+            self.recorded_mounting = None
+            if pose is not None and self.mounting is not None:
+                pose = compose(pose, self.mounting)
         if not math.isfinite(resolution) or resolution == 0.0:
             raise LogFormatError(
                 f"must be a non-zero number of radians, got {resolution!r}",
@@ -592,3 +618,20 @@ def _check_choice(option: str, value: Any, choices: tuple[Any, ...]) -> None:
     if value not in choices:
         shown = ", ".join(repr(c) for c in choices)
         raise ParameterError(f"{option} must be one of {shown}; got {value!r}")
+
+
+def _as_mounting(mounting: Sequence[float]) -> tuple[float, float, float]:
+    try:
+        values = tuple(float(v) for v in mounting)
+    except (TypeError, ValueError):
+        raise ParameterError(f"mounting must be (x, y, theta), got {mounting!r}") from None
+    if len(values) != 3 or not all(map(math.isfinite, values)):
+        raise ParameterError(f"mounting must be three finite numbers (x, y, theta): {mounting!r}")
+    return values  # type: ignore[return-value]
+
+
+def _mounting_between(laser: np.ndarray, robot: np.ndarray) -> tuple[float, float, float] | None:
+    """The laser's pose in the robot's frame, or ``None`` when a pose is not finite."""
+    if not (np.isfinite(laser).all() and np.isfinite(robot).all()):
+        return None
+    return relative_pose(robot, laser)
