@@ -139,19 +139,21 @@ def local_residuals(returns, gap):
 def parabola_at_centre(index, r, a, b, i):
     """Least-squares parabola of ``r`` over the beam offsets ``index - index[i]`` of
     positions ``a..b``: ``(r[i] - fit at i, leverage of i, slope at i per beam)``."""
-    s = np.zeros(5)
+    s0 = s1 = s2 = s3 = s4 = 0.0  # sums of t^k (scalars: no allocation per return)
     t0 = t1 = t2 = 0.0
     for p in range(a, b + 1):
         t = float(index[p] - index[i])
-        power = 1.0
-        for k in range(5):
-            s[k] += power
-            power *= t
+        t_2 = t * t
+        s0 += 1.0
+        s1 += t
+        s2 += t_2
+        s3 += t_2 * t
+        s4 += t_2 * t_2
         t0 += r[p]
         t1 += r[p] * t
         t2 += r[p] * t * t
     # Normal equations M (c0, c1, c2) = (t0, t1, t2), M symmetric with entries s[j + k].
-    m00, m01, m02, m11, m12, m22 = s[0], s[1], s[2], s[2], s[3], s[4]
+    m00, m01, m02, m11, m12, m22 = s0, s1, s2, s2, s3, s4
     c00 = m11 * m22 - m12 * m12
     c01 = m02 * m12 - m01 * m22
     c02 = m01 * m12 - m02 * m11
