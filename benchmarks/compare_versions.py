@@ -11,6 +11,12 @@ their passes over the same scans alternate, so that both see the same state of a
 machine. Printed per method and dataset: the median time of a pass per scan for each
 version and the median of the paired ratios (this / other; below 1 is faster).
 
+Only for versions before the settings records: when both versions pass their settings to
+the kernels as numpy record arrays (every version since the re-housing, 0589ad8), numba
+in this process types the second version's record on every call (``from_struct_dtype``
+in a profile), and its calls took 3-4x their time in a process of their own (2026-12-02,
+against a7268b7). Compare two such versions in separate processes, interleaved.
+
 Methods are timed in the order given, and on this 2-core machine the one timed first in a
 process measures the fairest (later ones showed ratios up to 1.1 either way from the order
 alone): time one method per run for a verdict. Only the public API of both versions is

@@ -24,6 +24,12 @@ What is measured
 4. Every method on simulated ground truth for every sensor preset
    (:func:`scanlines.evaluation.evaluate.evaluate`).
 
+Sensor profiles
+---------------
+Every method extracts the real excerpts (and the labelled Intel frames) with one sensor
+profile measured from the whole excerpt, as ``scanlines run`` and ``scanlines eval
+--labels`` do; simulated scans measure their own noise, as ``scanlines eval`` does.
+
 Matching
 --------
 Found events are matched one-to-one to true or labelled ones within
@@ -62,6 +68,7 @@ from scanlines.evaluation.scenes import make_scene
 from scanlines.evaluation.scores import EventScore, SimilarityScore, Tolerances
 from scanlines.evaluation.specs import MethodSpec, parse_specs
 from scanlines.evaluation.timing import REFERENCE, time_calls
+from scanlines.sensor_profile import SensorProfile, estimate_profile
 from scanlines.sim import SENSORS
 
 __all__ = [
@@ -335,11 +342,13 @@ def run_dataset(
     *,
     repeats: int,
     tol: Tolerances,
+    sensor_profile: SensorProfile | None = None,
 ) -> DatasetRun:
-    """Run, time and score every spec on every case (see the module docstring, Timing)."""
+    """Run, time and score every spec on every case (see the module docstring, Timing),
+    each spec with ``sensor_profile`` (``None``: each scan measures its own noise)."""
     if not cases:
         raise ParameterError(f"dataset {name} has no scans")
-    extractors = {s.label: s.extractor() for s in specs}
+    extractors = {s.label: s.extractor(sensor_profile) for s in specs}
     timed = time_calls(extractors, [c.scan for c in cases], repeats)
     extractions = {label: t.results for label, t in timed.items()}
     samples = {label: t.samples_ns for label, t in timed.items()}
@@ -501,14 +510,22 @@ def run(
     intel = _real_scans("intel")
     frames, rule, how_chosen = _labelled_frames(labels, config.frames, len(intel))
 
-    def dataset(name: str, title: str, cases: Sequence[Case]) -> DatasetRun:
-        return run_dataset(name, title, cases, parsed, repeats=config.repeats, tol=tol)
+    def dataset(
+        name: str, title: str, cases: Sequence[Case], profile: SensorProfile | None = None
+    ) -> DatasetRun:
+        return run_dataset(
+            name, title, cases, parsed, repeats=config.repeats, tol=tol, sensor_profile=profile
+        )
+
+    def profile_of(name: str, scans: Sequence[Scan]) -> SensorProfile:
+        return estimate_profile(scans, source=f"shipped {name} excerpt")
 
     stage(f"Table 1: {len(frames)} labelled Intel frames")
     labelled = dataset(
         "intel-labelled",
         "hand-labelled frames of the shipped Intel excerpt (SICK LMS, 180 beams at 1 deg)",
         [Case(f"intel #{f.scan}", intel[f.scan], labels=f) for f in frames],
+        profile_of("intel", intel),
     )
     stage(f"Table 1: {config.table_scenes} simulated lms_1deg scenes")
     sim_table1 = dataset(
@@ -525,10 +542,11 @@ def run(
     )
     real = []
     for name in REAL_EXCERPTS:
-        scans = (intel if name == "intel" else _real_scans(name))[: config.real_scans]
+        excerpt = intel if name == "intel" else _real_scans(name)
+        scans = excerpt[: config.real_scans]
         stage(f"Table 3 and headline: {len(scans)} {name} scans x {config.repeats} repeats")
         cases = [Case(f"{name} #{i}", s) for i, s in enumerate(scans)]
-        real.append(dataset(name, REAL_EXCERPTS[name], cases))
+        real.append(dataset(name, REAL_EXCERPTS[name], cases, profile_of(name, excerpt)))
     stage(f"Ground truth: {config.scenes_per_sensor} scenes x {len(SENSORS)} sensor presets")
     ground_truth = evaluate(
         parsed, None, config.scenes_per_sensor, config.seed, tol=tol, workers=config.jobs
