@@ -6,6 +6,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from scanlines import Scan, extract
 from scanlines.evaluation.scenes import make_scene
@@ -30,7 +32,17 @@ from scanlines.steps.fit import (
 )
 from scanlines.steps.noise import NoiseLine, noise_at, scan_noise
 from scanlines.steps.returns import Returns, beam_gaps
-from scanlines.steps.select import BIC, SSE, best_level, level_corners, sweep_levels, threshold_grid
+from scanlines.steps.select import (
+    BIC,
+    SSE,
+    best_level,
+    extend_sweep,
+    level_corners,
+    start_sweep,
+    sweep_decided,
+    sweep_levels,
+    threshold_grid,
+)
 from scenes import cast, returns_of, scan_of, square_room
 
 
@@ -229,6 +241,44 @@ def test_bic_picks_the_four_corners():
     for seed in range(3):
         corners, _, _ = room_sweep_choice(seed, BIC)
         assert len(corners) == 4
+
+
+@given(
+    seed=st.integers(0, 10_000),
+    noise=st.sampled_from([0.002, 0.01, 0.03]),
+    sigma=st.floats(0.002, 0.05),
+    penalty=st.floats(0.0, 20.0),
+    chunked=st.booleans(),
+)
+@settings(max_examples=60, deadline=None)
+def test_a_sweep_stopped_when_decided_chooses_what_the_full_sweep_chooses(
+    seed, noise, sigma, penalty, chunked
+):
+    scan = scan_of(
+        square_room(), fov_deg=340, step_deg=1 / 3, sigma=noise, seed=seed, start_deg=-170
+    )
+    returns = returns_of(scan)
+    start, end = whole(len(returns.r))
+    moments = prefix_moments(returns.x, returns.y)
+    score = turn_scores(returns.x, returns.y, moments, start, end, 5)
+    candidates = peak_positions(score, start, end)
+    cost = RunCost(TLS, moments, np.zeros(0), np.zeros(0))
+    ranked, accepted, sse, segments, _, levels = sweep_levels(
+        cost, start, end, candidates, score[candidates], np.zeros(0), False, 100, False
+    )
+    full, _ = best_level(BIC, sse, segments, levels, len(returns.r), sigma, penalty)
+    sweep = start_sweep(cost, start, end, candidates, score[candidates], np.zeros(0), False, 100)
+    done = 0
+    if chunked:  # a sweep already extended by an earlier choice
+        done = extend_sweep(sweep, cost, False, 0, sweep.useful // 3)
+    best, inserted = sweep_decided(sweep, cost, False, done, len(returns.r), sigma, penalty)
+    assert best == levels[full]
+    assert inserted <= sweep.useful
+    np.testing.assert_array_equal(sweep.sse[: inserted + 1], sse[: inserted + 1])
+    np.testing.assert_array_equal(
+        level_corners(sweep.ranked, sweep.accepted, best),
+        level_corners(ranked, accepted, levels[full]),
+    )
 
 
 def test_paper_threshold_grid():

@@ -197,6 +197,8 @@ from scanlines.steps.select import (
     CRITERION_CODES,
     best_level,
     level_corners,
+    start_sweep,
+    sweep_decided,
     sweep_levels,
     threshold_grid,
 )
@@ -513,8 +515,34 @@ def corner_scores(returns, n_beams, step, moments, start, end, window, kind):
 def choose_corners(cost, start, end, scores, rescale, s, grid):
     """Steps 5-7: corner candidates and the threshold sweep; returns the corners and the
     scale of the noise model (1, or with ``rescale`` the scale the lines of a first
-    choice measure)."""
+    choice measure). Under ``"bic"`` the sweep stops where the choice is certain
+    (:func:`~scanlines.steps.select.sweep_decided`)."""
     candidates = peak_positions(scores, start, end)
+    n_points = int(np.sum(end - start + 1))
+    if s.criterion != BIC or s.use_grid:
+        return chosen_by_full_sweep(cost, start, end, candidates, scores, rescale, s, grid)
+    sweep = start_sweep(
+        cost, start, end, candidates, scores[candidates], grid, s.use_grid, s.max_evaluations
+    )
+    nothing_inserted = np.int64(0)
+    best, done = sweep_decided(
+        sweep, cost, s.shared_corner, nothing_inserted, n_points, 1.0, s.penalty
+    )
+    corners = level_corners(sweep.ranked, sweep.accepted, best)
+    scale = 1.0
+    if rescale:
+        # Second choice with the noise scaled to the lines of the first.
+        a, b, _ = cut_at(start, end, corners, s.shared_corner)
+        scale = max(residual_noise(cost, a, b, scale), 1e-3)
+        best, _ = sweep_decided(sweep, cost, s.shared_corner, done, n_points, scale, s.penalty)
+        corners = level_corners(sweep.ranked, sweep.accepted, best)
+    return corners, scale
+
+
+@kernel
+def chosen_by_full_sweep(cost, start, end, candidates, scores, rescale, s, grid):
+    """:func:`choose_corners` over every tried threshold (the ``"sse"`` criterion, or a
+    fixed ``dkth_range``)."""
     ranked, accepted, sse, segment_count, _, levels = sweep_levels(
         cost, start, end, candidates, scores[candidates], grid, s.use_grid,
         s.max_evaluations, s.shared_corner,
@@ -524,10 +552,8 @@ def choose_corners(cost, start, end, scores, rescale, s, grid):
     best, _ = best_level(s.criterion, sse, segment_count, levels, n_points, scale, s.penalty)
     corners = level_corners(ranked, accepted, levels[best])
     if rescale:
-        # Second pass with the noise scaled to the lines of the first choice.
         a, b, _ = cut_at(start, end, corners, s.shared_corner)
-        scale = residual_noise(cost, a, b, scale)
-        scale = max(scale, 1e-3)
+        scale = max(residual_noise(cost, a, b, scale), 1e-3)
         best, _ = best_level(s.criterion, sse, segment_count, levels, n_points, scale, s.penalty)
         corners = level_corners(ranked, accepted, levels[best])
     return corners, scale

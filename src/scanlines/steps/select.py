@@ -4,7 +4,10 @@ For each threshold the clusters are cut at the candidates scoring above it, each
 part is fitted and the sum of squared fitting errors is recorded; the cut with
 the best criterion is kept. Thresholds are nested (a lower threshold keeps every
 corner of a higher one), so the sweep inserts candidates in decreasing score
-order and scores every threshold from running sums.
+order and scores every threshold from running sums. Under ``"bic"`` the sweep stops as
+soon as no lower threshold can win (:func:`sweep_decided`): each segment charges the
+criterion ``penalty ln(n)``, the charge only grows as thresholds fall, and once it alone
+exceeds the best value found, the choice is made; the result is the full sweep's.
 
 Criteria
 --------
@@ -26,6 +29,7 @@ References
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -37,8 +41,12 @@ __all__ = [
     "CRITERIA",
     "CRITERION_CODES",
     "SSE",
+    "Sweep",
     "best_level",
+    "extend_sweep",
     "level_corners",
+    "start_sweep",
+    "sweep_decided",
     "sweep_levels",
     "threshold_grid",
 ]
@@ -46,41 +54,14 @@ __all__ = [
 CRITERIA = ("bic", "sse")
 CRITERION_CODES = {"bic": 0, "sse": 1}
 BIC, SSE = 0, 1
+#: Candidates :func:`sweep_decided` inserts between two checks of its bound.
+SWEEP_CHUNK = 8
 
 
 def threshold_grid(low: float, high: float, step: float, max_evaluations: int) -> np.ndarray:
     """``low, low + step, ...`` up to ``high``, at most ``max_evaluations`` values."""
     count = min(math.floor((high - low) / step + 1e-9) + 1, max_evaluations)
     return low + step * np.arange(count)
-
-
-@kernel
-def insert_in_rank_order(start, end, n, candidates, shared):
-    """Insert candidates best first; return, per candidate, accepted flag and its parent run.
-
-    A candidate is dropped when a part it would create is too short (Step 5: a
-    corner needs at least two points on each side of it).
-    """
-    run_end = np.full(n, -1, dtype=np.int64)  # end of the run starting at a position
-    for c in range(start.shape[0]):
-        run_end[start[c]] = end[c]
-    m = candidates.shape[0]
-    accepted = np.zeros(m, dtype=np.bool_)
-    parent_a = np.zeros(m, dtype=np.int64)
-    parent_b = np.zeros(m, dtype=np.int64)
-    for j in range(m):
-        c = candidates[j]
-        a = c
-        while run_end[a] < 0:
-            a -= 1
-        b = run_end[a]
-        if c - a < (2 if shared else 1) or b - c < 2:
-            continue
-        accepted[j] = True
-        parent_a[j], parent_b[j] = a, b
-        run_end[a] = c
-        run_end[c if shared else c + 1] = b
-    return accepted, parent_a, parent_b
 
 
 @kernel
@@ -125,23 +106,35 @@ def rank_descending(values):
     return order
 
 
+class Sweep(NamedTuple):
+    """A threshold sweep in progress (:func:`start_sweep`, :func:`extend_sweep`).
+
+    ``ranked`` are the candidates best first (``ranked_score`` their ``|score|``), of
+    which the first ``useful`` can change a cut; ``sse[m]`` and ``segments[m]`` describe
+    the cut with the ``m`` best, filled for ``m`` up to the candidates inserted so far
+    (``accepted[j]`` False: candidate ``j`` does not cut, ``parent_a/b[j]`` the run it
+    cut). ``run_end[a]`` is the end of the current run starting at ``a`` (-1 inside a
+    run) and ``cost_from[a]`` its cost.
+    """
+
+    ranked: np.ndarray
+    ranked_score: np.ndarray
+    useful: int
+    accepted: np.ndarray
+    parent_a: np.ndarray
+    parent_b: np.ndarray
+    sse: np.ndarray
+    segments: np.ndarray
+    run_end: np.ndarray
+    cost_from: np.ndarray
+
+
 @kernel
-def sweep_levels(cost, start, end, candidates, scores, grid, use_grid, max_evaluations, shared):
-    """Score every cut of the clusters ``[start, end]`` at ``candidates`` that a threshold makes.
+def start_sweep(cost, start, end, candidates, scores, grid, use_grid, max_evaluations):
+    """A :class:`Sweep` of the clusters ``[start, end]`` with no candidate inserted yet.
 
-    Thresholds are nested (a lower one keeps every corner of a higher one), so the
-    candidates are inserted in decreasing ``|score|`` order and each cut is scored
-    from the one before (``cost``, a :class:`~scanlines.steps.fit.RunCost`: eq. 14,
-    or in noise units). ``use_grid`` tries the thresholds ``grid``; otherwise the
-    candidates' own scores (every distinct segmentation, best first, at most
-    ``max_evaluations``). ``shared`` cuts a run ``[a, b]`` at ``c`` into ``[a, c]``
-    and ``[c, b]`` (the corner point ends one segment and starts the next, as in the
-    paper); otherwise into ``[a, c]`` and ``[c + 1, b]``.
-
-    Returns ``ranked, accepted, sse, segments, thresholds, levels``: ``sse[m]`` and
-    ``segments[m]`` describe the cut with the ``m`` best ``ranked`` candidates (those
-    ``accepted`` is False for do not cut); ``levels[t]`` is the cut each tried
-    threshold ``thresholds[t]`` gives.
+    ``use_grid`` tries the thresholds ``grid``; otherwise the candidates' own scores
+    (every distinct segmentation, best first, at most ``max_evaluations``).
     """
     n = cost.moments.table.shape[1] - 1
     magnitude = np.abs(scores)
@@ -154,31 +147,105 @@ def sweep_levels(cost, start, end, candidates, scores, grid, use_grid, max_evalu
         useful = np.count_nonzero(ranked_score > np.min(grid))
     else:
         useful = 0
-    ranked, ranked_score = ranked[:useful], ranked_score[:useful]
-    accepted, parent_a, parent_b = insert_in_rank_order(start, end, n, ranked, shared)
-    cost_from = np.empty(n + 1)  # cost of the current run starting at a position
+    run_end = np.full(n, -1, dtype=np.int64)
+    cost_from = np.empty(n + 1)
     base = 0.0
     for c in range(start.shape[0]):
+        run_end[start[c]] = end[c]
         cost_from[start[c]] = run_cost(cost, start[c], end[c])
         base += cost_from[start[c]]
     sse = np.empty(useful + 1)
     segments = np.empty(useful + 1, dtype=np.int64)
     sse[0], segments[0] = base, start.shape[0]
-    for j in range(useful):
+    accepted = np.zeros(useful, dtype=np.bool_)
+    parent_a = np.zeros(useful, dtype=np.int64)
+    parent_b = np.zeros(useful, dtype=np.int64)
+    return Sweep(
+        ranked[:useful], ranked_score[:useful], useful, accepted, parent_a, parent_b,
+        sse, segments, run_end, cost_from,
+    )  # fmt: skip
+
+
+@kernel
+def extend_sweep(sweep, cost, shared, done, upto):
+    """Insert candidates ``done .. upto - 1`` of ``sweep`` (in place) and score each cut.
+
+    A candidate is dropped when a part it would create is too short (Step 5: a corner
+    needs at least two points on each side of it). ``shared`` cuts a run ``[a, b]`` at
+    ``c`` into ``[a, c]`` and ``[c, b]`` (the corner point ends one segment and starts the
+    next, as in the paper); otherwise into ``[a, c]`` and ``[c + 1, b]``. Returns
+    ``upto``, the count inserted.
+    """
+    run_end, cost_from, sse, segments = sweep.run_end, sweep.cost_from, sweep.sse, sweep.segments
+    for j in range(done, upto):
+        c = sweep.ranked[j]
+        a = c
+        while run_end[a] < 0:
+            a -= 1
+        b = run_end[a]
         gain = 0.0
-        if accepted[j]:
-            a, b, c = parent_a[j], parent_b[j], ranked[j]
+        if not (c - a < (2 if shared else 1) or b - c < 2):
+            sweep.accepted[j] = True
+            sweep.parent_a[j], sweep.parent_b[j] = a, b
             second = c if shared else c + 1
+            run_end[a] = c
+            run_end[second] = b
             whole = cost_from[a]
             cost_from[a] = run_cost(cost, a, c)
             cost_from[second] = run_cost(cost, second, b)
             gain = cost_from[a] + cost_from[second] - whole
         sse[j + 1] = sse[j] + gain
-        segments[j + 1] = segments[j] + accepted[j]
+        segments[j + 1] = segments[j] + sweep.accepted[j]
+    return upto
+
+
+@kernel
+def sweep_decided(sweep, cost, shared, done, n_points, sigma, penalty):
+    """Extend ``sweep`` (from ``done`` inserted) until the ``"bic"`` choice with noise
+    ``sigma`` is certain; returns ``(best level, inserted)``.
+
+    The value of the cut with ``m`` candidates is at least ``penalty ln(n) segments[m]``
+    (its SSE term is not negative) and ``segments`` never falls, so once that charge
+    reaches the best value so far no later cut can win (ties go to the first): the level
+    is the full sweep's, found without inserting the rest.
+    """
+    log_n = math.log(max(n_points, 2))
+    best, best_value = 0, math.inf
+    scored = 0
+    while True:
+        for m in range(scored, done + 1):
+            value = criterion_value(
+                np.int64(BIC), sweep.sse[m], sweep.segments[m], log_n, sigma, penalty
+            )
+            if value < best_value:
+                best, best_value = m, value
+        scored = done + 1
+        if done == sweep.useful or not penalty * log_n * sweep.segments[done] < best_value:
+            return best, done
+        done = extend_sweep(sweep, cost, shared, done, min(done + SWEEP_CHUNK, sweep.useful))
+
+
+@kernel
+def sweep_levels(cost, start, end, candidates, scores, grid, use_grid, max_evaluations, shared):
+    """Score every cut of the clusters ``[start, end]`` at ``candidates`` that a threshold makes.
+
+    Thresholds are nested (a lower one keeps every corner of a higher one), so the
+    candidates are inserted in decreasing ``|score|`` order and each cut is scored
+    from the one before (``cost``, a :class:`~scanlines.steps.fit.RunCost`: eq. 14,
+    or in noise units); see :func:`start_sweep` and :func:`extend_sweep`.
+
+    Returns ``ranked, accepted, sse, segments, thresholds, levels``: ``sse[m]`` and
+    ``segments[m]`` describe the cut with the ``m`` best ``ranked`` candidates (those
+    ``accepted`` is False for do not cut); ``levels[t]`` is the cut each tried
+    threshold ``thresholds[t]`` gives.
+    """
+    sweep = start_sweep(cost, start, end, candidates, scores, grid, use_grid, max_evaluations)
+    extend_sweep(sweep, cost, shared, np.int64(0), sweep.useful)
+    useful = sweep.useful
     if not use_grid:
         levels = np.arange(min(useful, max_evaluations) + 1)
-        thresholds = np.append(ranked_score, 0.0)[levels]
+        thresholds = np.append(sweep.ranked_score, 0.0)[levels]
     else:
         thresholds = grid.copy()
-        levels = np.searchsorted(-ranked_score, -thresholds)  # count of scores > t
-    return ranked, accepted, sse, segments, thresholds, levels
+        levels = np.searchsorted(-sweep.ranked_score, -thresholds)  # count of scores > t
+    return sweep.ranked, sweep.accepted, sweep.sse, sweep.segments, thresholds, levels
