@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gc
 import math
 from contextlib import contextmanager
 from pathlib import Path
@@ -276,6 +277,9 @@ def run_command(
             options = _with_mounting(log, options, profile)
         extractor = Extractor(method, preset, sensor_profile=profile, **params)
         extractor.warm_up()  # before the progress bar: the displays do not overlap
+    # What is loaded now lives for the whole run: frozen, the collector no longer walks
+    # it each time the chunks' records set off a collection.
+    gc.freeze()
     with open_log(log, **options) as reader:
         summary = _run_with_progress(reader, extractor, selection, out, frame, log, jobs, overwrite)
     summary.compile_seconds += compiled.seconds

@@ -129,7 +129,11 @@ class LogReader(ABC):
         self.bad_other = 0
         self.skip_reasons: Counter[str] = Counter()
         self.scan_count: int | None = None
-        self.recorded_mounting: tuple[float, float, float] | None = None
+
+    @property
+    def recorded_mounting(self) -> tuple[float, float, float] | None:
+        """See the class docstring; ``None`` for formats that record no robot pose."""
+        return None
 
     # -- iteration -------------------------------------------------------------------------
 

@@ -287,6 +287,7 @@ class CarmenReader(LogReader):
         self.params: dict[str, str] = {}
         self._numeric_params: dict[str, float] = {}
         self._odom_pose: tuple[float, float, float] | None = None
+        self._pose_pair: tuple[np.ndarray, np.ndarray] | None = None  # of the last record
 
     # -- public metadata ------------------------------------------------------------------
 
@@ -296,6 +297,14 @@ class CarmenReader(LogReader):
         if self._message is None:
             self._message = self._detect_message()
         return self._message
+
+    @property
+    def recorded_mounting(self) -> tuple[float, float, float] | None:
+        """The laser's pose on the robot from the record just read (laser and robot pose
+        both finite), else ``None``."""
+        if self._pose_pair is None:
+            return None
+        return _mounting_between(*self._pose_pair)
 
     @property
     def moves_robot_poses(self) -> bool:
@@ -344,7 +353,7 @@ class CarmenReader(LogReader):
         self.params = {}
         self._numeric_params = {}
         self._odom_pose = None
-        self.recorded_mounting = None
+        self._pose_pair = None
         index = 0
         for line_number, line in iter_lines(self.path, self.max_record_bytes):
             name = _record_name(line)
@@ -421,7 +430,7 @@ class CarmenReader(LogReader):
             record=line_number,
         )
         laser_pose, robot_pose = numbers[n : n + 3], numbers[n + 3 : n + 6]
-        self.recorded_mounting = _mounting_between(laser_pose, robot_pose)
+        self._pose_pair = (laser_pose, robot_pose)
         fov = math.radians(self._flaser_fov(side))
         steps = n if self.angle_convention == "step" else n - 1
         return self._make_scan(
@@ -479,12 +488,10 @@ class CarmenReader(LogReader):
         if robot:
             pose_at = after if self.pose_source == "laser" else after + 3
             pose: Any = numbers[pose_at : pose_at + 3]
-            self.recorded_mounting = _mounting_between(
-                numbers[after : after + 3], numbers[after + 3 : after + 6]
-            )
+            self._pose_pair = (numbers[after : after + 3], numbers[after + 3 : after + 6])
         else:
             pose = self._odom_pose
-            self.recorded_mounting = None
+            self._pose_pair = None
             if pose is not None and self.mounting is not None:
                 pose = compose(pose, self.mounting)
         if not math.isfinite(resolution) or resolution == 0.0:
