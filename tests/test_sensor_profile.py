@@ -281,6 +281,14 @@ def test_calibrate_measures_the_mounting_and_world_frame_runs_use_it(tmp_path):
     from_flaser = world_lines(flaser)
     assert len(from_flaser) > 40
     np.testing.assert_allclose(world_lines(rawlaser), from_flaser, atol=1e-6)
+    folder = tmp_path / "several"
+    folder.mkdir()
+    args = ["run", str(rawlaser), str(flaser), "--out", str(folder), "--format", "jsonl"]
+    result = runner.invoke(app, [*args, "--frame", "world", "--sensor-profile", str(profile_path)])
+    assert result.exit_code == 0, result.output
+    rows = map(json.loads, (folder / f"{rawlaser.name}.jsonl").open())
+    several = [[*s["start"], *s["end"], s["rho"], s["alpha"]] for r in rows for s in r["segments"]]
+    np.testing.assert_allclose(several, from_flaser, atol=1e-6)
     profile = SensorProfile(**{**profile.__dict__, "mounting": None})
     profile.save(profile_path)
     assert not np.allclose(world_lines(rawlaser), from_flaser, atol=1e-3)

@@ -63,7 +63,7 @@ def _one_output_per_log(logs, out, output_format, method, preset, params, option
     """Each log to ``out/NAME.FORMAT``, one after the other, with ``jobs`` threads each."""
     import time
 
-    from scanlines.cli.logs import _profile_for_run, compiled_for
+    from scanlines.cli.logs import _profile_for_run, _with_mounting, compiled_for
     from scanlines.errors import ScanlinesError
     from scanlines.extractor import Extractor
     from scanlines.fleet import FleetSummary, LogOutcome, expand_inputs, log_names
@@ -83,7 +83,8 @@ def _one_output_per_log(logs, out, output_format, method, preset, params, option
         try:
             profile = _profile_for_run(path, options, selection, sensor_profile)
             extractor = Extractor(method, preset, sensor_profile=profile, **params)
-            with open_log(path, **options) as reader:
+            log_options = _with_mounting(path, options, profile) if frame == "world" else options
+            with open_log(path, **log_options) as reader:
                 result = run_log_to_file(reader, extractor, out / f"{name}.{output_format}",
                                          frame=frame, scans=selection, jobs=jobs,
                                          overwrite=overwrite)  # fmt: skip
