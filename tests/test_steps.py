@@ -213,10 +213,11 @@ def test_peak_rule():
 # --- threshold sweep (Step 5-7) ------------------------------------------------------------------
 
 
-def room_sweep_choice(seed: int, criterion: int) -> tuple[np.ndarray, float, np.ndarray]:
-    """The corners and threshold the sweep chooses on a noisy room, and every threshold."""
+def room_sweep_inputs(seed: int, noise: float):
+    """A noisy room scan's candidates and the sweep over them (a plain SSE cost):
+    ``(cost, start, end, candidates, scores, n_points, full sweep)``."""
     scan = scan_of(
-        square_room(), fov_deg=340, step_deg=1 / 3, sigma=0.01, seed=seed, start_deg=-170
+        square_room(), fov_deg=340, step_deg=1 / 3, sigma=noise, seed=seed, start_deg=-170
     )
     returns = returns_of(scan)
     start, end = whole(len(returns.r))
@@ -224,10 +225,16 @@ def room_sweep_choice(seed: int, criterion: int) -> tuple[np.ndarray, float, np.
     score = turn_scores(returns.x, returns.y, moments, start, end, 5)
     candidates = peak_positions(score, start, end)
     cost = RunCost(TLS, moments, np.zeros(0), np.zeros(0))
-    ranked, accepted, sse, segments, thresholds, levels = sweep_levels(
-        cost, start, end, candidates, score[candidates], np.zeros(0), False, 100, False
-    )
-    best, _ = best_level(criterion, sse, segments, levels, len(returns.r), 0.01, 4.0)
+    scores = score[candidates]
+    swept = sweep_levels(cost, start, end, candidates, scores, np.zeros(0), False, 100, False)
+    return cost, start, end, candidates, scores, len(returns.r), swept
+
+
+def room_sweep_choice(seed: int, criterion: int) -> tuple[np.ndarray, float, np.ndarray]:
+    """The corners and threshold the sweep chooses on a noisy room, and every threshold."""
+    *_, n_points, swept = room_sweep_inputs(seed, 0.01)
+    ranked, accepted, sse, segments, thresholds, levels = swept
+    best, _ = best_level(criterion, sse, segments, levels, n_points, 0.01, 4.0)
     return level_corners(ranked, accepted, levels[best]), thresholds[best], thresholds
 
 
@@ -254,24 +261,14 @@ def test_bic_picks_the_four_corners():
 def test_a_sweep_stopped_when_decided_chooses_what_the_full_sweep_chooses(
     seed, noise, sigma, penalty, chunked
 ):
-    scan = scan_of(
-        square_room(), fov_deg=340, step_deg=1 / 3, sigma=noise, seed=seed, start_deg=-170
-    )
-    returns = returns_of(scan)
-    start, end = whole(len(returns.r))
-    moments = prefix_moments(returns.x, returns.y)
-    score = turn_scores(returns.x, returns.y, moments, start, end, 5)
-    candidates = peak_positions(score, start, end)
-    cost = RunCost(TLS, moments, np.zeros(0), np.zeros(0))
-    ranked, accepted, sse, segments, _, levels = sweep_levels(
-        cost, start, end, candidates, score[candidates], np.zeros(0), False, 100, False
-    )
-    full, _ = best_level(BIC, sse, segments, levels, len(returns.r), sigma, penalty)
-    sweep = start_sweep(cost, start, end, candidates, score[candidates], np.zeros(0), False, 100)
+    cost, start, end, candidates, scores, n_points, swept = room_sweep_inputs(seed, noise)
+    ranked, accepted, sse, segments, _, levels = swept
+    full, _ = best_level(BIC, sse, segments, levels, n_points, sigma, penalty)
+    sweep = start_sweep(cost, start, end, candidates, scores, np.zeros(0), False, 100)
     done = 0
     if chunked:  # a sweep already extended by an earlier choice
         done = extend_sweep(sweep, cost, False, 0, sweep.useful // 3)
-    best, inserted = sweep_decided(sweep, cost, False, done, len(returns.r), sigma, penalty)
+    best, inserted = sweep_decided(sweep, cost, False, done, n_points, sigma, penalty)
     assert best == levels[full]
     assert inserted <= sweep.useful
     np.testing.assert_array_equal(sweep.sse[: inserted + 1], sse[: inserted + 1])
