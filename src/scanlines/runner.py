@@ -99,8 +99,9 @@ def measure_profile(
 
     def selected() -> Iterator[Scan]:
         for _, scan in select(reader.enumerate(), scans):
-            if reader.recorded_mounting is not None:
-                recorded.append(reader.recorded_mounting)
+            mounting = reader.recorded_mounting
+            if mounting is not None:
+                recorded.append(mounting)
             yield scan
 
     profile = estimate_profile(selected(), max_scans=max_scans, source=source)

@@ -316,14 +316,20 @@ def estimate_mounting(
         return None
     x, y = np.median(samples[:, 0]), np.median(samples[:, 1])
     reference = samples[0, 2]
-    turns = np.remainder(samples[:, 2] - reference + np.pi, 2 * np.pi) - np.pi
-    theta = math.remainder(reference + float(np.median(turns)), 2 * math.pi)
+    theta = math.remainder(
+        reference + float(np.median(_turns(samples[:, 2], reference))), 2 * math.pi
+    )
     offset = np.hypot(samples[:, 0] - x, samples[:, 1] - y)
-    turn_off = np.abs(np.remainder(samples[:, 2] - theta + np.pi, 2 * np.pi) - np.pi)
+    turn_off = np.abs(_turns(samples[:, 2], theta))
     agree = (offset <= MOUNTING_AGREEMENT[0]) & (turn_off <= MOUNTING_AGREEMENT[1])
     if agree.mean() < MOUNTING_QUORUM:
         return None
     return (float(x), float(y), float(theta))
+
+
+def _turns(angles: np.ndarray, reference: float) -> np.ndarray:
+    """``angles - reference`` wrapped to ``[-pi, pi)``."""
+    return np.remainder(angles - reference + np.pi, 2 * np.pi) - np.pi
 
 
 def scan_noise_line(scan: Scan) -> NoiseLine:

@@ -7,7 +7,7 @@ corner of a higher one), so the sweep inserts candidates in decreasing score
 order and scores every threshold from running sums. Under ``"bic"`` the sweep stops as
 soon as no lower threshold can win (:func:`sweep_decided`): each segment charges the
 criterion ``penalty ln(n)``, the charge only grows as thresholds fall, and once it alone
-exceeds the best value found, the choice is made; the result is the full sweep's.
+reaches the best value found, the choice is made; the result is the full sweep's.
 
 Criteria
 --------
