@@ -106,3 +106,63 @@ def test_scan_and_batch_share_one_validity_rule():
     batch = Extractor().batch(ranges, 0.0, 0.1, range_min=0.1, range_max=30.0)
     scan = Scan(ranges[0], 0.0, 0.1, range_min=0.1, range_max=30.0)
     assert same(batch[0], Extractor()(scan))
+
+
+def sawtooth_scans(rows: int = 3) -> list[Scan]:
+    """Scans of 30 ramps of 12 beams, each starting 1 m nearer than the last one ends:
+    more segments and breakpoints per scan than a stack table first holds."""
+    beams = np.arange(360)
+    rng = np.random.default_rng(7)
+    ramp = 2.0 + 0.08 * (beams % 12)
+    return [
+        Scan(ramp + rng.normal(0.0, 0.003, beams.size), -np.pi, np.radians(1.0), range_max=30.0)
+        for _ in range(rows)
+    ]
+
+
+@pytest.mark.parametrize(
+    ("method", "scan_kernel"),
+    [
+        ("adaptive", "scanlines.methods.adaptive:adaptive_scan"),
+        ("iepf", "scanlines.methods.iepf:iepf_scan"),
+        ("split_merge", "scanlines.methods.split_merge:split_merge_scan"),
+    ],
+)
+def test_stack_kernel_rows_are_the_scan_kernel_results(method, scan_kernel):
+    import importlib
+
+    from scanlines.extraction import _ARRAYS
+    from scanlines.extractor import at_float32, float32
+    from scanlines.scan import is_full_circle, valid_returns
+    from scanlines.steps.stack import FIRST_CAPACITY
+
+    module, name = scan_kernel.split(":")
+    per_scan = getattr(importlib.import_module(module), name)
+    scans = sawtooth_scans()
+    extractor = Extractor(method)
+    first = scans[0]
+    table = extractor.batch(
+        np.stack([s.ranges for s in scans]), first.angle_min, first.angle_increment, 0.0, 30.0
+    )
+    assert max(table.counts("segments")) > FIRST_CAPACITY
+    assert max(table.counts("breakpoints")) > FIRST_CAPACITY
+    step = float32(first.angle_increment)
+    local = step * np.arange(len(first))
+    inner = extractor._method
+    for row, scan in enumerate(scans):
+        ranges = at_float32(scan.ranges)
+        arrays = per_scan(
+            ranges,
+            valid_returns(ranges, 0.0, 30.0),
+            np.cos(local),
+            np.sin(local),
+            abs(step),
+            is_full_circle(len(scan), step),
+            float32(scan.angle_min),
+            inner.noise,
+            *inner.arguments,
+        )
+        for name, expected in zip(_ARRAYS, arrays, strict=True):
+            got = getattr(table[row], name)
+            assert got.shape == expected.shape, name
+            assert np.array_equal(got, expected), name

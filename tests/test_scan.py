@@ -6,8 +6,14 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import example, given
+from hypothesis import strategies as st
 
 from scanlines import Scan, ScanError
+from scanlines.extractor import float32
+from scanlines.scan import valid_returns
+
+any_float = st.floats(allow_nan=True, allow_infinity=True)
 
 
 def test_valid_mask_treats_no_return_as_data():
@@ -16,6 +22,27 @@ def test_valid_mask_treats_no_return_as_data():
     assert scan.valid.tolist() == [True, False, False, False, False, False, False, True]
     assert np.isnan(scan.points[1]).all()
     assert scan.points[0].tolist() == [1.0, 0.0]
+
+
+@given(st.lists(any_float, max_size=20), any_float, any_float)
+@example([1.0, math.inf, 0.0], math.nan, 5.0)
+@example([1.0, math.inf, 0.0], 0.0, math.nan)
+@example([1.0, math.inf, 0.0], math.inf, math.inf)
+def test_valid_returns_is_the_rule_as_written(ranges, range_min, range_max):
+    ranges = np.array(ranges, dtype=np.float64)
+    with np.errstate(invalid="ignore"):
+        rule = np.isfinite(ranges) & (ranges > 0) & (ranges >= range_min) & (ranges <= range_max)
+    assert valid_returns(ranges, range_min, range_max).tolist() == rule.tolist()
+
+
+@given(any_float)
+def test_float32_rounds_as_numpy_does(value):
+    with np.errstate(over="ignore"):
+        expected = float(np.float32(value))
+    got = float32(value)
+    assert (math.isnan(got) and math.isnan(expected)) or (
+        got == expected and math.copysign(1, got) == math.copysign(1, expected)
+    )
 
 
 def test_points_follow_rep_103():

@@ -33,7 +33,7 @@ try:
 except ImportError:  # pragma: no cover - exercised only without numba
     numba = None
 
-__all__ = ["COMPILED", "kernel", "kernel_seconds"]
+__all__ = ["COMPILED", "kernel", "kernel_seconds", "scan_kernel"]
 
 COMPILED = numba is not None and not numba.config.DISABLE_JIT
 
@@ -151,3 +151,13 @@ def kernel(function: F) -> F:
     if numba is None:  # pragma: no cover
         return function
     return numba.njit(cache=True, nogil=True, error_model="numpy")(function)
+
+
+def scan_kernel(function: F) -> F:
+    """A method's per-scan kernel: a :func:`kernel` that numba types inside its one
+    caller, the method's stack kernel (:mod:`scanlines.steps.stack`), rather than
+    compiling it on its own and linking it in, which costs the adaptive method 8 s more
+    on a cold cache (every kernel's machine code is emitted again with its callers')."""
+    if numba is None:  # pragma: no cover
+        return function
+    return numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")(function)

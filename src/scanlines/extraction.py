@@ -145,9 +145,7 @@ class Extraction:
             end_kinds = np.full((len(self.first), 2), END_KINDS.index("open"))
         self.end_kinds = _frozen(end_kinds, np.int8).reshape(-1, 2)
         self.method = method
-        self.params = (
-            params if isinstance(params, MappingProxyType) else MappingProxyType(dict(params))
-        )
+        self.params = _read_only(params)
         self._segments: tuple[Segment, ...] | None = None
 
     @classmethod
@@ -159,6 +157,15 @@ class Extraction:
             object.__setattr__(self, name, values)
         self.method, self.params, self._segments = method, params, None
         return self
+
+    @classmethod
+    def of_flat_table(cls, table: Sequence[np.ndarray], method: str, params: Mapping[str, Any]):
+        """The extraction of a stack kernel's table of one scan
+        (:mod:`scanlines.steps.stack`), whose arrays it takes over: views, made read-only."""
+        arrays = _flat_columns(table)
+        for values in arrays:
+            values.setflags(write=False)
+        return cls._of_frozen(arrays, method, _read_only(params))
 
     @property
     def segments(self) -> tuple[Segment, ...]:
@@ -283,9 +290,18 @@ class ExtractionTable(Sequence[Extraction]):
             name: _frozen(offsets[name], np.intp) for name in ("segments", *EVENT_COLUMNS)
         }
         self.method = method
-        self.params = (
-            params if isinstance(params, MappingProxyType) else MappingProxyType(dict(params))
-        )
+        self.params = _read_only(params)
+
+    @classmethod
+    def of_flat_table(cls, table: Sequence[np.ndarray], method: str,
+                      params: Mapping[str, Any]) -> ExtractionTable:  # fmt: skip
+        """The table of a stack kernel's output (:mod:`scanlines.steps.stack`)."""
+        columns = dict(zip(_ARRAYS, _flat_columns(table), strict=True))
+        counts = table[9]
+        offsets = {
+            name: _offsets(counts[:, k]) for k, name in enumerate(("segments", *EVENT_COLUMNS))
+        }
+        return cls(columns, offsets, method, params)
 
     @classmethod
     def concatenate(cls, rows: Sequence[Sequence[np.ndarray] | Extraction], method: str,
@@ -359,6 +375,28 @@ class ExtractionTable(Sequence[Extraction]):
     def __repr__(self) -> str:
         segments = len(self.first)
         return f"ExtractionTable(method={self.method!r}, scans={len(self)}, segments={segments})"
+
+
+def _flat_columns(table: Sequence[np.ndarray]) -> list[np.ndarray]:
+    """The columns of a stack kernel's table, in ``_ARRAYS`` order: views of its used
+    part, shaped as :class:`ExtractionTable`'s."""
+    segments, breakpoints, corners, outliers = table[10].tolist()
+    first, last, n_points, lines, covariances, *events, end_kinds = table[:9]
+    return [
+        first[:segments],
+        last[:segments],
+        n_points[:segments],
+        lines[: segments * N_LINE_COLUMNS].reshape(segments, N_LINE_COLUMNS),
+        covariances[: segments * 4].reshape(segments, 2, 2),
+        events[0][:breakpoints],
+        events[1][:corners],
+        events[2][:outliers],
+        end_kinds[: segments * 2].reshape(segments, 2),
+    ]
+
+
+def _read_only(params: Mapping[str, Any]) -> MappingProxyType:
+    return params if isinstance(params, MappingProxyType) else MappingProxyType(dict(params))
 
 
 def _offsets(counts: list[int]) -> np.ndarray:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import struct
 import sys
 from collections.abc import Mapping
 from concurrent.futures import ThreadPoolExecutor
@@ -180,8 +181,9 @@ class Extractor:
 
         Gives exactly what calling the extractor on each row as a :class:`Scan` gives,
         without building the scans: the stack is validated once, the validity
-        mask computed for all rows at once, the bearing tables shared, and the results
-        are one flat :class:`~scanlines.extraction.ExtractionTable` (``table[i]`` is
+        mask computed for all rows at once, the bearing tables shared, a compiled
+        method's kernel called once for the whole stack, and the results are one flat
+        :class:`~scanlines.extraction.ExtractionTable` (``table[i]`` is
         row ``i``'s :class:`Extraction`, built on access). ``jobs > 1`` splits the rows
         over that many threads (the kernels release the GIL); the table is the same.
         """
@@ -239,8 +241,10 @@ def _warm_up_scan() -> Scan:
 def float32(value: float) -> float:
     """``value`` rounded to float32 precision (infinities stay; beyond float32's range a
     range bound becomes infinite, which it is for every float32 range)."""
-    with np.errstate(over="ignore"):
-        return float(np.float32(value))
+    try:
+        return struct.unpack("f", struct.pack("f", value))[0]
+    except OverflowError:  # rounds beyond float32's largest value, as numpy's cast does
+        return math.copysign(math.inf, value)
 
 
 def at_float32(ranges: np.ndarray) -> np.ndarray:

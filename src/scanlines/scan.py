@@ -79,8 +79,10 @@ def valid_returns(ranges: np.ndarray, range_min: float, range_max: float) -> np.
 
     Works on one scan or a stack of scans (any shape).
     """
-    with np.errstate(invalid="ignore"):
-        return np.isfinite(ranges) & (ranges > 0.0) & (ranges >= range_min) & (ranges <= range_max)
+    # Comparisons with NaN are False (and quiet), so two comparisons cover every rule.
+    lower = (ranges > 0.0) if range_min <= 0.0 else (ranges >= range_min)
+    upper = (ranges < math.inf) if range_max == math.inf else (ranges <= range_max)
+    return np.logical_and(lower, upper, out=lower)
 
 
 def is_full_circle(n_beams: int, angle_increment: float) -> bool:

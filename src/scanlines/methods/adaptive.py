@@ -139,7 +139,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from scanlines._jit import kernel
+from scanlines._jit import kernel, scan_kernel
 from scanlines.methods.base import CompiledMethod, as_record
 from scanlines.params import (
     MAX_COUNT,
@@ -203,6 +203,7 @@ from scanlines.steps.select import (
     threshold_grid,
 )
 from scanlines.steps.split import cut_at, refine_cuts, split_by_residual
+from scanlines.steps.stack import add_row, new_table
 
 PARAMETERS: dict[str, Param] = {
     **segment_params(3),
@@ -394,16 +395,26 @@ class Adaptive(CompiledMethod):
         return as_record(self.settings), grid
 
     @staticmethod
-    def kernel(ranges, valid, cos, sin, step, full_circle, angle_min, noise, settings, grid):
-        return adaptive_scan(
-            ranges, valid, cos, sin, step, full_circle, angle_min, noise, settings, grid
-        )
+    def kernel(*arguments):
+        return adaptive_stack(*arguments)
 
 
 # --------------------------------------------------------------------------- the kernel
 
 
 @kernel
+def adaptive_stack(stack, valid, cos, sin, step, full_circle, angle_min, noise, settings, grid):
+    """:func:`adaptive_scan` of each row of ``stack``, as one flat table."""
+    table = new_table(stack.shape[0])
+    for row in range(stack.shape[0]):
+        result = adaptive_scan(
+            stack[row], valid[row], cos, sin, step, full_circle, angle_min, noise, settings, grid
+        )
+        table = add_row(table, row, result)
+    return table
+
+
+@scan_kernel
 def adaptive_scan(ranges, valid, cos, sin, step, full_circle, angle_min, noise, settings, grid):
     """The whole method on one scan: the result arrays (see :class:`CompiledMethod`)."""
     s = settings[0]

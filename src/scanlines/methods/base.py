@@ -124,14 +124,16 @@ def as_record(settings: Any) -> np.ndarray:
 
 
 class CompiledMethod(Method):
-    """A method that is one kernel from a scan's arrays to the result arrays.
+    """A method that is one kernel from a stack of scans' arrays to one flat table.
 
     A subclass sets :meth:`settings_of` (resolved parameters -> a frozen dataclass of
-    typed settings) and ``kernel(ranges, valid, cos, sin, step, full_circle,
-    angle_min, *arguments)`` as a ``staticmethod``; :meth:`kernel_arguments` returns
-    the kernel's last arguments, by default the settings record. ``stages`` may name
-    the kernels of the method's module that its kernel calls, in order, so that a
-    second core can compile them (:mod:`scanlines.warm`).
+    typed settings) and ``kernel(stack, valid, cos, sin, step, full_circle,
+    angle_min, *arguments)`` as a ``staticmethod``: the method's stack kernel, a loop
+    over the rows of its per-scan kernel (:mod:`scanlines.steps.stack`). One scan is a
+    stack of one. :meth:`kernel_arguments` returns the kernel's last arguments, by
+    default the settings record. ``stages`` may name the kernels of the method's module
+    that its per-scan kernel calls, in order, so that a second core can compile them
+    (:mod:`scanlines.warm`).
     """
 
     stages: ClassVar[tuple[str, ...]] = ()
@@ -153,20 +155,18 @@ class CompiledMethod(Method):
         raise NotImplementedError
 
     def extract(self, ranges, valid, cos, sin, step, angle_min) -> Extraction:
-        full_circle = is_full_circle(ranges.shape[0], step)
-        arrays = self.kernel(
-            ranges, valid, cos, sin, abs(step), full_circle, angle_min, self.noise, *self.arguments
-        )
-        return to_extraction(arrays, self.name, self.params)
+        table = self._stack_table(ranges[np.newaxis], valid[np.newaxis], cos, sin, step, angle_min)
+        return Extraction.of_flat_table(table, self.name, self.params)
 
     def extract_many(self, stack, valid, cos, sin, step, angle_min) -> ExtractionTable:
+        table = self._stack_table(stack, valid, cos, sin, step, angle_min)
+        return ExtractionTable.of_flat_table(table, self.name, self.params)
+
+    def _stack_table(self, stack, valid, cos, sin, step, angle_min) -> tuple[np.ndarray, ...]:
         full_circle = is_full_circle(stack.shape[1], step)
-        kernel, arguments, step, noise = self.kernel, self.arguments, abs(step), self.noise
-        rows = [
-            kernel(row, mask, cos, sin, step, full_circle, angle_min, noise, *arguments)
-            for row, mask in zip(stack, valid, strict=True)
-        ]
-        return ExtractionTable.concatenate(rows, self.name, self.params)
+        return self.kernel(
+            stack, valid, cos, sin, abs(step), full_circle, angle_min, self.noise, *self.arguments
+        )
 
 
 def rule_spec_of(params: Mapping[str, Any]) -> RuleSpec:

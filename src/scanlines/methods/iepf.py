@@ -48,7 +48,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from scanlines._jit import kernel
+from scanlines._jit import kernel, scan_kernel
 from scanlines.methods.base import CompiledMethod, cluster_scan
 from scanlines.params import Param, number, segment_params, with_default
 from scanlines.steps.assemble import Output, empty_result, finish
@@ -57,6 +57,7 @@ from scanlines.steps.events import EVENT_PARAMS
 from scanlines.steps.fit import prefix_moments
 from scanlines.steps.returns import valid_returns
 from scanlines.steps.split import REFERENCE_CODES, split_at_farthest
+from scanlines.steps.stack import add_row, new_table
 
 
 @dataclass(frozen=True)
@@ -149,11 +150,23 @@ class Iepf(CompiledMethod):
         return SplitSettings.of(params, reference="chord")
 
     @staticmethod
-    def kernel(ranges, valid, cos, sin, step, full_circle, angle_min, noise, settings):
-        return iepf_scan(ranges, valid, cos, sin, step, full_circle, angle_min, noise, settings)
+    def kernel(*arguments):
+        return iepf_stack(*arguments)
 
 
 @kernel
+def iepf_stack(stack, valid, cos, sin, step, full_circle, angle_min, noise, settings):
+    """:func:`iepf_scan` of each row of ``stack``, as one flat table."""
+    table = new_table(stack.shape[0])
+    for row in range(stack.shape[0]):
+        result = iepf_scan(
+            stack[row], valid[row], cos, sin, step, full_circle, angle_min, noise, settings
+        )
+        table = add_row(table, row, result)
+    return table
+
+
+@scan_kernel
 def iepf_scan(ranges, valid, cos, sin, step, full_circle, angle_min, noise, settings):
     """The whole method on one scan: the result arrays (see :class:`CompiledMethod`)."""
     s = settings[0]

@@ -60,7 +60,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from scanlines._jit import kernel
+from scanlines._jit import kernel, scan_kernel
 from scanlines.methods.base import CompiledMethod
 from scanlines.methods.iepf import SplitSettings, cluster_and_split, output
 from scanlines.params import Param, number, segment_params, with_default
@@ -70,6 +70,7 @@ from scanlines.steps.events import EVENT_PARAMS
 from scanlines.steps.merge import merge_by_chi_square
 from scanlines.steps.noise import covariance_sigmas
 from scanlines.steps.returns import beam_gaps, valid_returns, without
+from scanlines.steps.stack import add_row, new_table
 
 
 class SplitMerge(CompiledMethod):
@@ -109,13 +110,23 @@ class SplitMerge(CompiledMethod):
         return SplitSettings.of(params, reference="fit")
 
     @staticmethod
-    def kernel(ranges, valid, cos, sin, step, full_circle, angle_min, noise, settings):
-        return split_merge_scan(
-            ranges, valid, cos, sin, step, full_circle, angle_min, noise, settings
-        )
+    def kernel(*arguments):
+        return split_merge_stack(*arguments)
 
 
 @kernel
+def split_merge_stack(stack, valid, cos, sin, step, full_circle, angle_min, noise, settings):
+    """:func:`split_merge_scan` of each row of ``stack``, as one flat table."""
+    table = new_table(stack.shape[0])
+    for row in range(stack.shape[0]):
+        result = split_merge_scan(
+            stack[row], valid[row], cos, sin, step, full_circle, angle_min, noise, settings
+        )
+        table = add_row(table, row, result)
+    return table
+
+
+@scan_kernel
 def split_merge_scan(ranges, valid, cos, sin, step, full_circle, angle_min, noise, settings):
     """The whole method on one scan: the result arrays (see :class:`CompiledMethod`)."""
     s = settings[0]

@@ -18,6 +18,7 @@ validated entry points are :class:`~scanlines.Scan` and :class:`~scanlines.Extra
 ``merge``        merging neighbours (by the criterion, by chi-square)
 ``events``       corners and breakpoints between consecutive segments
 ``assemble``     the result arrays of an :class:`~scanlines.Extraction`
+``stack``        a stack of scans' result arrays as one flat table, in one kernel call
 """
 
 __all__ = [
@@ -33,4 +34,5 @@ __all__ = [
     "returns",
     "select",
     "split",
+    "stack",
 ]
