@@ -214,30 +214,54 @@ def json_records(
 ) -> list[dict[str, Any]]:
     """The JSON Lines records (the module docstring) of a chunk of scans and their
     features (in the output frame); non-finite numbers are left to the encoder (null)."""
-    first, last, n_points = table.first.tolist(), table.last.tolist(), table.n_points.tolist()
-    lines, covariances = table.lines.tolist(), table.covariances.reshape(-1, 4).tolist()
-    kinds = [(END_KINDS[a], END_KINDS[b]) for a, b in table.end_kinds.tolist()]
+    lines = table.lines
+    columns = (
+        table.first.tolist(),
+        table.last.tolist(),
+        lines[:, START_X : START_Y + 1].tolist(),
+        lines[:, END_X : END_Y + 1].tolist(),
+        lines[:, RHO].tolist(),
+        lines[:, ALPHA].tolist(),
+        table.n_points.tolist(),
+        lines[:, RMS].tolist(),
+        table.covariances.tolist(),
+        [END_KINDS[kind] for kind in table.end_kinds[:, 0].tolist()],
+        [END_KINDS[kind] for kind in table.end_kinds[:, 1].tolist()],
+    )
+    every_segment = [
+        {
+            "first": first,
+            "last": last,
+            "start": start,
+            "end": end,
+            "rho": rho,
+            "alpha": alpha,
+            "n_points": n_points,
+            "rms": rms,
+            "covariance": covariance,
+            "start_kind": start_kind,
+            "end_kind": end_kind,
+        }
+        for (
+            first,
+            last,
+            start,
+            end,
+            rho,
+            alpha,
+            n_points,
+            rms,
+            covariance,
+            start_kind,
+            end_kind,
+        ) in zip(*columns, strict=True)
+    ]
     segment_offsets = table.offsets["segments"].tolist()
     breakpoints, breakpoint_offsets = table.breakpoints.tolist(), table.offsets["breakpoints"]
     corners, corner_offsets = table.corners.tolist(), table.offsets["corners"]
     records = []
     for k, (index, scan) in enumerate(zip(indices, scans, strict=True)):
-        segments = [
-            {
-                "first": first[j],
-                "last": last[j],
-                "start": lines[j][START_X : START_Y + 1],
-                "end": lines[j][END_X : END_Y + 1],
-                "rho": lines[j][RHO],
-                "alpha": lines[j][ALPHA],
-                "n_points": n_points[j],
-                "rms": lines[j][RMS],
-                "covariance": [covariances[j][:2], covariances[j][2:]],
-                "start_kind": kinds[j][0],
-                "end_kind": kinds[j][1],
-            }
-            for j in range(segment_offsets[k], segment_offsets[k + 1])
-        ]
+        segments = every_segment[segment_offsets[k] : segment_offsets[k + 1]]
         records.append(
             {
                 "scan": int(index),
