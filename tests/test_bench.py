@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 
@@ -218,6 +219,7 @@ def test_quick_pipeline_section(quick_run):
     assert all(rate > 0 for rate in pipeline["end_to_end"].values())
     assert list(pipeline["jobs"]) == ["1"]
     assert len(pipeline["load_before"]) == 3
+    assert 0.0 <= pipeline["other_cores_busy"] <= os.cpu_count()
     assert 0 < pipeline["floor_us"] < stages["extract (batch)"]
     assert pipeline["cold"] is None  # not in --quick: it compiles from an empty cache
     page = (folder / "docs" / "PERFORMANCE.md").read_text()

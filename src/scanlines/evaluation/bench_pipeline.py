@@ -8,7 +8,9 @@
   on the same scans, encoding each text format, and end to end (read, extract, write,
   commit) into JSON Lines, CSV and MCAP.
 * **Jobs**: end to end to JSON Lines with 1 to ``max_jobs`` threads, with the machine's
-  load average before and after (the machine may be shared).
+  load average before and after (the machine may be shared) and the cores other processes
+  kept busy during a second of sleep just before (the load average also counts this
+  process's own work of the minutes before).
 * **The floor**: one compiled pass over the returns of the same stack (the sum of their
   ``x`` and ``y``), against which the extraction's cost per scan is a ratio.
 
@@ -33,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from scanlines._jit import kernel
+from scanlines.evaluation.machine import cores_busy
 from scanlines.evaluation.report import TableData
 
 __all__ = ["ColdStart", "PipelineResult", "cold_start", "measure_pipeline", "one_pass"]
@@ -111,6 +114,7 @@ class PipelineResult:
     jobs: dict[int, float] = field(default_factory=dict)
     load_before: list[float] = field(default_factory=list)
     load_after: list[float] = field(default_factory=list)
+    other_cores_busy: float | None = None
     floor_us: float = 0.0
     cold: ColdStart | None = None
 
@@ -140,6 +144,8 @@ class PipelineResult:
         if self.jobs:
             one = self.jobs.get(1)
             load = f"load average before {self.load_before[0]:.2f}, after {self.load_after[0]:.2f}"
+            if self.other_cores_busy is not None:
+                load += f"; other processes just before: {self.other_cores_busy:.2f} cores busy"
             tables.append(
                 TableData(
                     f"run to JSON Lines by jobs ({load}; {os.cpu_count()} cores)",
@@ -216,6 +222,7 @@ def measure_pipeline(
         seconds = min(_run_seconds(log, selection, extractor, suffix, 1) for _ in range(repeats))
         result.end_to_end[suffix] = len(scans) / seconds
     tick("end to end")
+    result.other_cores_busy = cores_busy()  # the load average counts this process's work
     result.load_before = list(os.getloadavg())
     for jobs in range(1, max_jobs + 1):
         seconds = min(

@@ -9,12 +9,13 @@ from __future__ import annotations
 
 import os
 import platform
+import time
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-__all__ = ["load_average", "machine_info"]
+__all__ = ["cores_busy", "load_average", "machine_info"]
 
 
 def load_average() -> list[float] | None:
@@ -23,6 +24,33 @@ def load_average() -> list[float] | None:
         return [round(x, 2) for x in os.getloadavg()]
     except (AttributeError, OSError):
         return None
+
+
+def cores_busy(seconds: float = 1.0) -> float | None:
+    """Cores kept busy by every process over the next ``seconds`` (from ``/proc/stat``),
+    ``None`` where there is no such file. Called while this process sleeps, it is what
+    the machine's other tenants use, which a load average that counts this process's own
+    work just before cannot tell."""
+    before = _cpu_times()
+    if before is None:
+        return None
+    time.sleep(seconds)
+    after = _cpu_times()
+    if after is None:
+        return None
+    total, idle = after[0] - before[0], after[1] - before[1]
+    cores = os.cpu_count() or 1
+    return round(cores * (total - idle) / total, 2) if total > 0 else None
+
+
+def _cpu_times() -> tuple[int, int] | None:
+    """All CPU time and idle time (idle and waiting for I/O) so far, in clock ticks."""
+    try:
+        fields = Path("/proc/stat").read_text().split("\n", 1)[0].split()[1:]
+    except OSError:
+        return None
+    ticks = [int(value) for value in fields[:8]]  # user nice system idle iowait irq softirq steal
+    return sum(ticks), ticks[3] + ticks[4]
 
 
 def machine_info() -> dict[str, Any]:
