@@ -38,7 +38,7 @@ __all__ = ["COMPILED", "kernel", "kernel_seconds", "scan_kernel"]
 COMPILED = numba is not None and not numba.config.DISABLE_JIT
 
 
-KERNEL_SOURCES = ("_jit.py", "steps/*.py", "methods/*.py")
+KERNEL_SOURCES = ("_jit.py", "steps/*.py", "methods/*.py", "io/numbers.py")
 """The package files that hold kernels (the cache key hashes them)."""
 
 
@@ -114,20 +114,28 @@ class _KernelClock:
         self._local.depth -= 1
         if self._local.depth == 0:
             now = time.perf_counter()
+            self._local.total = self.thread_seconds() + now - self._local.started
             with self._lock:
                 self.seconds += now - self._local.started
                 self._threads -= 1
                 if self._threads == 0:
                     self.wall_seconds += now - self._wall_started
 
+    def thread_seconds(self) -> float:
+        """The part of :attr:`seconds` spent by the calling thread."""
+        return getattr(self._local, "total", 0.0)
+
 
 _CLOCK = _KernelClock()
 
 
-def kernel_seconds(wall: bool = False) -> float:
+def kernel_seconds(wall: bool = False, *, this_thread: bool = False) -> float:
     """Seconds this process has spent compiling kernels or loading them from the cache:
-    summed over threads, or with ``wall`` the wall time during which any thread did.
-    Take the difference around a call to leave them out of its timing."""
+    summed over threads, with ``wall`` the wall time during which any thread did, with
+    ``this_thread`` the calling thread's share. Take the difference around a call to
+    leave them out of its timing."""
+    if this_thread:
+        return _CLOCK.thread_seconds()
     return _CLOCK.wall_seconds if wall else _CLOCK.seconds
 
 

@@ -20,9 +20,12 @@ MAX_SPAN = 2.0 * math.pi * (1.0 + 1e-4)
 
 
 def _as_float(name: str, value: Any, *, finite: bool = False, allow_inf: bool = True) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+    if isinstance(value, float):  # float and np.float64, checked first: the common case
+        out = float(value)
+    elif isinstance(value, bool) or not isinstance(value, (int, np.integer, np.floating)):
         raise ScanError(f"{name} must be a real number, got {value!r}")
-    out = float(value)
+    else:
+        out = float(value)
     if (
         math.isnan(out)
         or (finite and not math.isfinite(out))
@@ -45,7 +48,7 @@ def as_array(values: Any, name: str) -> np.ndarray:
 
 def _as_vector(name: str, values: Any, *, length: int | None = None) -> FloatArray:
     arr = as_array(values, name)
-    if arr.dtype.kind not in "fiu" or arr.dtype == np.bool_:
+    if arr.dtype.kind not in "fiu":  # not bool ("b") either
         raise ScanError(
             f"{name} must hold real numbers, got dtype {arr.dtype} ({_preview(values)})"
         )
@@ -319,4 +322,8 @@ def _as_pose(pose: Sequence[float]) -> tuple[float, float, float]:
         raise ScanError(f"pose must be (x, y, theta), got {pose!r}") from None
     if len(values) != 3:
         raise ScanError(f"pose must be (x, y, theta), got {len(values)} values: {pose!r}")
-    return tuple(_as_float(f"pose[{i}]", v, finite=True) for i, v in enumerate(values))  # type: ignore[return-value]
+    checked = [_as_float(name, v, finite=True) for name, v in zip(_POSE_NAMES, values, strict=True)]
+    return tuple(checked)  # type: ignore[return-value]
+
+
+_POSE_NAMES = ("pose[0]", "pose[1]", "pose[2]")

@@ -47,13 +47,22 @@ PROFILE = "sensor profile"
 """The name under which the kernels of :func:`~scanlines.sensor_profile.estimate_profile`
 are warmed."""
 
+TEXT_LOGS = "text logs"
+"""The name under which the number reader of the text logs
+(:func:`~scanlines.io.numbers.number_fields`) is warmed."""
+
 
 def warm_method(name: str) -> tuple[str, float]:
     """Compile (or load) the kernels ``name`` uses; returns ``(name, seconds)``.
 
-    ``name`` is a method, or :data:`PROFILE` for the sensor-profile estimate."""
+    ``name`` is a method, :data:`PROFILE` for the sensor-profile estimate, or
+    :data:`TEXT_LOGS` for the text logs' number reader."""
     started = time.perf_counter()
-    if name == PROFILE:
+    if name == TEXT_LOGS:
+        from scanlines.io.numbers import number_fields
+
+        number_fields("FLASER 1 2.5 host")
+    elif name == PROFILE:
         from scanlines.sensor_profile import ProfileError, estimate_profile
 
         with contextlib.suppress(ProfileError):  # the scans are made to be measurable
@@ -69,13 +78,14 @@ def compile_kernels(
     jobs: int = 1,
     on_done: Callable[[str, float], None] = lambda _name, _seconds: None,
 ) -> dict[str, float]:
-    """Compile the kernels of ``methods`` (default: every method, and the sensor-profile
-    estimate) in ``jobs`` processes; returns the seconds each took, in the order done."""
+    """Compile the kernels of ``methods`` (default: every method, the sensor-profile
+    estimate and the text logs' number reader) in ``jobs`` processes; returns the seconds
+    each took, in the order done."""
     names = [*(methods or method_names())]
     if methods is None:
-        names.append(PROFILE)
+        names += [PROFILE, TEXT_LOGS]
     for name in names:
-        if name != PROFILE:
+        if name not in (PROFILE, TEXT_LOGS):
             Extractor(name)  # an unknown method fails here, before any process starts
     seconds: dict[str, float] = {}
     if jobs == 1 or len(names) == 1:

@@ -96,6 +96,7 @@ from scanlines.io.base import (
     LogReader,
 )
 from scanlines.io.fields import FieldLayout
+from scanlines.io.numbers import INTEGER, number_fields
 from scanlines.io.text import iter_lines, parse_floats, parse_int
 from scanlines.poses import compose, relative_pose
 from scanlines.scan import Scan
@@ -361,7 +362,7 @@ class CarmenReader(LogReader):
             if kind == "scan":
                 record_index = index
                 index += 1
-                scan = self._read_or_skip(self._parse_laser, line, line_number)
+                scan = self._read_or_skip(self._parse_laser_line, line, line_number)
                 if scan is not None:
                     self.counts[name] += 1
                     yield record_index, scan
@@ -369,7 +370,8 @@ class CarmenReader(LogReader):
                 index += 1  # keeps its place in the scan numbering
             elif kind == "other":
                 parse = self._parse_odom if name == "ODOM" else self._parse_param
-                if self._read_or_skip(parse, line, line_number, scan=False) is not None:
+                split = _split_first(parse)
+                if self._read_or_skip(split, line, line_number, scan=False) is not None:
                     self.counts[name] += 1
             else:
                 self.skipped[_skip_kind(name)] += 1
@@ -405,12 +407,28 @@ class CarmenReader(LogReader):
     def _read_or_skip(self, parse: Any, line: str, line_number: int, *, scan: bool = True) -> Any:
         try:
             self._check_line(line, line_number)
-            return parse(line.split(), line_number)
+            return parse(line, line_number)
         except LogFormatError as error:
             self._bad_record(error, scan=scan)
             return None
 
     # -- record parsers -------------------------------------------------------------------
+
+    def _parse_laser_line(self, line: str, line_number: int) -> Scan:
+        scan = self._fast_flaser(line, line_number) if self.message in _SIDE else None
+        return scan if scan is not None else self._parse_laser(line.split(), line_number)
+
+    def _fast_flaser(self, line: str, line_number: int) -> Scan | None:
+        """The ``FLASER`` / ``RLASER`` record ``line`` read in one compiled pass, or
+        ``None`` when a field needs the slow path (:mod:`scanlines.io.numbers`)."""
+        fields = number_fields(line)
+        if fields is None or len(fields) < 2 or fields.kinds[1] != INTEGER:
+            return None
+        n = int(fields.values[1])
+        if len(fields) != n + 11 or fields.texts != [0, n + 9]:  # name, hostname
+            return None
+        numbers = np.concatenate((fields.values[2 : n + 9], fields.values[n + 10 :]))
+        return self._flaser_scan(self.message, n, numbers, line_number)
 
     def _parse_laser(self, tokens: list[str], line_number: int) -> Scan:
         name = tokens[0]
@@ -419,7 +437,6 @@ class CarmenReader(LogReader):
         return self._parse_new_laser(tokens, line_number, robot=name.startswith("ROBOT"))
 
     def _parse_flaser(self, tokens: list[str], line_number: int) -> Scan:
-        side = _SIDE[tokens[0]]
         n = _count(tokens, 1, "num_readings", self.path, line_number)
         _expect_length(tokens, n + 11, self.path, line_number, tokens[0], "num_readings", n)
         layout = FieldLayout([("range", n), *((f, None) for f in _FLASER_TAIL), *_STAMPS])
@@ -429,6 +446,12 @@ class CarmenReader(LogReader):
             path=self.path,
             record=line_number,
         )
+        return self._flaser_scan(tokens[0], n, numbers, line_number)
+
+    def _flaser_scan(self, name: str, n: int, numbers: np.ndarray, line_number: int) -> Scan:
+        """The scan of a ``FLASER`` / ``RLASER`` record from its ``n`` ranges, two poses
+        and two timestamps (``numbers``)."""
+        side = _SIDE[name]
         laser_pose, robot_pose = numbers[n : n + 3], numbers[n + 3 : n + 6]
         self._pose_pair = (laser_pose, robot_pose)
         fov = math.radians(self._flaser_fov(side))
@@ -580,6 +603,11 @@ def _record_name(line: str) -> str:
     """The first token of a line (its message name), without splitting the whole line."""
     parts = line.split(None, 1)
     return parts[0] if parts else ""
+
+
+def _split_first(parse: Any) -> Any:
+    """``parse`` (which takes a record's tokens) taking the record's line."""
+    return lambda line, line_number: parse(line.split(), line_number)
 
 
 def _skip_kind(name: str) -> str:
