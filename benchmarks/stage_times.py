@@ -57,14 +57,14 @@ def main() -> None:
     clustered = cluster_returns(returns, n_beams, step, False, rule, window, no_breaks)
     start, end, breakpoints = clustered[1], clustered[2], clustered[3]
     moments = fit.prefix_moments(returns.x, returns.y)
-    cost = ad.run_cost_of(s, moments, returns, noise)
+    sigmas = return_sigmas(returns.r, noise)
+    cost = ad.run_cost_of(s, moments, returns, sigmas)
     scores = ad.corner_scores(
         returns, n_beams, step, moments, start, end, window, settings.corner_score
     )
     corners, scale = ad.choose_corners(cost, start, end, scores, True, s, grid)
-    a, b, owner = ad.segments(returns, cost, start, end, corners, scale * scale, s, noise)
-    turn_sigmas = ad.direction_sigmas(returns, moments, a, b, noise)
-    sigmas = return_sigmas(returns.r, noise)
+    a, b, owner = ad.segments(returns, cost, start, end, corners, scale * scale, s, noise, sigmas)
+    turn_sigmas = ad.direction_sigmas(returns, moments, a, b, sigmas)
     events, scan_shape = (breakpoints, corners, breakpoints), (n_beams, False)
     cut = cut_at(start, end, corners, False)
     rows = {
@@ -105,7 +105,7 @@ def main() -> None:
             cost, start, end, scores, True, s, grid
         ),
         "cut, refine, merge, split": lambda: ad.segments(
-            returns, cost, start, end, corners, scale * scale, s, noise
+            returns, cost, start, end, corners, scale * scale, s, noise, sigmas
         ),
         "  of which: refine cuts": lambda: refine_cuts(cost, *cut),
         "corner beams": lambda: junction_events(

@@ -30,7 +30,13 @@ from scanlines.steps.fit import (
     prefix_moments,
     run_covariances,
 )
-from scanlines.steps.noise import NoiseLine, noise_at, scan_noise
+from scanlines.steps.noise import (
+    NoiseLine,
+    noise_at,
+    offset_power_sums,
+    parabola_at_centre,
+    scan_noise,
+)
 from scanlines.steps.returns import Returns, beam_gaps
 from scanlines.steps.select import (
     BIC,
@@ -399,6 +405,33 @@ def test_scan_noise_follows_noise_proportional_to_range():
     line = NoiseLine(*np.median(_noise_on_scenes("urg04lx"), axis=0))
     assert line.per_metre > 0.004
     assert noise_at(line, 3.0) == pytest.approx(0.03, rel=0.25)
+
+
+@settings(max_examples=80, deadline=None)
+@given(
+    st.lists(st.integers(1, 2), min_size=6, max_size=6),
+    st.lists(st.floats(0.5, 30.0), min_size=7, max_size=7),
+)
+def test_parabola_at_centre_is_the_least_squares_parabola(steps, ranges):
+    # beam offsets with one missing beam here and there, as the noise windows have them
+    index = np.concatenate(([0], np.cumsum(steps)))
+    r = np.array(ranges)
+    t = (index - index[3]).astype(float)
+    residual, leverage, slope = parabola_at_centre(
+        index, r, 0, 6, 3, offset_power_sums(index, 0, 6, 3)
+    )
+    design = np.column_stack((np.ones(7), t, t * t))
+    coefficients = np.linalg.lstsq(design, r, rcond=None)[0]
+    hat = design @ np.linalg.inv(design.T @ design) @ design.T
+    assert residual == pytest.approx(r[3] - coefficients[0], abs=1e-9)
+    assert slope == pytest.approx(coefficients[1], abs=1e-9)
+    assert leverage == pytest.approx(hat[3, 3], abs=1e-12)
+
+
+def test_contiguous_power_sums_are_the_small_integers():
+    assert offset_power_sums(np.arange(7), 0, 6, 3) == (7.0, 0.0, 28.0, 0.0, 196.0)
+    shifted = np.arange(100, 107)
+    assert offset_power_sums(shifted, 0, 6, 3) == offset_power_sums(np.arange(7), 0, 6, 3)
 
 
 @pytest.mark.parametrize(("turn_sigma", "corners"), [(0.005, 1), (0.05, 0)])

@@ -182,7 +182,6 @@ from scanlines.steps.fit import (
 from scanlines.steps.merge import merge_by_chi_square, merge_by_criterion
 from scanlines.steps.noise import (
     NoiseLine,
-    covariance_sigmas,
     noise_at,
     residual_noise,
     residual_tolerances,
@@ -376,9 +375,9 @@ class Adaptive(CompiledMethod):
     parameters: ClassVar[dict[str, Param]] = PARAMETERS
     presets: ClassVar[dict[str, dict[str, Any]]] = PRESETS
     stages = (
-        *("scan_noise_model", "breakpoint_rule", "denoise", "cluster_returns", "run_cost_of"),
-        *("corner_scores", "choose_corners", "segments", "junction_events"),
-        *("covariance_sigmas", "assemble"),
+        *("scan_noise_model", "breakpoint_rule", "denoise", "cluster_returns", "return_sigmas"),
+        *("run_cost_of", "corner_scores", "choose_corners", "segments", "junction_events"),
+        "assemble",
     )
 
     @classmethod
@@ -444,30 +443,30 @@ def adaptive_scan(ranges, valid, cos, sin, step, full_circle, angle_min, noise, 
         returns, n_beams, step, full_circle, rule, window, breaks
     )
     moments = prefix_moments(returns.x, returns.y)
-    cost = run_cost_of(s, moments, returns, noise)
+    sigma = return_sigmas(returns.r, noise)  # once: the criterion, merge, checks, covariances
+    cost = run_cost_of(s, moments, returns, sigma)
     scores = corner_scores(returns, n_beams, step, moments, start, end, window, s.corner_score)
     rescale = s.estimate_noise and s.criterion == BIC
     corners, scale = choose_corners(cost, start, end, scores, rescale, s, grid)
     unit = scale * scale if s.criterion == BIC else typical * typical
-    a, b, owner = segments(returns, cost, start, end, corners, unit, s, noise)
+    a, b, owner = segments(returns, cost, start, end, corners, unit, s, noise, sigma)
     check_sigma = scale * typical if s.corner_check else -1.0
-    turn_sigmas = direction_sigmas(returns, moments, a, b, noise) if s.corner_check else np.zeros(0)
+    turn_sigmas = direction_sigmas(returns, moments, a, b, sigma) if s.corner_check else np.zeros(0)
     corner_beams, jumps = junction_events(
         returns, s.fit, moments, a, b, owner, s.shared_corner, ring, check_sigma, turn_sigmas
     )
     breakpoints = sorted_distinct(np.concatenate((breakpoints, jumps)))
-    sigmas = covariance_sigmas(s.range_sigma, noise, returns, gap)
+    if s.range_sigma == s.range_sigma:  # given: it replaces the noise line
+        sigma = np.full(returns.r.shape[0], s.range_sigma)
     events = (breakpoints, corner_beams, outliers)
-    return assemble(
-        returns, s.fit, moments, a, b, angle_min, sigmas, events, (n_beams, full_circle)
-    )
+    return assemble(returns, s.fit, moments, a, b, angle_min, sigma, events, (n_beams, full_circle))
 
 
 @kernel
-def direction_sigmas(returns, moments, a, b, noise):
-    """Standard deviation of each segment's direction, from the noise and its residuals."""
+def direction_sigmas(returns, moments, a, b, sigma):
+    """Standard deviation of each segment's direction, from the noise (``sigma`` per
+    return) and its residuals."""
     rho, alpha, _ = fit_many(np.int64(TLS), moments, a, b)
-    sigma = return_sigmas(returns.r, noise)
     covariance = run_covariances(returns, rho, alpha, a, b, sigma, True)
     return np.sqrt(covariance[:, 1, 1])
 
@@ -486,13 +485,13 @@ def scan_noise_model(s, noise, returns, gap):
 
 
 @kernel
-def run_cost_of(s, moments, returns, noise):
+def run_cost_of(s, moments, returns, sigma):
     """The :class:`~scanlines.steps.fit.RunCost` of the criterion: in noise units for
-    BIC (each run's error over its returns' mean noise variance and incidence), square
-    metres for SSE."""
+    BIC (each run's error over its returns' mean noise variance, ``sigma`` per return,
+    and incidence), square metres for SSE."""
     if s.criterion != BIC:
         return RunCost(s.fit, moments, np.zeros(0), np.zeros(0))
-    variances = variance_sums(return_sigmas(returns.r, noise))
+    variances = variance_sums(sigma)
     return RunCost(s.fit, moments, inverse_square_sums(returns.r), variances)
 
 
@@ -571,7 +570,7 @@ def chosen_by_full_sweep(cost, start, end, candidates, scores, rescale, s, grid)
 
 
 @kernel
-def segments(returns, cost, start, end, corners, unit, s, noise):
+def segments(returns, cost, start, end, corners, unit, s, noise, sigma):
     """Runs ``[a, b]`` (and cluster of each) after cutting, refining, merging and bounding."""
     x, y = returns.x, returns.y
     a, b, owner = cut_at(start, end, corners, s.shared_corner)
@@ -581,7 +580,6 @@ def segments(returns, cost, start, end, corners, unit, s, noise):
         segment_cost = s.penalty * math.log(max(x.shape[0], 2)) * unit
         a, b, owner = merge_by_criterion(cost, a, b, owner, segment_cost)
         if s.merge_chi2 > 0.0 and s.fit != PAPER:
-            sigma = return_sigmas(returns.r, noise)
             a, b, owner = merge_by_chi_square(
                 returns, cost.moments, a, b, owner, sigma, s.merge_chi2, True
             )

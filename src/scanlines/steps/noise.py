@@ -118,13 +118,17 @@ def local_residuals(returns, gap):
     stretch_start[0] = 0
     for i in range(1, n):
         stretch_start[i] = stretch_start[i - 1] if gap[i - 1] <= MAX_BRIDGED_GAP else i
+    # A window without missing beams has the offsets -h..h: the same sums every time
+    # (small integers, exact in any order of summation).
+    contiguous = offset_power_sums(np.arange(2 * h + 1), 0, 2 * h, h)
     for i in range(h, n - h):
         if stretch_start[i + h] > i - h or r[i] <= 0.0:
             continue
-        residual, leverage, slope = parabola_at_centre(index, r, i - h, i + h, i)
+        a, b = i - h, i + h
+        sums = contiguous if index[b] - index[a] == 2 * h else offset_power_sums(index, a, b, i)
+        residual, leverage, slope = parabola_at_centre(index, r, a, b, i, sums)
         if not leverage < 1.0:
             continue
-        a, b = i - h, i + h
         bearing = abs(math.atan2(x[a] * y[b] - y[a] * x[b], x[a] * x[b] + y[a] * y[b]))
         per_beam = bearing / (index[b] - index[a])
         if not abs(slope) <= r[i] * per_beam:  # tan(incidence) <= 1
@@ -136,11 +140,10 @@ def local_residuals(returns, gap):
 
 
 @kernel
-def parabola_at_centre(index, r, a, b, i):
-    """Least-squares parabola of ``r`` over the beam offsets ``index - index[i]`` of
-    positions ``a..b``: ``(r[i] - fit at i, leverage of i, slope at i per beam)``."""
-    s0 = s1 = s2 = s3 = s4 = 0.0  # sums of t^k (scalars: no allocation per return)
-    t0 = t1 = t2 = 0.0
+def offset_power_sums(index, a, b, i):
+    """Sums of ``t^0 .. t^4`` over the beam offsets ``t = index[p] - index[i]`` of
+    positions ``a..b`` (scalars: no allocation per return)."""
+    s0 = s1 = s2 = s3 = s4 = 0.0
     for p in range(a, b + 1):
         t = float(index[p] - index[i])
         t_2 = t * t
@@ -149,6 +152,18 @@ def parabola_at_centre(index, r, a, b, i):
         s2 += t_2
         s3 += t_2 * t
         s4 += t_2 * t_2
+    return s0, s1, s2, s3, s4
+
+
+@kernel
+def parabola_at_centre(index, r, a, b, i, sums):
+    """Least-squares parabola of ``r`` over the beam offsets ``index - index[i]`` of
+    positions ``a..b`` (``sums``: their :func:`offset_power_sums`):
+    ``(r[i] - fit at i, leverage of i, slope at i per beam)``."""
+    s0, s1, s2, s3, s4 = sums
+    t0 = t1 = t2 = 0.0
+    for p in range(a, b + 1):
+        t = float(index[p] - index[i])
         t0 += r[p]
         t1 += r[p] * t
         t2 += r[p] * t * t
