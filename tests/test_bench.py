@@ -218,6 +218,7 @@ def test_quick_pipeline_section(quick_run):
     assert set(pipeline["end_to_end"]) == {".jsonl", ".csv", ".mcap"}
     assert all(rate > 0 for rate in pipeline["end_to_end"].values())
     assert list(pipeline["jobs"]) == ["1"]
+    assert pipeline["jobs_scans"] == 8 * 20  # the log repeated: many chunks in a full run
     assert len(pipeline["load_before"]) == 3
     assert 0.0 <= pipeline["other_cores_busy"] <= os.cpu_count()
     assert 0 < pipeline["floor_us"] < stages["extract (batch)"]

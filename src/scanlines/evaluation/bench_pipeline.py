@@ -7,7 +7,9 @@
   extraction of whole chunks (:meth:`~scanlines.Extractor.batch`), the single-call loop
   on the same scans, encoding each text format, and end to end (read, extract, write,
   commit) into JSON Lines, CSV and MCAP.
-* **Jobs**: end to end to JSON Lines with 1 to ``max_jobs`` threads, with the machine's
+* **Jobs**: end to end to JSON Lines with 1 to ``max_jobs`` threads, on a log of many
+  chunks (a text log's records repeated :data:`JOBS_COPIES` times: the 300-scan excerpt
+  alone makes two chunks, which two threads cannot share out), with the machine's
   load average before and after (the machine may be shared) and the cores other processes
   kept busy during a second of sleep just before (the load average also counts this
   process's own work of the minutes before).
@@ -37,6 +39,7 @@ import numpy as np
 from scanlines._jit import kernel
 from scanlines.evaluation.machine import cores_busy
 from scanlines.evaluation.report import TableData
+from scanlines.runner import CHUNK_SCANS
 
 __all__ = ["ColdStart", "PipelineResult", "cold_start", "measure_pipeline", "one_pass"]
 
@@ -101,6 +104,10 @@ def one_pass(stack, valid, cos, sin):
     return sums
 
 
+JOBS_COPIES = 8
+"""Times the jobs section repeats a text log's records (:func:`_repeated_log`)."""
+
+
 @dataclass
 class PipelineResult:
     """The figures of the section (see the module docstring); times in microseconds per
@@ -112,6 +119,7 @@ class PipelineResult:
     stages_us: dict[str, float] = field(default_factory=dict)
     end_to_end: dict[str, float] = field(default_factory=dict)
     jobs: dict[int, float] = field(default_factory=dict)
+    jobs_scans: int = 0
     load_before: list[float] = field(default_factory=list)
     load_after: list[float] = field(default_factory=list)
     other_cores_busy: float | None = None
@@ -146,9 +154,11 @@ class PipelineResult:
             load = f"load average before {self.load_before[0]:.2f}, after {self.load_after[0]:.2f}"
             if self.other_cores_busy is not None:
                 load += f"; other processes just before: {self.other_cores_busy:.2f} cores busy"
+            chunks = -(-self.jobs_scans // CHUNK_SCANS)
+            size = f"{self.jobs_scans:,} scans, {chunks} chunks"
             tables.append(
                 TableData(
-                    f"run to JSON Lines by jobs ({load}; {os.cpu_count()} cores)",
+                    f"run to JSON Lines by jobs ({size}; {load}; {os.cpu_count()} cores)",
                     ("jobs", "scans / s", "speed-up"),
                     tuple(
                         (str(j), f"{rate:,.0f}", f"{rate / one:.2f}x" if one else "-")
@@ -222,14 +232,17 @@ def measure_pipeline(
         seconds = min(_run_seconds(log, selection, extractor, suffix, 1) for _ in range(repeats))
         result.end_to_end[suffix] = len(scans) / seconds
     tick("end to end")
-    result.other_cores_busy = cores_busy()  # the load average counts this process's work
-    result.load_before = list(os.getloadavg())
-    for jobs in range(1, max_jobs + 1):
-        seconds = min(
-            _run_seconds(log, selection, extractor, ".jsonl", jobs) for _ in range(repeats)
-        )
-        result.jobs[jobs] = len(scans) / seconds
-    result.load_after = list(os.getloadavg())
+    with tempfile.TemporaryDirectory() as folder:
+        many, result.jobs_scans = _repeated_log(log, len(scans), Path(folder))
+        chosen = slice(0, result.jobs_scans)
+        result.other_cores_busy = cores_busy()  # the load average counts this process's work
+        result.load_before = list(os.getloadavg())
+        for jobs in range(1, max_jobs + 1):
+            seconds = min(
+                _run_seconds(many, chosen, extractor, ".jsonl", jobs) for _ in range(repeats)
+            )
+            result.jobs[jobs] = result.jobs_scans / seconds
+        result.load_after = list(os.getloadavg())
     tick("jobs")
     passes = [(s[0], s[0] > 0, *_bearings(s)) for s in stacks]
     one_pass(*passes[0])  # untimed: compiles
@@ -238,6 +251,24 @@ def measure_pipeline(
         result.cold = cold_start(method)
         tick("cold start")
     return result
+
+
+def _repeated_log(log: Path, scans: int, folder: Path) -> tuple[Path, int]:
+    """``log`` with its records :data:`JOBS_COPIES` times over, written in ``folder`` (a
+    CARMEN log; any other is used as it is), and how many of its scans to run: ``scans``
+    (the scans of the other stages) times :data:`JOBS_COPIES`, at most all."""
+    from scanlines.io import CarmenReader, open_log
+    from scanlines.io.text import open_text
+
+    with open_log(log) as reader:
+        if not isinstance(reader, CarmenReader):
+            return log, scans
+    with open_text(log) as handle:
+        text = handle.read()
+    many = folder / log.name.removesuffix(".gz")
+    many.write_text(text * JOBS_COPIES)
+    with open_log(many) as reader:
+        return many, min(sum(1 for _ in reader), scans * JOBS_COPIES)
 
 
 def _seconds(work: Callable[[], Any]) -> float:
