@@ -11,7 +11,7 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from scanlines.data import sample
-from scanlines.io import CarmenReader
+from scanlines.io import CarmenReader, open_log
 from scanlines.io.numbers import DECIMAL, INTEGER, NOT_A_NUMBER, number_fields
 
 
@@ -117,7 +117,7 @@ def test_fast_flaser_records_are_the_split_records() -> None:
         lines = _laser_lines(sample(name))
         assert lines
         for line_number, line in lines:
-            fast = reader._fast_flaser(line, line_number)
+            fast = reader._fast_flaser(number_fields(line), line_number)
             assert fast is not None, line_number
             _same_scan(fast, reader._parse_laser(line.split(), line_number))
 
@@ -136,4 +136,64 @@ def test_records_the_fast_path_cannot_read_are_read_token_by_token(tmp_path) -> 
     expected = np.array([float(r) for r in ranges])
     np.testing.assert_array_equal(scans[0].ranges, expected)
     assert reader.error_count == 1
-    assert reader._fast_flaser(good, 1) is None
+    assert reader._fast_flaser(number_fields(good), 1) is None
+
+
+def _record(message: str, ranges: list[float], remissions: list[float], numbers: list[float]):
+    """A laser record of ``message`` (values formatted as a logger might write them)."""
+    text = " ".join(f"{v:.3f}" for v in ranges)
+    stamps = f"{numbers[0]:.6f} host {numbers[1]:.6f}"
+    if message == "FLASER":
+        return f"FLASER {len(ranges)} {text} 1.5 -2.25 0.125 1.0 -2.0 0.25 {stamps}\n"
+    header = "0 -1.570796 3.141593 0.017453 80.0 0.01 0"
+    middle = f"{len(ranges)} {text} {len(remissions)} {' '.join(f'{v:g}' for v in remissions)}"
+    tail = " 1.5 -2.25 0.125 1.0 -2.0 0.25 0.3 0.0 0.5 0.2 0.0" if message == "ROBOTLASER1" else ""
+    return f"{message} {header} {middle}{tail} {stamps}\n"
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    st.sampled_from(["FLASER", "ROBOTLASER1", "RAWLASER1"]),
+    st.lists(st.floats(0.0, 81.9), min_size=1, max_size=40),
+    st.integers(0, 3),
+    st.lists(st.floats(0.0, 2e9), min_size=2, max_size=2),
+)
+def test_each_laser_message_reads_the_same_either_way(tmp_path_factory, message, ranges, m, stamps):
+    remissions = ranges[:m] if m < 3 else [float(k) for k in range(len(ranges))]
+    line = _record(message, ranges, remissions, stamps)
+    path = tmp_path_factory.mktemp("laser") / "one.log"
+    path.write_text(line)
+    reader = CarmenReader(path)
+    reader.message  # noqa: B018 - detect the message
+    fields = number_fields(line)
+    assert fields is not None
+    fast = (reader._fast_flaser if message == "FLASER" else reader._fast_new_laser)(fields, 1)
+    assert fast is not None
+    slow = reader._parse_laser(line.split(), 1)
+    _same_scan(fast, slow)
+    assert (fast.intensities is None) == (slow.intensities is None)
+    if fast.intensities is not None:
+        assert fast.intensities.tobytes() == slow.intensities.tobytes()
+    _same_scan(next(iter(CarmenReader(path))), slow)
+
+
+def test_a_negative_count_goes_to_the_slow_path(tmp_path) -> None:
+    line = "FLASER -5 1 2 3 host 4\n"
+    path = tmp_path / "negative.log"
+    path.write_text("FLASER 1 2.0 0 0 0 0 0 0 1.0 host 1.0\n" + line)
+    reader = CarmenReader(path, on_error="skip")
+    assert reader._fast_flaser(number_fields(line), 2) is None
+    assert len(list(reader)) == 1
+    assert reader.error_count == 1
+
+
+def test_coreslam_records_are_the_split_records() -> None:
+    reader = open_log(sample("urg"))
+    with gzip.open(sample("urg"), "rt") as handle:
+        lines = [line for line in handle if line.strip() and not line.startswith("#")]
+    assert lines
+    for line_number, line in enumerate(lines, 1):
+        fields = number_fields(line)
+        assert fields is not None
+        assert not fields.texts
+        _same_scan(reader._parse_line(line, line_number), reader._parse(line.split(), line_number))

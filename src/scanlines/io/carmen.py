@@ -96,7 +96,7 @@ from scanlines.io.base import (
     LogReader,
 )
 from scanlines.io.fields import FieldLayout
-from scanlines.io.numbers import INTEGER, number_fields
+from scanlines.io.numbers import INTEGER, NumberFields, number_fields
 from scanlines.io.text import iter_lines, parse_floats, parse_int
 from scanlines.poses import compose, relative_pose
 from scanlines.scan import Scan
@@ -415,20 +415,35 @@ class CarmenReader(LogReader):
     # -- record parsers -------------------------------------------------------------------
 
     def _parse_laser_line(self, line: str, line_number: int) -> Scan:
-        scan = self._fast_flaser(line, line_number) if self.message in _SIDE else None
+        fields = number_fields(line)
+        scan = None
+        if fields is not None:
+            fast = self._fast_flaser if self.message in _SIDE else self._fast_new_laser
+            scan = fast(fields, line_number)
         return scan if scan is not None else self._parse_laser(line.split(), line_number)
 
-    def _fast_flaser(self, line: str, line_number: int) -> Scan | None:
-        """The ``FLASER`` / ``RLASER`` record ``line`` read in one compiled pass, or
+    def _fast_flaser(self, fields: NumberFields, line_number: int) -> Scan | None:
+        """The ``FLASER`` / ``RLASER`` record of ``fields`` (read in one compiled pass), or
         ``None`` when a field needs the slow path (:mod:`scanlines.io.numbers`)."""
-        fields = number_fields(line)
-        if fields is None or len(fields) < 2 or fields.kinds[1] != INTEGER:
-            return None
-        n = int(fields.values[1])
-        if len(fields) != n + 11 or fields.texts != [0, n + 9]:  # name, hostname
+        n = _count_field(fields, 1)
+        if n is None or len(fields) != n + 11 or fields.texts != [0, n + 9]:  # name, hostname
             return None
         numbers = np.concatenate((fields.values[2 : n + 9], fields.values[n + 10 :]))
         return self._flaser_scan(self.message, n, numbers, line_number)
+
+    def _fast_new_laser(self, fields: NumberFields, line_number: int) -> Scan | None:
+        """:meth:`_fast_flaser` for ``ROBOTLASER`` and ``RAWLASER`` records."""
+        n = _count_field(fields, 8)
+        m = None if n is None else _count_field(fields, 9 + n)
+        if m is None:
+            return None
+        robot = self.message.startswith("ROBOT")
+        stamps_at = 10 + n + m + (len(_ROBOTLASER_TAIL) if robot else 0)
+        if len(fields) != stamps_at + 3 or fields.texts != [0, stamps_at + 1]:
+            return None
+        values = fields.values
+        parts = (values[1:8], values[9 : 9 + n], values[10 + n : stamps_at + 1], values[-1:])
+        return self._new_laser_scan(n, m, np.concatenate(parts), line_number, robot=robot)
 
     def _parse_laser(self, tokens: list[str], line_number: int) -> Scan:
         name = tokens[0]
@@ -505,6 +520,13 @@ class CarmenReader(LogReader):
             path=self.path,
             record=line_number,
         )
+        return self._new_laser_scan(n, m, numbers, line_number, robot=robot)
+
+    def _new_laser_scan(
+        self, n: int, m: int, numbers: np.ndarray, line_number: int, *, robot: bool
+    ) -> Scan:
+        """The scan of a ``ROBOTLASER`` / ``RAWLASER`` record from its numbers: the seven
+        header fields, ``n`` ranges, ``m`` remissions, the tail and two timestamps."""
         start_angle, resolution, record_max = numbers[1], numbers[3], numbers[4]
         ranges, remissions = numbers[7 : 7 + n], numbers[7 + n : 7 + n + m]
         after = 7 + n + m
@@ -623,6 +645,15 @@ def _skip_kind(name: str) -> str:
     if _MESSAGE_NAME.fullmatch(name):
         return name
     return "other"
+
+
+def _count_field(fields: NumberFields, at: int) -> int | None:
+    """The count at position ``at`` of a record read by
+    :func:`~scanlines.io.numbers.number_fields`, or ``None`` when it is not one (missing,
+    not digits, negative: the slow path reports it)."""
+    if len(fields) <= at or fields.kinds[at] != INTEGER or fields.values[at] < 0:
+        return None
+    return int(fields.values[at])
 
 
 def _count(tokens: list[str], at: int, field: str, path: Path, line_number: int) -> int:

@@ -30,6 +30,8 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from scanlines.errors import LogFormatError, ParameterError
 from scanlines.io.base import (
     DEFAULT_MAX_BEAMS,
@@ -38,6 +40,7 @@ from scanlines.io.base import (
     LogReader,
 )
 from scanlines.io.fields import FieldLayout
+from scanlines.io.numbers import number_fields
 from scanlines.io.text import iter_lines, parse_floats
 from scanlines.scan import Scan
 
@@ -165,12 +168,21 @@ class CoreSlamReader(LogReader):
             index += 1
             try:
                 self._check_line(line, line_number)
-                scan = self._parse(line.split(), line_number)
+                scan = self._parse_line(line, line_number)
             except LogFormatError as error:
                 self._bad_record(error)
                 continue
             self.counts["scan"] += 1
             yield record_index, scan
+
+    def _parse_line(self, line: str, line_number: int) -> Scan:
+        """The scan of a record: its numbers read in one compiled pass when every field is
+        one :func:`~scanlines.io.numbers.number_fields` reads, else token by token."""
+        fields = number_fields(line)
+        expected = _FIRST_RANGE_FIELD + self.beams
+        if fields is not None and len(fields) == expected and not fields.texts:
+            return self._scan_of(fields.values, line_number)
+        return self._parse(line.split(), line_number)
 
     def _parse(self, tokens: list[str], line_number: int) -> Scan:
         expected = _FIRST_RANGE_FIELD + self.beams
@@ -183,6 +195,9 @@ class CoreSlamReader(LogReader):
                 field=self._layout.name(min(len(tokens), expected)),
             )
         numbers = parse_floats(tokens, self._layout.name, path=self.path, record=line_number)
+        return self._scan_of(numbers, line_number)
+
+    def _scan_of(self, numbers: np.ndarray, line_number: int) -> Scan:
         return self._make_scan(
             line_number,
             ranges=numbers[_FIRST_RANGE_FIELD:] / 1000.0,
