@@ -24,7 +24,7 @@ NOT_A_NUMBER, INTEGER, DECIMAL = 0, 1, 2
 """Kinds of token: not one :func:`number_fields` reads, digits only (with a sign), any
 other number it reads."""
 
-_POWERS_OF_TEN = np.array([10.0**k for k in range(23)])  # all exact doubles
+_POWERS_OF_TEN = np.array([float(10**k) for k in range(23)])  # exact: 5^22 < 2^53
 _LARGEST_EXACT = 2**53
 
 
