@@ -38,7 +38,7 @@ __all__ = ["COMPILED", "kernel", "kernel_seconds", "scan_kernel"]
 COMPILED = numba is not None and not numba.config.DISABLE_JIT
 
 
-KERNEL_SOURCES = ("_jit.py", "steps/*.py", "methods/*.py", "io/numbers.py")
+KERNEL_SOURCES = ("_jit.py", "steps/*.py", "methods/*.py", "io/_number_kernels.py")
 """The package files that hold kernels (the cache key hashes them)."""
 
 

@@ -10,6 +10,7 @@ import numpy as np
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
+import scanlines.io._number_kernels  # noqa: F401 - loads numba, so number_fields reads
 from scanlines.data import sample
 from scanlines.io import CarmenReader, open_log
 from scanlines.io.numbers import DECIMAL, INTEGER, NOT_A_NUMBER, number_fields
@@ -146,7 +147,7 @@ def _record(message: str, ranges: list[float], remissions: list[float], numbers:
     if message == "FLASER":
         return f"FLASER {len(ranges)} {text} 1.5 -2.25 0.125 1.0 -2.0 0.25 {stamps}\n"
     header = "0 -1.570796 3.141593 0.017453 80.0 0.01 0"
-    middle = f"{len(ranges)} {text} {len(remissions)} {' '.join(f'{v:g}' for v in remissions)}"
+    middle = f"{len(ranges)} {text} {len(remissions)} {' '.join(f'{v:.1f}' for v in remissions)}"
     tail = " 1.5 -2.25 0.125 1.0 -2.0 0.25 0.3 0.0 0.5 0.2 0.0" if message == "ROBOTLASER1" else ""
     return f"{message} {header} {middle}{tail} {stamps}\n"
 

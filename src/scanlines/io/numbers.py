@@ -10,22 +10,28 @@ division rounds the value correctly: it is the double ``float(token)`` gives (Cl
 fast path, "How to read floating point numbers accurately", PLDI 1990). Any other token
 (``nan``, ``inf``, ``1_000``, 17 significant digits, text) is reported as not a number,
 and the reader parses that record the slow way, which also names a bad field.
+
+The kernels are in :mod:`scanlines.io._number_kernels`. They are used once numba is
+loaded and compiling (any extraction loads it); until then :func:`number_fields` returns
+``None`` and records are split in Python, so that a command that needs no kernel yet
+(the viewer serving its first scan) does not wait the 0.3-0.5 s numba's import takes,
+and plain Python (``NUMBA_DISABLE_JIT``) keeps the faster split.
 """
 
 from __future__ import annotations
 
+import sys
+from types import ModuleType
+
 import numpy as np
 
-from scanlines._jit import kernel
+from scanlines.interrupts import kernel_calls
 
 __all__ = ["DECIMAL", "INTEGER", "NOT_A_NUMBER", "NumberFields", "number_fields"]
 
 NOT_A_NUMBER, INTEGER, DECIMAL = 0, 1, 2
 """Kinds of token: not one :func:`number_fields` reads, digits only (with a sign), any
 other number it reads."""
-
-_POWERS_OF_TEN = np.array([float(10**k) for k in range(23)])  # exact: 5^22 < 2^53
-_LARGEST_EXACT = 2**53
 
 
 class NumberFields:
@@ -48,104 +54,28 @@ class NumberFields:
 def number_fields(line: str) -> NumberFields | None:
     """The whitespace-separated tokens of ``line`` (split as ``str.split()`` splits),
     each read as a number where the module docstring's fast path allows; ``None`` for a
-    line that is not ASCII (the caller splits it the slow way)."""
+    line that is not ASCII, or before numba is loaded (the caller splits it the slow
+    way)."""
+    kernels = _kernels()
+    if kernels is None:
+        return None
     try:
         data = line.encode("ascii")
     except UnicodeEncodeError:
         return None
-    values, kinds, texts = _read_fields(np.frombuffer(data, dtype=np.uint8), _POWERS_OF_TEN)
+    with kernel_calls:  # a signal waits for the call (scanlines.interrupts)
+        values, kinds, texts = kernels.read_fields(
+            np.frombuffer(data, dtype=np.uint8), kernels.POWERS_OF_TEN
+        )
     return NumberFields(values, kinds, texts.tolist())
 
 
-@kernel
-def _is_space(byte):
-    # str.split() separators among ASCII: \t \n \v \f \r, \x1c-\x1f and the space
-    return byte == 32 or 9 <= byte <= 13 or 28 <= byte <= 31
+def _kernels() -> ModuleType | None:
+    """:mod:`scanlines.io._number_kernels` once numba is loaded and compiling, else ``None``."""
+    kernels = sys.modules.get("scanlines.io._number_kernels")
+    if kernels is None and "numba" in sys.modules:
+        from scanlines._jit import COMPILED
 
-
-@kernel
-def _read_fields(data, powers):
-    n = data.shape[0]
-    values = np.empty(n // 2 + 1)
-    kinds = np.zeros(n // 2 + 1, dtype=np.int8)
-    texts = np.empty(n // 2 + 1, dtype=np.int64)
-    count = 0
-    text_count = 0
-    i = 0
-    while i < n:
-        if _is_space(data[i]):
-            i += 1
-            continue
-        end = i
-        while end < n and not _is_space(data[end]):
-            end += 1
-        values[count], kinds[count] = _read_number(data, i, end, powers)
-        if kinds[count] == NOT_A_NUMBER:
-            texts[text_count] = count
-            text_count += 1
-        count += 1
-        i = end
-    return values[:count], kinds[:count], texts[:text_count]
-
-
-@kernel
-def _read_number(data, start, end, powers):
-    """``(value, kind)`` of the token ``data[start:end]`` (module docstring)."""
-    failed = (np.nan, np.int8(NOT_A_NUMBER))
-    i = start
-    negative = data[i] == 45  # '-'
-    if data[i] == 45 or data[i] == 43:  # '-' or '+'
-        i += 1
-    significand = 0
-    digits = 0
-    after_point = 0
-    point = False
-    exact = True
-    while i < end:
-        byte = data[i]
-        if 48 <= byte <= 57:
-            digits += 1
-            if significand > _LARGEST_EXACT:
-                exact = False
-            else:
-                significand = significand * 10 + (byte - 48)
-            if point:
-                after_point += 1
-        elif byte == 46 and not point:  # '.'
-            point = True
-        else:
-            break
-        i += 1
-    if digits == 0:
-        return failed
-    exponent = 0
-    has_exponent = False
-    if i < end and (data[i] == 101 or data[i] == 69):  # 'e' or 'E'
-        has_exponent = True
-        i += 1
-        exponent_negative = i < end and data[i] == 45
-        if i < end and (data[i] == 45 or data[i] == 43):
-            i += 1
-        exponent_digits = 0
-        while i < end and 48 <= data[i] <= 57 and exponent_digits < 6:
-            exponent = exponent * 10 + (data[i] - 48)
-            exponent_digits += 1
-            i += 1
-        if exponent_digits == 0:
-            return failed
-        if exponent_negative:
-            exponent = -exponent
-    if i != end or not exact or significand > _LARGEST_EXACT:
-        return failed
-    power = exponent - after_point
-    if power > 22 or power < -22:
-        return failed
-    value = float(significand)
-    if power > 0:
-        value = value * powers[power]
-    elif power < 0:
-        value = value / powers[-power]
-    if negative:
-        value = -value
-    kind = INTEGER if not point and not has_exponent else DECIMAL
-    return value, np.int8(kind)
+        if COMPILED:
+            import scanlines.io._number_kernels as kernels
+    return kernels
