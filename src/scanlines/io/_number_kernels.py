@@ -1,5 +1,5 @@
-"""The kernels of :mod:`scanlines.io.numbers` (a module of their own, imported on first
-use, so that reading a log's header or serving the viewer's page does not load numba)."""
+"""The kernels of :mod:`scanlines.io.numbers` (a module of their own: it is imported only
+once numba is loaded, so that importing the readers does not load numba)."""
 
 from __future__ import annotations
 
@@ -47,7 +47,8 @@ def read_fields(data, powers):
 
 @kernel
 def read_number(data, start, end, powers):
-    """``(value, kind)`` of the token ``data[start:end]`` (module docstring)."""
+    """``(value, kind)`` of the token ``data[start:end]`` (the rule of
+    :mod:`scanlines.io.numbers`)."""
     failed = (np.nan, np.int8(NOT_A_NUMBER))
     i = start
     negative = data[i] == 45  # '-'
