@@ -23,6 +23,7 @@ from scanlines.evaluation.registration import (
 )
 from scanlines.evaluation.repeatability import (
     RepeatTolerances,
+    candidate_pairs,
     match_segments,
     register_pairs,
     repeatability_of_scans,
@@ -176,6 +177,9 @@ def test_exact_copies_repeat_fully(offset):
         assert method.per_pair == 1.0
         assert 0.5 < method.coverage <= 1.0
         assert method.per_scan == method.segments / 5
+        assert method.strict == 1.0
+        assert method.strict_pairs == 9
+        assert method.repeated_metres > 0.5
 
 
 def test_stricter_distance_tolerance_repeats_less():
@@ -188,6 +192,32 @@ def test_stricter_distance_tolerance_repeats_less():
     strict = repeatability_of_scans(scans, ["iepf"], tol=strict_tol).methods[0]
     assert loose.long_segments == strict.long_segments > 0
     assert strict.repeatability < loose.repeatability
+
+
+def test_strict_measure_weighs_length_and_compares_rho_at_the_origin():
+    scene = random_scene(4, "lms_05deg", kind="room")
+    scans = [(k, scene.scan(seed=k).scan) for k in range(4)]
+    loose = repeatability_of_scans(scans, ["iepf"]).methods[0]
+    tight = RepeatTolerances(strict_distance=0.002)
+    strict = repeatability_of_scans(scans, ["iepf"], tol=tight).methods[0]
+    assert loose.strict_pairs == strict.strict_pairs == 6
+    assert strict.strict < loose.strict <= 1.0
+    assert strict.repeated_metres < loose.repeated_metres
+    assert strict.repeatability == loose.repeatability  # the lenient measure is untouched
+
+
+def test_max_pairs_spreads_the_pairs_over_the_log():
+    scene = random_scene(1, "lms_1deg", kind="room")
+    scans = [(k, scene.scan(seed=0).scan) for k in range(300)]
+    chosen = candidate_pairs(scans, RepeatTolerances(max_pairs=50))
+    assert len(chosen) == len(set(chosen)) == 50
+    assert all(1 <= b - a <= 3 for a, b in chosen)
+    starts = [a for a, _ in chosen]
+    assert starts == sorted(starts)
+    assert starts[0] == 0
+    assert starts[-1] >= 290
+    assert {b - a for a, b in chosen} == {1, 2, 3}
+    assert len(candidate_pairs(scans, RepeatTolerances())) == 299 + 298 + 297
 
 
 def run(*args: str, cwd: Path) -> subprocess.CompletedProcess:
@@ -217,6 +247,9 @@ SUMMARY_COLUMNS = {
     "per_scan",
     "per_metre",
     "pairs_used",
+    "strict",
+    "repeated_metres",
+    "strict_pairs",
 }
 
 

@@ -15,4 +15,5 @@ BUILTIN_METHODS = (
     "line_regression",
     "ransac",
     "hough",
+    "partition",
 )

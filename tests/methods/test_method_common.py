@@ -26,7 +26,16 @@ from scanlines.steps.split import CHORD, REFERENCE_CODES, chord_distance, split_
 from scenes import beam_of, returns_of, scan_of, square_room
 from test_properties import check_order, scans
 
-METHODS = ("iepf", "pdbs", "split_merge", "line_tracking", "line_regression", "ransac", "hough")
+METHODS = (
+    "iepf",
+    "pdbs",
+    "split_merge",
+    "line_tracking",
+    "line_regression",
+    "ransac",
+    "hough",
+    "partition",
+)
 SIGMA = 0.01  # 1 cm Gaussian range noise in the hand-built scenes
 SIM_PRESETS = ("tim571", "lms_1deg")
 SIM_SEEDS = range(20)

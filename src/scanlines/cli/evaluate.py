@@ -107,6 +107,15 @@ def eval_command(
         int | None,
         typer.Option("--scans", min=2, help="With --real: the first N scans of each log."),
     ] = None,
+    pairs: Annotated[
+        int | None,
+        typer.Option(
+            "--pairs",
+            min=1,
+            help="With --real: register and score only N pairs spread evenly over each log "
+            "(the strict measure's 200, say); default every pair.",
+        ),
+    ] = None,
     family: Annotated[
         bool,
         typer.Option(
@@ -173,7 +182,7 @@ def eval_command(
     if real:
         _check_real_options(sensor, scenes_per_sensor, seed, scenes, save_scenes, noise, specs)
         _refuse_tolerances("--real", tol_beams=tol_beams, tol_rho=tol_rho, tol_alpha=tol_alpha)
-        results = [_repeatability_with_progress(log, specs, scans, profile) for log in real]
+        results = [_repeatability_with_progress(log, specs, scans, profile, pairs) for log in real]
         from scanlines.evaluation.repeatability import write_results
 
         for path in write_results(results, out):
@@ -404,12 +413,15 @@ def _labelled(names: list[str], specs, tolerance: int, profile, out: Path) -> No
 
 
 def _repeatability_with_progress(
-    log: Path, specs, scans: int | None, profile=None
+    log: Path, specs, scans: int | None, profile=None, pairs: int | None = None
 ) -> RepeatabilityResult:
-    from scanlines.evaluation.repeatability import repeatability
+    from scanlines.evaluation.repeatability import RepeatTolerances, repeatability
 
+    tol = RepeatTolerances(max_pairs=pairs)
     with _progress(f"{log.name}: pairs, then scans per method", unit="steps") as advance:
-        result = repeatability(log, specs, scans, on_progress=advance, sensor_profile=profile)
+        result = repeatability(
+            log, specs, scans, tol=tol, on_progress=advance, sensor_profile=profile
+        )
     _print_repeatability(result)
     return result
 

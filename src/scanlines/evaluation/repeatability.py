@@ -67,8 +67,8 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Callable, Iterable, Sequence
-from dataclasses import asdict, dataclass, field
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -100,6 +100,7 @@ __all__ = [
     "PairRecord",
     "RepeatTolerances",
     "RepeatabilityResult",
+    "candidate_pairs",
     "match_segments",
     "register_pairs",
     "repeatability",
@@ -125,6 +126,8 @@ class RepeatTolerances:
     max_gap: int = 3
     few_points: int = 5
     occlusion_margin: float = 0.2
+    max_pairs: int | None = None
+    strict_distance: float = 0.03
 
     def to_dict(self) -> dict[str, Any]:
         """The tolerances by name, with ``alpha_deg``."""
@@ -269,12 +272,7 @@ def register_pairs(
     for index, scan in scans:
         targets[index] = line_target(scan, settings)
         sources[index] = scan.points[scan.valid]
-    candidates = [
-        (a, b)
-        for a in range(len(scans))
-        for b in range(a + 1, len(scans))
-        if 1 <= scans[b][0] - scans[a][0] <= tol.max_gap
-    ]
+    candidates = candidate_pairs(scans, tol)
     consecutive: dict[int, Pose] = {}  # record i -> refined pose of the next record in i
     previous: Pose | None = None
     pairs = []
@@ -313,6 +311,29 @@ def register_pairs(
             on_pair(done + 1, len(candidates))
     pairs.sort(key=lambda p: (p.i, p.j))
     return tuple(pairs), "log poses + ICP" if with_poses else "ICP alone"
+
+
+def candidate_pairs(scans: Sequence[tuple[int, Scan]], tol: RepeatTolerances) -> list:
+    """Positions ``(a, b)`` of the pairs to register: every pair 1 to ``max_gap`` records
+    apart, or with ``max_pairs`` that many spread evenly over the log (the gap cycling
+    through 1 .. ``max_gap``), so that a long log costs no more than a short one."""
+    every = [
+        (a, b)
+        for a in range(len(scans))
+        for b in range(a + 1, min(a + 1 + tol.max_gap, len(scans)))
+        if 1 <= scans[b][0] - scans[a][0] <= tol.max_gap
+    ]
+    if tol.max_pairs is None or len(every) <= tol.max_pairs:
+        return every
+    by_start: dict[int, list[tuple[int, int]]] = {}
+    for a, b in every:
+        by_start.setdefault(a, []).append((a, b))
+    starts = sorted(by_start)
+    chosen = []
+    for k in range(tol.max_pairs):
+        options = by_start[starts[k * len(starts) // tol.max_pairs]]
+        chosen.append(options[k % len(options)])
+    return chosen
 
 
 # --------------------------------------------------------------------------- matching
@@ -401,6 +422,9 @@ class MethodRepeatability:
     short_share: float
     per_scan: float
     per_metre: float
+    strict: float = math.nan
+    repeated_metres: float = math.nan
+    strict_pairs: int = 0
 
     def to_dict(self) -> dict[str, Any]:
         """Flat row for CSV (spec columns first)."""
@@ -475,6 +499,7 @@ def _score_method(
         ends[index] = segment_ends
         if on_scan is not None:
             on_scan()
+    strict, metres, strict_pairs = _strict_scores(ends, dict(scans), pairs, tol)
     partners: dict[int, list[PairRecord]] = {}
     for pair in pairs:
         if pair.used:
@@ -508,7 +533,76 @@ def _score_method(
         short_share=_ratio(counts.few, counts.segments),
         per_scan=_ratio(counts.segments, counts.scans),
         per_metre=_ratio(counts.segments, counts.surface),
+        strict=strict,
+        repeated_metres=metres,
+        strict_pairs=strict_pairs,
     )
+
+
+SURFACE_SAMPLES = 11
+"""Points along a segment that decide whether the other scan of a pair observed it."""
+
+
+def _strict_scores(
+    ends: Mapping[int, np.ndarray],
+    scans: Mapping[int, Scan],
+    pairs: Sequence[PairRecord],
+    tol: RepeatTolerances,
+) -> tuple[float, float, int]:
+    """The strict measure: each used pair scored on its own, in both directions.
+
+    In direction ``i -> j`` the trials are ``i``'s long segments whose surface ``j``
+    observed (at least half of :data:`SURFACE_SAMPLES` points along the segment in
+    ``j``'s view, not hidden behind ``j``'s returns), weighted by length; one is repeated
+    when a segment of ``j``, moved into ``i``'s frame, matches it with the lines compared
+    in Hesse form in ``i``'s frame (``|d rho| <= strict_distance``). A pair scores the
+    mean of its two directions' repeated length over trial length; the log, the mean over
+    pairs (``strict``) and the mean repeated metres per scan and direction
+    (``repeated_metres``); also the number of pairs scored.
+    """
+    hesse = replace(tol, distance_at="origin", distance=tol.strict_distance)
+    scores, metres = [], []
+    for pair in pairs:
+        if not pair.used:
+            continue
+        ratios, repeated_lengths = [], []
+        for mine, theirs, pose, other in (
+            (ends[pair.i], ends[pair.j], pair.pose, scans[pair.j]),
+            (ends[pair.j], ends[pair.i], invert(pair.pose), scans[pair.i]),
+        ):
+            trial, repeated = _direction(
+                mine, _moved(theirs, pose), invert(pose), other, tol, hesse
+            )
+            repeated_lengths.append(repeated)
+            if trial > 0:
+                ratios.append(repeated / trial)
+        metres.append(float(np.mean(repeated_lengths)))
+        if ratios:
+            scores.append(float(np.mean(ratios)))
+    return (
+        float(np.mean(scores)) if scores else math.nan,
+        float(np.mean(metres)) if metres else math.nan,
+        len(scores),
+    )
+
+
+def _direction(mine, theirs, to_other, other, tol, hesse) -> tuple[float, float]:
+    """Trial and repeated length of one direction of a pair (see :func:`_strict_scores`)."""
+    lengths = np.hypot(*(mine[:, 2:4] - mine[:, 0:2]).T) if len(mine) else np.zeros(0)
+    long = np.flatnonzero(np.isfinite(lengths) & (lengths >= tol.min_length))
+    if len(long) == 0:
+        return 0.0, 0.0
+    share = np.linspace(0.0, 1.0, SURFACE_SAMPLES)[:, None]
+    observed = np.zeros(len(long), dtype=bool)
+    for k, m in enumerate(long):
+        samples = mine[m, 0:2] + share * (mine[m, 2:4] - mine[m, 0:2])
+        moved = transform_points(samples, to_other)
+        observed[k] = _share_in_view(moved, other, tol.occlusion_margin) >= 0.5
+    long = long[observed]
+    if len(long) == 0:
+        return 0.0, 0.0
+    hit = match_segments(mine[long], theirs, hesse).any(axis=1)
+    return float(lengths[long].sum()), float(lengths[long][hit].sum())
 
 
 def _ratio(a: float, b: float) -> float:
@@ -621,6 +715,8 @@ class RepeatabilityResult:
 
 
 TABLE_COLUMNS: tuple[tuple[str, Callable[[MethodRepeatability], float], str], ...] = (
+    ("strict", lambda m: m.strict, ".3f"),
+    ("repeated m/scan", lambda m: m.repeated_metres, ".2f"),
     ("repeat.", lambda m: m.repeatability, ".3f"),
     ("per pair", lambda m: m.per_pair, ".3f"),
     ("coverage", lambda m: m.coverage, ".3f"),
@@ -633,6 +729,9 @@ TABLE_COLUMNS: tuple[tuple[str, Callable[[MethodRepeatability], float], str], ..
 """Table columns: header, value of a :class:`MethodRepeatability`, format."""
 
 TABLE_CAPTION = (
+    "strict: each used pair scored on its own, both directions averaged, length-weighted, "
+    "lines compared in Hesse form (|d rho| at the origin), only long segments the other scan "
+    "observed; repeated m/scan: metres of long segments repeated per scan and direction; "
     "repeat.: long segments repeated in any used later pair / long segments; per pair: the "
     "same per (segment, pair); coverage: valid returns on segments; median m: median segment "
     "length; < 5 returns: share of segments; seg/m: segments per metre of surface (polyline "
@@ -658,12 +757,10 @@ def repeatability_of_scans(
     settings = settings or IcpSettings()
     scans = list(scans)
     profile = sensor_profile or _log_profile(scans, log)
-    n_candidates = sum(
-        1
-        for a in range(len(scans))
-        for b in range(a + 1, min(a + 1 + tol.max_gap, len(scans)))
-        if 1 <= scans[b][0] - scans[a][0] <= tol.max_gap
-    )
+    if tol.max_pairs is not None:  # only the scans of the chosen pairs are extracted
+        chosen = {position for pair in candidate_pairs(scans, tol) for position in pair}
+        scans = [scans[position] for position in sorted(chosen)]
+    n_candidates = len(candidate_pairs(scans, tol))
     total = n_candidates + len(scans) * len(parsed)
     done = 0
 

@@ -20,6 +20,7 @@ from scanlines.methods.hough import Hough
 from scanlines.methods.iepf import Iepf
 from scanlines.methods.line_regression import LineRegression
 from scanlines.methods.line_tracking import LineTracking
+from scanlines.methods.partition import Partition
 from scanlines.methods.pdbs import Pdbs
 from scanlines.methods.ransac import Ransac
 from scanlines.methods.split_merge import SplitMerge
@@ -45,6 +46,7 @@ REGISTRY: dict[str, type[Method]] = {
         LineRegression,
         Ransac,
         Hough,
+        Partition,
     )
 }
 
