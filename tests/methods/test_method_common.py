@@ -14,6 +14,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 
 from scanlines import Extraction, Extractor, Scan, extract, method_info
+from scanlines.builtin_methods import BUILTIN_METHODS
 from scanlines.evaluation.metrics import aggregate, score
 from scanlines.evaluation.scores import Summary
 from scanlines.methods.consensus import inlier_runs
@@ -26,16 +27,7 @@ from scanlines.steps.split import CHORD, REFERENCE_CODES, chord_distance, split_
 from scenes import beam_of, returns_of, scan_of, square_room
 from test_properties import check_order, scans
 
-METHODS = (
-    "iepf",
-    "pdbs",
-    "split_merge",
-    "line_tracking",
-    "line_regression",
-    "ransac",
-    "hough",
-    "partition",
-)
+METHODS = tuple(m for m in BUILTIN_METHODS if m != "adaptive")  # adaptive: its own tests
 SIGMA = 0.01  # 1 cm Gaussian range noise in the hand-built scenes
 SIM_PRESETS = ("tim571", "lms_1deg")
 SIM_SEEDS = range(20)
