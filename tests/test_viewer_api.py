@@ -3,6 +3,8 @@ and ``scanlines view`` as a process."""
 
 from __future__ import annotations
 
+import http.client
+import json
 import re
 import signal
 import subprocess
@@ -22,7 +24,7 @@ from scanlines.errors import ParameterError
 from scanlines.io import open_log
 from scanlines.runner import log_profile
 from scanlines.viewer import ScanStore, ViewerSession
-from scanlines.viewer.app import STATIC
+from scanlines.viewer.app import MAX_BODY_BYTES, STATIC
 from viewer_helpers import long_carmen_log, request, serving
 
 FIXTURES = Path(__file__).parent / "io" / "fixtures"
@@ -175,7 +177,8 @@ def test_the_page_is_served_without_loading_numba():
         "store = ScanStore(sample('intel'))\n"
         "server = ViewerServer(ViewerSession(store, config_later=True)).start()\n"
         "request = urllib.request.Request(server.url + 'api/frame', method='POST',\n"
-        "    data=json.dumps({'index': 0, 'configs': []}).encode())\n"
+        "    data=json.dumps({'index': 0, 'configs': []}).encode(),\n"
+        "    headers={'Content-Type': 'application/json'})\n"
         "frame = json.loads(urllib.request.urlopen(request, timeout=60).read())\n"
         "print(frame['returns'] > 0, 'numba' in sys.modules)\n"
     )
@@ -236,6 +239,74 @@ def test_api_answers_a_bad_request_with_one_line_and_goes_on(intel_server, body,
     assert message in answer["error"]
     assert "\n" not in answer["error"]
     assert request(intel_server, "/api/frame", {"index": 0, "configs": [{}]})[0] == 200
+
+
+def _raw(server, method, path, headers, body=b""):
+    """``(status, body)`` of a request sent with exactly these headers."""
+    host, port = server.url.removeprefix("http://").rstrip("/").split(":")
+    connection = http.client.HTTPConnection(host, int(port), timeout=60)
+    try:
+        connection.putrequest(method, path, skip_host=True, skip_accept_encoding=True)
+        for name, value in headers.items():
+            connection.putheader(name, value)
+        connection.endheaders(body)
+        response = connection.getresponse()
+        return response.status, response.read()
+    finally:
+        connection.close()
+
+
+@pytest.mark.parametrize("host", ["evil.com", "evil.com:{port}", "127.0.0.2:{port}", ""])
+def test_api_refuses_a_host_other_than_its_own(intel_server, host):
+    # DNS rebinding: a page of evil.com whose name now points at 127.0.0.1 sends its own Host
+    port = intel_server.url.rstrip("/").rsplit(":", 1)[1]
+    headers = {"Host": host.format(port=port)}
+    for path in ("/", "/api/log"):
+        status, answer = _raw(intel_server, "GET", path, headers)
+        assert status == 403, path
+        assert b"intel" not in answer  # neither the page nor the log's path
+
+
+def test_api_answers_its_own_address_and_localhost(intel_server):
+    port = intel_server.url.rstrip("/").rsplit(":", 1)[1]
+    for host in (f"127.0.0.1:{port}", f"localhost:{port}", f"LOCALHOST:{port}"):
+        status, answer = _raw(intel_server, "GET", "/api/log", {"Host": host})
+        assert status == 200, host
+        assert b"intel" in answer
+
+
+@pytest.mark.parametrize(
+    "content_type", [None, "text/plain", "application/x-www-form-urlencoded", "multipart/form-data"]
+)
+def test_api_post_needs_a_json_content_type(intel_server, content_type):
+    port = intel_server.url.rstrip("/").rsplit(":", 1)[1]
+    body = json.dumps({"index": 0, "configs": [{}]}).encode()
+    headers = {"Host": f"127.0.0.1:{port}", "Content-Length": str(len(body))}
+    if content_type is not None:
+        headers["Content-Type"] = content_type
+    status, answer = _raw(intel_server, "POST", "/api/frame", headers, body)
+    assert status == 415
+    assert b"application/json" in answer
+    headers["Content-Type"] = "application/json; charset=utf-8"
+    assert _raw(intel_server, "POST", "/api/frame", headers, body)[0] == 200
+
+
+def test_api_refuses_a_body_over_the_limit_unread(intel_server):
+    port = intel_server.url.rstrip("/").rsplit(":", 1)[1]
+    body = b'{"index": 0, "configs": [], "pad": "' + b"x" * MAX_BODY_BYTES + b'"}'
+    headers = {"Host": f"127.0.0.1:{port}", "Content-Type": "application/json"}
+    declared = dict(headers, **{"Content-Length": str(len(body))})
+    status, answer = _raw(intel_server, "POST", "/api/frame", declared, body)
+    assert status == 413
+    assert str(MAX_BODY_BYTES).encode() in answer
+    # chunked, no declared length: cut off while reading
+    chunked = dict(headers, **{"Transfer-Encoding": "chunked"})
+    stream = b"".join(
+        b"%x\r\n%s\r\n" % (len(piece), piece)
+        for piece in (body[i : i + 8192] for i in range(0, len(body), 8192))
+    )
+    assert _raw(intel_server, "POST", "/api/frame", chunked, stream + b"0\r\n\r\n")[0] == 413
+    assert request(intel_server, "/api/frame", {"index": 0, "configs": []})[0] == 200
 
 
 def test_api_world_view_needs_poses(tmp_path):

@@ -15,6 +15,12 @@
 
 A bad request (unknown scan, bad parameter, malformed body) is answered with status 400
 and ``{"error": "one line"}``; the server goes on.
+
+Only the viewer's own page may talk to it: a request whose ``Host`` header is not the
+address the server listens on (or ``localhost`` with its port) is answered 403, so a web
+page that rebinds its own name to 127.0.0.1 cannot read the log; a POST must say
+``Content-Type: application/json`` (a cross-site form or ``text/plain`` POST, sent without
+a preflight, gets 415), and a body over :data:`MAX_BODY_BYTES` gets 413 unread.
 """
 
 from __future__ import annotations
@@ -35,13 +41,25 @@ from scanlines.config import ExtractionConfig
 from scanlines.errors import ScanlinesError, one_line
 from scanlines.viewer.session import ViewerSession, methods
 
-__all__ = ["BadRequest", "create_app"]
+__all__ = ["MAX_BODY_BYTES", "BadRequest", "allowed_hosts", "create_app"]
 
 STATIC = files("scanlines.viewer") / "static"
+
+#: The largest request body the API reads (a frame request with two configurations is
+#: under 2 KiB).
+MAX_BODY_BYTES = 64 * 1024
 
 
 class BadRequest(ScanlinesError, ValueError):
     """A request the API cannot answer (its message is sent back)."""
+
+
+class Refused(BadRequest):
+    """A request refused with its own status code."""
+
+    def __init__(self, message: str, status: int) -> None:
+        super().__init__(message)
+        self.status = status
 
 
 class JSON(Response):
@@ -58,8 +76,34 @@ def _plain(value: Any) -> Any:
     raise TypeError(f"cannot send {type(value).__name__} as JSON")
 
 
-def create_app(session: ViewerSession) -> Starlette:
-    """The viewer's ASGI app over ``session``."""
+def allowed_hosts(host: str, port: int) -> frozenset[str]:
+    """The ``Host`` headers of requests to a server on ``host:port``: its address and
+    ``localhost``, with the port."""
+    return frozenset({f"{host}:{port}", f"localhost:{port}"})
+
+
+class HostCheck:
+    """ASGI middleware: 403 for an HTTP request whose ``Host`` header is not one of
+    ``hosts`` (DNS rebinding: a page of another name reaching the loopback server)."""
+
+    def __init__(self, app: Any, hosts: frozenset[str]) -> None:
+        self.app = app
+        self.hosts = frozenset(h.lower() for h in hosts)
+
+    async def __call__(self, scope: Any, receive: Any, send: Any) -> None:
+        if scope["type"] == "http":
+            headers = dict(scope.get("headers") or ())
+            host = headers.get(b"host", b"").decode("latin-1").lower()
+            if host not in self.hosts:
+                response = JSON({"error": f"host {host!r} is not this viewer's"}, 403)
+                await response(scope, receive, send)
+                return
+        await self.app(scope, receive, send)
+
+
+def create_app(session: ViewerSession, hosts: frozenset[str] | None = None) -> Any:
+    """The viewer's ASGI app over ``session``; with ``hosts`` (see :func:`allowed_hosts`),
+    requests with any other ``Host`` header are refused."""
 
     async def page(request: Request) -> Response:
         return FileResponse(str(STATIC / "index.html"), headers={"Cache-Control": "no-store"})
@@ -91,7 +135,8 @@ def create_app(session: ViewerSession) -> Starlette:
         return JSON({"toml": checked.to_toml(), "command": checked.command(str(log_name))})
 
     async def refused(request: Request, error: Exception) -> Response:
-        return JSON({"error": one_line(str(error))}, status_code=400)
+        status = error.status if isinstance(error, Refused) else 400
+        return JSON({"error": one_line(str(error))}, status_code=status)
 
     async def failed(request: Request, error: Exception) -> Response:
         return JSON({"error": f"internal error: {one_line(repr(error))}"}, status_code=500)
@@ -105,12 +150,29 @@ def create_app(session: ViewerSession) -> Starlette:
         Route("/api/config", config, methods=["POST"]),
         Mount("/static", StaticFiles(directory=str(STATIC)), name="static"),
     ]
-    return Starlette(routes=routes, exception_handlers={ScanlinesError: refused, Exception: failed})
+    app = Starlette(routes=routes, exception_handlers={ScanlinesError: refused, Exception: failed})
+    return app if hosts is None else HostCheck(app, hosts)
+
+
+async def _read_limited(request: Request) -> bytes:
+    declared = request.headers.get("content-length")
+    if declared is not None and (not declared.isdigit() or int(declared) > MAX_BODY_BYTES):
+        raise Refused(f"request body over {MAX_BODY_BYTES} bytes", 413)
+    chunks, size = [], 0
+    async for chunk in request.stream():
+        size += len(chunk)
+        if size > MAX_BODY_BYTES:
+            raise Refused(f"request body over {MAX_BODY_BYTES} bytes", 413)
+        chunks.append(chunk)
+    return b"".join(chunks)
 
 
 async def _body(request: Request) -> dict[str, Any]:
+    media_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
+    if media_type != "application/json":
+        raise Refused(f"request body must be application/json, got {media_type!r}", 415)
     try:
-        body = orjson.loads(await request.body())
+        body = orjson.loads(await _read_limited(request))
     except orjson.JSONDecodeError as error:
         raise BadRequest(f"request body is not JSON: {error}") from None
     if not isinstance(body, dict):

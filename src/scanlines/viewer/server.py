@@ -10,7 +10,7 @@ import time
 import uvicorn
 
 from scanlines.errors import ParameterError
-from scanlines.viewer.app import create_app
+from scanlines.viewer.app import allowed_hosts, create_app
 from scanlines.viewer.session import ViewerSession
 
 __all__ = ["ViewerServer"]
@@ -36,7 +36,8 @@ class ViewerServer:
         self.socket.listen(128)  # connections wait from now on, not only once serving
         bound_host, bound_port = self.socket.getsockname()[:2]
         self.url = f"http://{bound_host}:{bound_port}/"
-        config = uvicorn.Config(create_app(session), log_level="warning", lifespan="off")
+        app = create_app(session, allowed_hosts(bound_host, bound_port))
+        config = uvicorn.Config(app, log_level="warning", lifespan="off")
         self._server = uvicorn.Server(config)
         self._thread: threading.Thread | None = None
 
