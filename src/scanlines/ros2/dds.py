@@ -11,6 +11,7 @@ __all__ = [
     "LOOPBACK_CONFIG",
     "default_qos",
     "participant",
+    "prepare",
     "ros_topic",
     "sensor_data_qos",
     "wait_for_match",
@@ -37,6 +38,13 @@ def participant(domain_id: int, *, loopback: bool = False) -> Any:
     if loopback and domain_id not in _DOMAINS:
         _DOMAINS[domain_id] = Domain(domain_id, LOOPBACK_CONFIG)
     return DomainParticipant(domain_id)
+
+
+def prepare(*kinds: type) -> None:
+    """Build the serialisers of message types now: Cyclone builds each on first use, which
+    takes long enough (a tenth of a second and more) for a sensor-data reader to lose scans."""
+    for kind in kinds:
+        kind.deserialize(kind().serialize())
 
 
 def ros_topic(name: str) -> str:

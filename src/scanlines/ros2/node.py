@@ -15,7 +15,7 @@ from scanlines.errors import ScanError
 from scanlines.extractor import Extractor
 from scanlines.ros2 import convert
 from scanlines.ros2 import messages as msg
-from scanlines.ros2.dds import default_qos, participant, ros_topic, sensor_data_qos
+from scanlines.ros2.dds import default_qos, participant, prepare, ros_topic, sensor_data_qos
 
 __all__ = ["LineNode", "NodeStats"]
 
@@ -76,6 +76,7 @@ class LineNode:
         self.extractor = extractor
         self.log = log
         self.stats = NodeStats()
+        prepare(msg.LaserScan, msg.MarkerArray, msg.LineSegmentList, msg.ScanFeatures)
         dp = participant(domain_id, loopback=loopback)
         self._participant = dp
         writers = {}

@@ -7,7 +7,7 @@ from collections.abc import Iterable
 
 from scanlines.ros2 import convert
 from scanlines.ros2 import messages as msg
-from scanlines.ros2.dds import default_qos, participant, ros_topic, wait_for_match
+from scanlines.ros2.dds import default_qos, participant, prepare, ros_topic, wait_for_match
 from scanlines.scan import Scan
 
 __all__ = ["Player", "schedule"]
@@ -46,6 +46,7 @@ class Player:
         from cyclonedds.pub import DataWriter
         from cyclonedds.topic import Topic
 
+        prepare(msg.LaserScan)
         dp = participant(domain_id, loopback=loopback)
         self._participant = dp
         self.frame_id = frame_id
@@ -64,9 +65,14 @@ class Player:
     ) -> int:
         """Publish ``scans`` paced as recorded (or at ``rate`` Hz); ``restamp``: stamped
         with the time of sending instead of the log's. Returns the scans published."""
-        published, previous, due = 0, None, time.monotonic()
+        published, previous, due = 0, None, 0.0
         for scan in scans:
-            due += 0.0 if published == 0 else schedule(previous, scan.timestamp, rate)
+            # paced from the first scan read: opening a log can take a while, and scans due
+            # meanwhile would go out in a burst that a sensor-data subscriber drops
+            if published == 0:
+                due = time.monotonic()
+            else:
+                due += schedule(previous, scan.timestamp, rate)
             previous = scan.timestamp
             pause = due - time.monotonic()
             if pause > 0:
