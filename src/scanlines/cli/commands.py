@@ -6,7 +6,7 @@ from typing import Annotated
 
 import typer
 
-from scanlines.cli import bench, compile, evaluate, extract, logs, reproduce, view
+from scanlines.cli import bench, compile, evaluate, extract, logs, reproduce, ros2, view
 
 app = typer.Typer(
     name="scanlines",
@@ -47,3 +47,4 @@ bench.register(app)
 reproduce.register(app)
 compile.register(app)
 view.register(app)
+ros2.register(app)

@@ -1,0 +1,168 @@
+"""Scans to and from ``sensor_msgs/LaserScan``, and an extraction as the node's messages."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from scanlines.errors import ScanError
+from scanlines.extraction import END_KINDS, END_X, END_Y, START_X, START_Y, Extraction
+from scanlines.ros2 import messages as msg
+from scanlines.scan import Scan
+
+__all__ = [
+    "beam_count_error",
+    "features",
+    "laser_scan",
+    "line_segments",
+    "markers",
+    "scan_of",
+    "stamp_of",
+]
+
+_COLORS = {
+    "segments": (0.1, 0.8, 0.2, 1.0),
+    "breakpoints": (0.9, 0.1, 0.1, 1.0),
+    "corners": (0.1, 0.3, 1.0, 1.0),
+}
+_SCALES = {"segments": 0.03, "breakpoints": 0.08, "corners": 0.12}
+#: Largest ``builtin_interfaces/msg/Time.sec`` (an int32).
+MAX_STAMP_SECONDS = 2**31 - 1
+
+
+def stamp_of(seconds: float) -> msg.Time:
+    """A ROS time of ``seconds`` (0 for none), nanoseconds rounded."""
+    if not math.isfinite(seconds) or not 0 <= seconds <= MAX_STAMP_SECONDS:
+        raise ScanError(f"timestamp {seconds!r} s is not a ROS 2 time (0 .. 2**31 - 1 s)")
+    sec, nanosec = divmod(round(seconds * 1e9), 1_000_000_000)
+    return msg.Time(sec=int(sec), nanosec=int(nanosec))
+
+
+def laser_scan(scan: Scan, frame_id: str, scan_time: float = 0.0) -> msg.LaserScan:
+    """``scan`` as a LaserScan in frame ``frame_id``, stamped with its timestamp."""
+    n = len(scan)
+    intensities = [] if scan.intensities is None else scan.intensities.astype(np.float32).tolist()
+    return msg.LaserScan(
+        header=msg.Header(stamp=stamp_of(scan.timestamp or 0.0), frame_id=frame_id),
+        angle_min=scan.angle_min,
+        angle_max=scan.angle_min + (n - 1) * scan.angle_increment,
+        angle_increment=scan.angle_increment,
+        scan_time=scan_time,
+        range_min=scan.range_min,
+        range_max=min(scan.range_max, float(np.finfo(np.float32).max)),
+        ranges=scan.ranges.astype(np.float32).tolist(),
+        intensities=intensities,
+    )
+
+
+def beam_count_error(message: msg.LaserScan) -> str | None:
+    """Why the ranges and the angles of ``message`` disagree, or ``None``: ROS 2 drivers give
+    ``angle_max = angle_min + (n - 1) angle_increment``; one beam either way is tolerated."""
+    step = message.angle_increment
+    if not math.isfinite(step) or step == 0.0:
+        return f"angle_increment must be finite and non-zero, got {step!r}"
+    beams = (message.angle_max - message.angle_min) / step + 1.0
+    if not math.isfinite(beams) or abs(beams - len(message.ranges)) > 1.5:
+        return (
+            f"ranges has {len(message.ranges)} values but angle_min {message.angle_min!r} to "
+            f"angle_max {message.angle_max!r} by {step!r} makes {beams:.6g} beams"
+        )
+    return None
+
+
+def scan_of(message: msg.LaserScan) -> Scan:
+    """The scan of a LaserScan message; :class:`ScanError` when it is malformed."""
+    problem = beam_count_error(message)
+    if problem is not None:
+        raise ScanError(problem)
+    return Scan.from_laserscan(message)
+
+
+def line_segments(extraction: Extraction, header: msg.Header) -> msg.LineSegmentList:
+    """laser_line_extraction's message of the segments (radius, angle, covariance, ends)."""
+    lines = extraction.lines.astype(np.float32)
+    covariances = extraction.covariances.astype(np.float32).reshape(-1, 4).tolist()
+    return msg.LineSegmentList(
+        header=header,
+        line_segments=[
+            msg.LineSegment(
+                radius=row[0],
+                angle=row[1],
+                covariance=cov,
+                start=[row[START_X], row[START_Y]],
+                end=[row[END_X], row[END_Y]],
+            )
+            for row, cov in zip(lines.tolist(), covariances, strict=True)
+        ],
+    )
+
+
+def features(extraction: Extraction, header: msg.Header) -> msg.ScanFeatures:
+    """The full result as the project's ``scanlines/msg/ScanFeatures``."""
+    lines = extraction.lines.astype(np.float32).tolist()
+    covariances = extraction.covariances.astype(np.float32).reshape(-1, 4).tolist()
+    segments = [
+        msg.Segment(
+            first=int(a),
+            last=int(b),
+            n_points=int(n),
+            radius=row[0],
+            angle=row[1],
+            covariance=cov,
+            start=[row[START_X], row[START_Y]],
+            end=[row[END_X], row[END_Y]],
+            rms=row[6],
+            start_kind=int(kinds[0]),
+            end_kind=int(kinds[1]),
+        )
+        for a, b, n, row, cov, kinds in zip(
+            extraction.first.tolist(),
+            extraction.last.tolist(),
+            extraction.n_points.tolist(),
+            lines,
+            covariances,
+            extraction.end_kinds.tolist(),
+            strict=True,
+        )
+    ]
+    return msg.ScanFeatures(
+        header=header,
+        method=extraction.method,
+        segments=segments,
+        breakpoints=extraction.breakpoints.tolist(),
+        corners=extraction.corners.tolist(),
+        outliers=extraction.outliers.tolist(),
+    )
+
+
+assert len(END_KINDS) < 256  # end kinds travel as uint8
+
+
+def markers(extraction: Extraction, scan: Scan, header: msg.Header) -> msg.MarkerArray:
+    """RViz / Foxglove markers: a DELETEALL, then segments (a line list), breakpoints and
+    corners (sphere lists at their beams' points)."""
+    points = scan.points
+    ends = extraction.lines[:, [START_X, START_Y, END_X, END_Y]].reshape(-1, 2)
+    groups = (
+        ("segments", ends),
+        ("breakpoints", points[extraction.breakpoints]),
+        ("corners", points[extraction.corners]),
+    )
+    out = [msg.Marker(header=header, action=msg.Marker.DELETEALL)]
+    for marker_id, (namespace, xy) in enumerate(groups, start=1):
+        scale, color = _SCALES[namespace], _COLORS[namespace]
+        kind = msg.Marker.LINE_LIST if namespace == "segments" else msg.Marker.SPHERE_LIST
+        out.append(
+            msg.Marker(
+                header=header,
+                ns=namespace,
+                id=marker_id,
+                type=kind,
+                action=msg.Marker.ADD,
+                scale=msg.Vector3(scale, scale, scale),
+                color=msg.ColorRGBA(*color),
+                points=[msg.Point(x, y, 0.0) for x, y in xy.tolist()],
+            )
+        )
+    return msg.MarkerArray(markers=out)

@@ -1,0 +1,89 @@
+"""Cyclone DDS set up as ROS 2 expects: domains, ``rt/`` topics, and the QoS of ROS 2's profiles."""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+from scanlines.errors import ParameterError
+
+__all__ = [
+    "LOOPBACK_CONFIG",
+    "default_qos",
+    "participant",
+    "prepare",
+    "ros_topic",
+    "sensor_data_qos",
+    "wait_for_match",
+]
+
+#: Cyclone DDS confined to the loopback interface: unicast discovery to 127.0.0.1 (``lo``
+#: has no multicast), so nothing leaves the machine.
+LOOPBACK_CONFIG = """<CycloneDDS><Domain id="any"><General>
+<Interfaces><NetworkInterface address="127.0.0.1"/></Interfaces>
+<AllowMulticast>false</AllowMulticast></General>
+<Discovery><ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>30</MaxAutoParticipantIndex>
+<Peers><Peer address="127.0.0.1"/></Peers></Discovery></Domain></CycloneDDS>"""
+
+_DOMAINS: dict[int, Any] = {}
+
+
+def participant(domain_id: int, *, loopback: bool = False) -> Any:
+    """A DDS participant on ROS domain ``domain_id`` (``ROS_DOMAIN_ID``); ``loopback``:
+    on 127.0.0.1 only, else as ``CYCLONEDDS_URI`` (or Cyclone's default) configures it."""
+    from cyclonedds.domain import Domain, DomainParticipant
+
+    if not 0 <= domain_id <= 232:
+        raise ParameterError(f"--domain-id must be within 0..232 (ROS 2), got {domain_id}")
+    if loopback and domain_id not in _DOMAINS:
+        _DOMAINS[domain_id] = Domain(domain_id, LOOPBACK_CONFIG)
+    return DomainParticipant(domain_id)
+
+
+def prepare(*kinds: type) -> None:
+    """Build the serialisers of message types now: Cyclone builds each on first use, which
+    takes long enough (a tenth of a second and more) for a sensor-data reader to lose scans."""
+    for kind in kinds:
+        kind.deserialize(kind().serialize())
+
+
+def ros_topic(name: str) -> str:
+    """The DDS topic of ROS 2 topic ``name``: ``/scan`` and ``scan`` are ``rt/scan``."""
+    stripped = name.strip("/")
+    if not stripped or any(not (c.isalnum() or c in "_/") for c in stripped):
+        raise ParameterError(f"not a ROS 2 topic name: {name!r}")
+    return f"rt/{stripped}"
+
+
+def sensor_data_qos(depth: int = 5) -> Any:
+    """ROS 2's sensor-data profile: best effort, volatile, keep last ``depth``."""
+    from cyclonedds.core import Policy, Qos
+
+    return Qos(
+        Policy.Reliability.BestEffort, Policy.Durability.Volatile, Policy.History.KeepLast(depth)
+    )
+
+
+def default_qos(depth: int = 10) -> Any:
+    """ROS 2's default profile: reliable, volatile, keep last ``depth`` (a default ROS 2
+    subscriber, best effort or reliable, accepts it)."""
+    from cyclonedds.core import Policy, Qos
+    from cyclonedds.util import duration
+
+    return Qos(
+        Policy.Reliability.Reliable(duration(milliseconds=100)),
+        Policy.Durability.Volatile,
+        Policy.History.KeepLast(depth),
+    )
+
+
+def wait_for_match(entity: Any, timeout: float) -> bool:
+    """Wait up to ``timeout`` seconds until a writer has a subscriber or a reader a
+    publisher; whether it has."""
+    matched = getattr(entity, "get_matched_subscriptions", None) or entity.get_matched_publications
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if matched():
+            return True
+        time.sleep(0.02)
+    return bool(matched())
