@@ -1,6 +1,7 @@
 """The node's messages on the wire: the CDR bytes of rosbags' ROS 2 serialiser, both ways."""
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -137,3 +138,9 @@ def test_the_own_messages_are_the_documented_msg_text(store):
         ours = msg.Segment if name.endswith("/Segment") else msg.ScanFeatures
         declared = [field for field, _ in store.fielddefs[name][1]]
         assert declared == [f.name for f in dataclasses.fields(ours)]
+
+
+def test_the_documented_msg_files_are_the_ones_on_the_wire():
+    documented = Path(__file__).parents[1] / "docs" / "ros2" / "msg"
+    for name, text in msg.SCANLINES_MSGS.items():
+        assert (documented / f"{name.rsplit('/', 1)[1]}.msg").read_text() == text

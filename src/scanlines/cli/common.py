@@ -27,9 +27,9 @@ TERMINATED = 143
 
 def guarded(command: F, *, show_compilation: bool = True) -> F:
     """Turn an input error raised by ``command`` into one line on stderr and exit code 2,
-    and Ctrl-C or SIGTERM into a one-line note and exit code 130 or 143 (outputs being
-    written are deleted on the way out); show kernel compilation on stderr while it runs
-    (:class:`CompileProgress`)."""
+    and Ctrl-C or SIGTERM into a one-line note and exit code 130 or 143 (the interrupt's
+    notes, if any, in brackets; outputs being written are deleted on the way out); show
+    kernel compilation on stderr while it runs (:class:`CompileProgress`)."""
 
     @functools.wraps(command)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
@@ -43,7 +43,9 @@ def guarded(command: F, *, show_compilation: bool = True) -> F:
             if not is_interrupt(stop):
                 raise
             terminated = any_terminated(stop)
-            print(f"scanlines: {'terminated' if terminated else 'interrupted'}", file=sys.stderr)
+            notes = "; ".join(getattr(stop, "__notes__", ()))
+            word = "terminated" if terminated else "interrupted"
+            print(f"scanlines: {word}" + (f" ({notes})" if notes else ""), file=sys.stderr)
             raise typer.Exit(TERMINATED if terminated else INTERRUPTED) from None
 
     return wrapper  # type: ignore[return-value]

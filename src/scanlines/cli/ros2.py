@@ -11,6 +11,7 @@ import typer
 
 from scanlines.cli.common import ConfigMethodOption, ConfigOption, guarded, method_options
 from scanlines.cli.logs import ParamOption, PresetOption, ProfileOption, ScansOption
+from scanlines.interrupts import is_interrupt
 
 
 def register(app: typer.Typer) -> None:
@@ -143,5 +144,8 @@ def _node(
     )
     try:
         node.spin(max_scans=max_scans, duration=duration)
-    finally:
-        print(f"scanlines ros2: {node.stats.summary()}", file=sys.stderr, flush=True)
+    except BaseException as stop:
+        if is_interrupt(stop):
+            stop.add_note(node.stats.summary())  # the interrupt's one line carries it
+        raise
+    print(f"scanlines ros2: {node.stats.summary()}", file=sys.stderr, flush=True)
