@@ -122,47 +122,126 @@ def test_paper_preset_exists():
     assert "paper" in scanlines.method_info("adaptive")["presets"]
 
 
-def _module_imports(path, name: str, package: str) -> set[str]:
-    """The ``scanlines`` modules a module imports at its top level."""
+def _module_imports(path: Path, package: str, modules: set[str]) -> set[str]:
+    """The package's modules a module imports, at its top level or inside a function:
+    ``from a.b import c`` imports ``a.b.c`` if that is a module, else ``a.b``."""
     found = set()
-    for node in ast.parse(path.read_text()).body:
+    for node in ast.walk(ast.parse(path.read_text())):
         if isinstance(node, ast.Import):
             found.update(alias.name for alias in node.names)
-        elif isinstance(node, ast.ImportFrom) and node.module:
-            base = node.module if node.level == 0 else package
-            found.add(base)
-            found.update(f"{base}.{alias.name}" for alias in node.names)
-    return {module for module in found if module.startswith("scanlines")}
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                parent = package.rsplit(".", node.level - 1)[0] if node.level > 1 else package
+                base = f"{parent}.{base}" if base else parent
+            for alias in node.names:
+                submodule = f"{base}.{alias.name}"
+                found.add(submodule if submodule in modules else base)
+    return found & modules
 
 
-def test_modules_import_without_cycles():
-    """The graph of top-level imports between the package's modules has no cycle."""
-    root = Path(scanlines.__file__).parent
+def import_graph(root: Path) -> dict[str, list[str]]:
+    """Module -> the package's modules it imports (function-level imports counted)."""
     modules = {}
     for path in root.rglob("*.py"):
         parts = path.relative_to(root.parent).with_suffix("").parts
         is_package = parts[-1] == "__init__"
         name = ".".join(parts[:-1] if is_package else parts)
         modules[name] = (path, name if is_package else name.rpartition(".")[0])
-    graph = {
-        name: sorted(_module_imports(path, name, package) & modules.keys() - {name})
+    return {
+        name: sorted(_module_imports(path, package, modules.keys()) - {name})
         for name, (path, package) in modules.items()
     }
-    done: set[str] = set()
 
-    def visit(name: str, trail: tuple[str, ...]) -> None:
-        assert name not in trail, "import cycle: " + " -> ".join((*trail, name))
-        if name in done:
-            return
+
+def import_cycles(graph: dict[str, list[str]]) -> list[list[str]]:
+    """The strongly connected groups of more than one module (Tarjan), each sorted."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    cycles = []
+
+    def connect(name: str) -> None:
+        index[name] = low[name] = len(index)
+        stack.append(name)
         for imported in graph[name]:
-            visit(imported, (*trail, name))
-        done.add(name)
+            if imported not in index:
+                connect(imported)
+                low[name] = min(low[name], low[imported])
+            elif imported in stack:
+                low[name] = min(low[name], index[imported])
+        if low[name] == index[name]:
+            group = []
+            while not group or group[-1] != name:
+                group.append(stack.pop())
+            if len(group) > 1:
+                cycles.append(sorted(group))
 
     for name in graph:
-        visit(name, ())
-    assert len(done) == len(modules) > 50
+        if name not in index:
+            connect(name)
+    return cycles
+
+
+#: The package's areas from the bottom up: a module may import its own area and those
+#: below it, never one above (the first prefix that matches names a module's area).
+LAYERS = (
+    ("scanlines.errors", "scanlines.json_values", "scanlines.interrupts", "scanlines.outputs",
+     "scanlines._compile_watch", "scanlines._jit", "scanlines.params", "scanlines.poses",
+     "scanlines.truth", "scanlines.builtin_methods"),
+    ("scanlines.scan", "scanlines.extraction"),
+    ("scanlines.steps",),
+    ("scanlines.methods",),
+    ("scanlines.extractor", "scanlines.sensor_profile", "scanlines.config", "scanlines.sim"),
+    ("scanlines.io", "scanlines.data"),
+    ("scanlines.runner", "scanlines.warm", "scanlines.evaluation", "scanlines.fleet",
+     "scanlines.ros2", "scanlines.map"),
+    ("scanlines.viz", "scanlines.viewer"),
+    ("scanlines.cli", "scanlines.__main__"),
+)  # fmt: skip
+
+
+def layer_of(name: str) -> int:
+    for level, prefixes in enumerate(LAYERS):
+        if any(name == prefix or name.startswith(prefix + ".") for prefix in prefixes):
+            return level
+    return -1  # the package itself, and anything not placed: fails the test below
+
+
+def upward_imports(graph: dict[str, list[str]]) -> list[str]:
+    return [
+        f"{name} -> {imported}"
+        for name, imports in graph.items()
+        if name != "scanlines"
+        for imported in imports
+        if imported != "scanlines" and layer_of(imported) > layer_of(name)
+    ]
+
+
+def test_modules_import_without_cycles_or_upward_arrows():
+    """The package's import graph, counting imports inside functions, has no circle, and
+    no module imports an area above its own (``LAYERS``)."""
+    graph = import_graph(Path(scanlines.__file__).parent)
+    assert len(graph) > 50
+    assert import_cycles(graph) == []
+    unplaced = [name for name in graph if name != "scanlines" and layer_of(name) < 0]
+    assert unplaced == []
+    assert upward_imports(graph) == []
     for name in ("scanlines.steps.select", "scanlines.methods.adaptive", "scanlines.evaluation"):
         importlib.import_module(name)
+
+
+def test_the_cycle_check_finds_a_planted_circle_and_an_upward_arrow(tmp_path):
+    package = tmp_path / "scanlines"
+    (package / "io").mkdir(parents=True)
+    (package / "__init__.py").write_text("")
+    (package / "errors.py").write_text("def f():\n    from scanlines.io.reader import R\n")
+    (package / "io" / "__init__.py").write_text("")
+    (package / "io" / "reader.py").write_text("from ..errors import f\nR = 1\n")
+    graph = import_graph(package)
+    assert graph["scanlines.io.reader"] == ["scanlines.errors"]
+    assert import_cycles(graph) == [["scanlines.errors", "scanlines.io.reader"]]
+    assert upward_imports(graph) == ["scanlines.errors -> scanlines.io.reader"]
 
 
 def test_plot_title_counts_features_in_words():

@@ -225,7 +225,7 @@ def test_a_notebook_computes_the_tasks_on_its_own_cluster(logs, local_dataset, t
 
 def test_a_changed_sensor_profile_is_not_taken_for_done(logs, tmp_path) -> None:
     from scanlines.io import open_log
-    from scanlines.io.outputs import OutputError
+    from scanlines.outputs import OutputError
     from scanlines.sensor_profile import estimate_profile
 
     profile = tmp_path / "sensor.json"
@@ -252,7 +252,7 @@ def test_an_interrupted_run_starts_its_logs_again(logs, tmp_path) -> None:
     assert summary.logs[0].status == "done"
     assert segment_rows(dataset) == rows
     done.unlink()
-    from scanlines.io.outputs import OutputError
+    from scanlines.outputs import OutputError
 
     with pytest.raises(OutputError, match="--overwrite"):
         run_fleet([log], dataset, params={"k": 4.0})

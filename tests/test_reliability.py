@@ -21,7 +21,7 @@ import pytest
 from scanlines import Extractor, LogFormatError, Scan, ScanError
 from scanlines.data import sample
 from scanlines.io import open_log, open_writer
-from scanlines.io.outputs import OutputError, remove_stale_temps, temp_path
+from scanlines.outputs import OutputError, remove_stale_temps, temp_path
 
 sys.path.insert(0, str(Path(__file__).parent / "io"))
 from io_helpers import make_extraction

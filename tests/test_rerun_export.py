@@ -17,7 +17,7 @@ from scanlines.data import sample
 from scanlines.errors import ParameterError
 from scanlines.extraction import Extraction
 from scanlines.io import RerunWriter, meta_path_for, open_log, open_writer, points_to_world
-from scanlines.io.outputs import OutputError
+from scanlines.outputs import OutputError
 from test_cli_logs import one_error_line, run
 
 pytest.importorskip("rerun")

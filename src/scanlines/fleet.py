@@ -371,8 +371,8 @@ def _skip_finished(
     begun with them and interrupted (``_logs/NAME.pending.json``) starts again; rows of a
     log written from another input or with other options are an error unless
     ``overwrite``. Each log to run gets its pending record."""
-    from scanlines.io.outputs import OutputError, write_text_atomically
     from scanlines.io.parquet import remove_log
+    from scanlines.outputs import OutputError, write_text_atomically
 
     kept, skipped, decided = [], [], {}
     for task in tasks:
@@ -483,8 +483,8 @@ def _collect(executor, tasks, outcomes, on_chunk) -> None:
 
 def _finish_logs(dataset: Path, tasks: list[ChunkTask], outcomes: dict[str, LogOutcome]) -> None:
     """Remove the rows of failed logs; record the finished ones."""
-    from scanlines.io.outputs import write_text_atomically
     from scanlines.io.parquet import remove_log
+    from scanlines.outputs import write_text_atomically
 
     first_task = {}
     for task in tasks:

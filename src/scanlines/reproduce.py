@@ -20,7 +20,7 @@ from pathlib import Path
 from scanlines.evaluation.cases import LabelledFrameLike
 from scanlines.evaluation.experiments import ReproduceConfig, ReproduceResult, Stage, run
 from scanlines.evaluation.results_page import render_markdown
-from scanlines.io.outputs import write_text_atomically
+from scanlines.outputs import write_text_atomically
 from scanlines.viz.reproduce import write_figures
 
 __all__ = ["reproduce"]

@@ -90,6 +90,53 @@ def log_profile(
         return measure_profile(reader, scans, max_scans=DEFAULT_SCANS, source=str(path))
 
 
+def run_profile(
+    path: Any, reader_options: dict[str, Any], scans: slice, given: Any = None
+) -> tuple[SensorProfile | None, str | None]:
+    """The sensor profile a run of the log at ``path`` uses, and a note saying where it
+    came from: the profile file ``given``; else measured from the log's first selected
+    scans; else none (a log too short or too odd to measure: each scan's noise is then
+    measured from itself)."""
+    from scanlines.sensor_profile import ProfileError, read_profile
+
+    if given is not None:
+        return read_profile(given), None
+    try:
+        profile = log_profile(path, reader_options, scans)
+    except ProfileError as error:
+        return None, f"sensor profile: {error}; each scan's noise is measured from itself"
+    name = getattr(path, "name", str(path))
+    return profile, (
+        f"sensor profile: measured from the first {profile.scans} scans of {name} "
+        f"(noise {1000 * profile.noise_sigma0:.1f} mm + {100 * profile.noise_per_metre:.2f} % "
+        "of range); `scanlines calibrate` saves one for --sensor-profile"
+    )
+
+
+def mounted_options(
+    path: Any, reader_options: dict[str, Any], profile: SensorProfile | None
+) -> tuple[dict[str, Any], str | None]:
+    """Reader options that give the laser's pose where the log records only the robot's
+    (the profile's mounting, for a reader that takes one), and a note when they do."""
+    from scanlines.io import detect_format, open_log
+    from scanlines.io import reader_options as options_of
+
+    if profile is None or profile.mounting is None:
+        return reader_options, None
+    if "mounting" not in options_of(detect_format(path)):
+        return reader_options, None
+    options = {**reader_options, "mounting": profile.mounting}
+    with open_log(path, **options) as reader:
+        if not reader.moves_robot_poses:
+            return options, None
+        x, y, theta = profile.mounting
+        return options, (
+            f"world frame: {reader.message} records carry the robot's pose; moved by the "
+            f"laser's mounting (x {x:.3f} m, y {y:.3f} m, theta {math.degrees(theta):.2f} "
+            "deg) of the sensor profile"
+        )
+
+
 def measure_profile(
     reader: Any, scans: slice = slice(None), *, max_scans: int = DEFAULT_SCANS, source: str = ""
 ) -> SensorProfile:

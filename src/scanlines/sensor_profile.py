@@ -171,7 +171,7 @@ class SensorProfile:
 
     def save(self, path: str | Path) -> Path:
         """Write the profile as JSON to ``path``."""
-        from scanlines.io.outputs import write_text_atomically
+        from scanlines.outputs import write_text_atomically
 
         return write_text_atomically(path, json.dumps(self.to_dict(), indent=2) + "\n")
 

@@ -27,7 +27,7 @@ from scanlines.io import (
     open_writer,
     to_world,
 )
-from scanlines.io.outputs import OutputError
+from scanlines.outputs import OutputError
 from scanlines.scan import Scan
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import math
 import sys
 import threading
 import time
@@ -23,6 +24,47 @@ INPUT_ERROR = 2
 #: Exit codes of a command stopped by SIGINT (Ctrl-C) and SIGTERM: 128 + the signal.
 INTERRUPTED = 130
 TERMINATED = 143
+
+
+LogArgument = Annotated[Path, typer.Argument(help="CARMEN log, ROS bag, .dat, .csv or .npz.")]
+FovOption = Annotated[
+    float | None, typer.Option("--fov", help="CARMEN FLASER: field of view, degrees.")
+]
+ConventionOption = Annotated[
+    Literal["step", "linspace"] | None,
+    typer.Option("--angle-convention", help="CARMEN FLASER: bearings by step or linspace."),
+]
+TopicOption = Annotated[str | None, typer.Option(help="ROS bag: the LaserScan topic.")]
+AngleMinOption = Annotated[
+    float | None, typer.Option("--angle-min", help="CSV: first bearing, degrees.")
+]
+AngleStepOption = Annotated[
+    float | None, typer.Option("--angle-increment", help="CSV: bearing step, degrees.")
+]
+OnErrorOption = Annotated[
+    Literal["fail", "skip"],
+    typer.Option("--on-error", help="Stop at a malformed record, or skip and count it."),
+]
+MaxBeamsOption = Annotated[
+    int | None,
+    typer.Option("--max-beams", help="Most beams in one scan (default 1,000,000).", min=1),
+]
+PresetOption = Annotated[str | None, typer.Option(help="Named parameter set, e.g. paper.")]
+ParamOption = Annotated[list[str] | None, typer.Option("--param", help="NAME=VALUE, repeatable.")]
+ScansOption = Annotated[
+    str | None, typer.Option("--scans", help="Python slice of scan indices, e.g. 100:200.")
+]
+JobsOption = Annotated[
+    int | None,
+    typer.Option("--jobs", "-j", help="Threads extracting chunks of scans (default: every core)."),
+]
+ProfileOption = Annotated[
+    Path | None,
+    typer.Option(
+        "--sensor-profile",
+        help="Sensor profile from `scanlines calibrate` (default: measured from the log).",
+    ),
+]
 
 
 def guarded(command: F, *, show_compilation: bool = True) -> F:
@@ -163,8 +205,8 @@ def writable(path: Path | None, overwrite: bool, *, with_meta: bool = False) -> 
     and it (and its ``.meta.json``) does not, unless ``--overwrite``."""
     if path is None:
         return None
-    from scanlines.io.outputs import check_output
     from scanlines.io.writers import meta_path_for
+    from scanlines.outputs import check_output
 
     companions = [meta_path_for(path)] if with_meta else []
     return check_output(path, overwrite=overwrite, companions=companions)
@@ -228,3 +270,64 @@ def parse_params(pairs: list[str] | None) -> dict[str, Any]:
             raise ParameterError(f"--param takes NAME=VALUE, got {pair!r}")
         params[name.strip()] = value.strip()
     return params
+
+
+def reader_options(
+    fov: float | None = None,
+    angle_convention: str | None = None,
+    topic: str | None = None,
+    angle_min: float | None = None,
+    angle_increment: float | None = None,
+    on_error: str | None = None,
+    max_beams: int | None = None,
+) -> dict[str, Any]:
+    """The reader options the user gave on the command line (angles given in degrees),
+    and only those: each reader refuses the ones it does not take."""
+    options: dict[str, Any] = {
+        "max_beams": max_beams,
+        "fov": fov,
+        "angle_convention": angle_convention,
+        "topic": topic,
+        "angle_min": None if angle_min is None else math.radians(angle_min),
+        "angle_increment": None if angle_increment is None else math.radians(angle_increment),
+        "on_error": on_error,
+    }
+    return {k: v for k, v in options.items() if v is not None}
+
+
+def profile_for_run(log: Path, options: dict[str, Any], selection: slice, given: Any):
+    """:func:`scanlines.runner.run_profile`, its note on stderr."""
+    from scanlines.runner import run_profile
+
+    profile, note = run_profile(log, options, selection, given)
+    if note:
+        typer.echo(note, err=True)
+    return profile
+
+
+def with_mounting(log: Path, options: dict[str, Any], profile: Any) -> dict[str, Any]:
+    """:func:`scanlines.runner.mounted_options`, its note on stderr."""
+    from scanlines.runner import mounted_options
+
+    options, note = mounted_options(log, options, profile)
+    if note:
+        typer.echo(note, err=True)
+    return options
+
+
+class _Clock:
+    seconds = 0.0
+
+
+@contextlib.contextmanager
+def compiled_for(method: str):
+    """A block that compiles (or loads) ``method``'s kernels, a second core helping
+    (:func:`scanlines.warm.compiling_from_both_ends`); ``.seconds`` says how long the
+    kernels took."""
+    from scanlines._jit import kernel_seconds
+    from scanlines.warm import compiling_from_both_ends
+
+    clock, before = _Clock(), kernel_seconds()
+    with compiling_from_both_ends(method):
+        yield clock
+    clock.seconds = kernel_seconds() - before

@@ -63,7 +63,7 @@ def _one_output_per_log(logs, out, output_format, method, preset, params, option
     """Each log to ``out/NAME.FORMAT``, one after the other, with ``jobs`` threads each."""
     import time
 
-    from scanlines.cli.logs import _profile_for_run, _with_mounting, compiled_for
+    from scanlines.cli.common import compiled_for, profile_for_run, with_mounting
     from scanlines.errors import ScanlinesError
     from scanlines.extractor import Extractor
     from scanlines.fleet import FleetSummary, LogOutcome, expand_inputs, log_names
@@ -81,9 +81,9 @@ def _one_output_per_log(logs, out, output_format, method, preset, params, option
     for name, path in zip(log_names(paths), paths, strict=True):
         outcome = LogOutcome(name, str(path))
         try:
-            profile = _profile_for_run(path, options, selection, sensor_profile)
+            profile = profile_for_run(path, options, selection, sensor_profile)
             extractor = Extractor(method, preset, sensor_profile=profile, **params)
-            log_options = _with_mounting(path, options, profile) if frame == "world" else options
+            log_options = with_mounting(path, options, profile) if frame == "world" else options
             with open_log(path, **log_options) as reader:
                 result = run_log_to_file(reader, extractor, out / f"{name}.{output_format}",
                                          frame=frame, scans=selection, jobs=jobs,

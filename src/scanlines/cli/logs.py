@@ -3,62 +3,37 @@
 from __future__ import annotations
 
 import gc
-import math
-from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated, Literal
 
 import typer
 
 from scanlines.cli.common import (
+    AngleMinOption,
+    AngleStepOption,
     ConfigMethodOption,
     ConfigOption,
+    ConventionOption,
+    FovOption,
+    JobsOption,
+    LogArgument,
+    MaxBeamsOption,
+    OnErrorOption,
     OverwriteOption,
+    ParamOption,
+    PresetOption,
+    ProfileOption,
+    ScansOption,
+    TopicOption,
+    compiled_for,
     guarded,
     jobs_option,
     method_options,
+    profile_for_run,
+    reader_options,
+    with_mounting,
     writable,
 )
-
-LogArgument = Annotated[Path, typer.Argument(help="CARMEN log, ROS bag, .dat, .csv or .npz.")]
-FovOption = Annotated[
-    float | None, typer.Option("--fov", help="CARMEN FLASER: field of view, degrees.")
-]
-ConventionOption = Annotated[
-    Literal["step", "linspace"] | None,
-    typer.Option("--angle-convention", help="CARMEN FLASER: bearings by step or linspace."),
-]
-TopicOption = Annotated[str | None, typer.Option(help="ROS bag: the LaserScan topic.")]
-AngleMinOption = Annotated[
-    float | None, typer.Option("--angle-min", help="CSV: first bearing, degrees.")
-]
-AngleStepOption = Annotated[
-    float | None, typer.Option("--angle-increment", help="CSV: bearing step, degrees.")
-]
-OnErrorOption = Annotated[
-    Literal["fail", "skip"],
-    typer.Option("--on-error", help="Stop at a malformed record, or skip and count it."),
-]
-MaxBeamsOption = Annotated[
-    int | None,
-    typer.Option("--max-beams", help="Most beams in one scan (default 1,000,000).", min=1),
-]
-PresetOption = Annotated[str | None, typer.Option(help="Named parameter set, e.g. paper.")]
-ParamOption = Annotated[list[str] | None, typer.Option("--param", help="NAME=VALUE, repeatable.")]
-ScansOption = Annotated[
-    str | None, typer.Option("--scans", help="Python slice of scan indices, e.g. 100:200.")
-]
-JobsOption = Annotated[
-    int | None,
-    typer.Option("--jobs", "-j", help="Threads extracting chunks of scans (default: every core)."),
-]
-ProfileOption = Annotated[
-    Path | None,
-    typer.Option(
-        "--sensor-profile",
-        help="Sensor profile from `scanlines calibrate` (default: measured from the log).",
-    ),
-]
 
 
 def register(app: typer.Typer) -> None:
@@ -76,28 +51,6 @@ def register(app: typer.Typer) -> None:
     app.command("demo", help="Run the default method on the shipped Intel excerpt.")(
         guarded(demo_command)
     )
-
-
-def reader_options(
-    fov: float | None = None,
-    angle_convention: str | None = None,
-    topic: str | None = None,
-    angle_min: float | None = None,
-    angle_increment: float | None = None,
-    on_error: str | None = None,
-    max_beams: int | None = None,
-) -> dict[str, Any]:
-    """Only the options the user gave (each reader refuses the ones it does not take)."""
-    options: dict[str, Any] = {
-        "max_beams": max_beams,
-        "fov": fov,
-        "angle_convention": angle_convention,
-        "topic": topic,
-        "angle_min": None if angle_min is None else math.radians(angle_min),
-        "angle_increment": None if angle_increment is None else math.radians(angle_increment),
-        "on_error": on_error,
-    }
-    return {k: v for k, v in options.items() if v is not None}
 
 
 def info_command(
@@ -272,9 +225,9 @@ def run_command(
     )
     jobs = jobs_option(jobs)
     with compiled_for(method) as compiled:
-        profile = _profile_for_run(log, options, selection, sensor_profile)
+        profile = profile_for_run(log, options, selection, sensor_profile)
         if frame == "world":
-            options = _with_mounting(log, options, profile)
+            options = with_mounting(log, options, profile)
         extractor = Extractor(method, preset, sensor_profile=profile, **params)
         extractor.warm_up()  # before the progress bar: the displays do not overlap
     # What is loaded now lives for the whole run: frozen, the collector no longer walks
@@ -341,51 +294,6 @@ def _bins_text(profile) -> str:
     )
 
 
-def _profile_for_run(log, options, selection, given):
-    """The sensor profile of a run: the file given, else measured from the log (said on
-    stderr)."""
-    from scanlines.runner import log_profile
-    from scanlines.sensor_profile import ProfileError, read_profile
-
-    if given is not None:
-        return read_profile(given)
-    try:
-        profile = log_profile(log, options, selection)
-    except ProfileError as error:
-        typer.echo(f"sensor profile: {error}; each scan's noise is measured from itself", err=True)
-        return None
-    typer.echo(
-        f"sensor profile: measured from the first {profile.scans} scans of {log.name} "
-        f"(noise {1000 * profile.noise_sigma0:.1f} mm + {100 * profile.noise_per_metre:.2f} % "
-        "of range); `scanlines calibrate` saves one for --sensor-profile",
-        err=True,
-    )
-    return profile
-
-
-def _with_mounting(log, options, profile):
-    """Reader options that give scans whose log records only the robot's pose the laser's
-    pose, from the profile's mounting (where the reader takes one)."""
-    from scanlines.io import detect_format, open_log
-    from scanlines.io import reader_options as options_of
-
-    if profile is None or profile.mounting is None:
-        return options
-    if "mounting" not in options_of(detect_format(log)):
-        return options
-    options = {**options, "mounting": profile.mounting}
-    with open_log(log, **options) as reader:
-        if reader.moves_robot_poses:
-            x, y, theta = profile.mounting
-            typer.echo(
-                f"world frame: {reader.message} records carry the robot's pose; moved by the "
-                f"laser's mounting (x {x:.3f} m, y {y:.3f} m, theta {math.degrees(theta):.2f} "
-                "deg) of the sensor profile",
-                err=True,
-            )
-    return options
-
-
 def _run_with_progress(reader, extractor, selection, out, frame, log, jobs, overwrite):
     from rich.progress import BarColumn, Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
@@ -412,24 +320,6 @@ def _run_with_progress(reader, extractor, selection, out, frame, log, jobs, over
                 input_name=str(log), jobs=jobs, overwrite=overwrite,
             )  # fmt: skip
     return summary
-
-
-class _Clock:
-    seconds = 0.0
-
-
-@contextmanager
-def compiled_for(method: str):
-    """A block that compiles (or loads) ``method``'s kernels, a second core helping
-    (:func:`scanlines.warm.compiling_from_both_ends`); ``.seconds`` says how long the
-    kernels took."""
-    from scanlines._jit import kernel_seconds
-    from scanlines.warm import compiling_from_both_ends
-
-    clock, before = _Clock(), kernel_seconds()
-    with compiling_from_both_ends(method):
-        yield clock
-    clock.seconds = kernel_seconds() - before
 
 
 def _print_summary(summary, out) -> None:
@@ -571,7 +461,7 @@ def demo_command(
 
     log = sample("intel")
     with compiled_for("adaptive") as compiled:
-        extractor = Extractor(sensor_profile=_profile_for_run(log, {}, slice(None), None))
+        extractor = Extractor(sensor_profile=profile_for_run(log, {}, slice(None), None))
         extractor.warm_up()
     output.mkdir(parents=True, exist_ok=True)  # the demo's own folder, replaced each time
     jsonl = output / "intel.jsonl"

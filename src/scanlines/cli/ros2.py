@@ -9,8 +9,16 @@ from typing import Annotated
 
 import typer
 
-from scanlines.cli.common import ConfigMethodOption, ConfigOption, guarded, method_options
-from scanlines.cli.logs import ParamOption, PresetOption, ProfileOption, ScansOption
+from scanlines.cli.common import (
+    ConfigMethodOption,
+    ConfigOption,
+    ParamOption,
+    PresetOption,
+    ProfileOption,
+    ScansOption,
+    guarded,
+    method_options,
+)
 from scanlines.interrupts import is_interrupt
 
 

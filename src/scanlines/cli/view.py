@@ -6,10 +6,11 @@ from typing import Annotated
 
 import typer
 
-from scanlines.cli.common import ConfigMethodOption, ConfigOption, guarded, method_options
-from scanlines.cli.logs import (
+from scanlines.cli.common import (
     AngleMinOption,
     AngleStepOption,
+    ConfigMethodOption,
+    ConfigOption,
     ConventionOption,
     FovOption,
     LogArgument,
@@ -20,6 +21,8 @@ from scanlines.cli.logs import (
     ProfileOption,
     TopicOption,
     compiled_for,
+    guarded,
+    method_options,
     reader_options,
 )
 

@@ -20,7 +20,7 @@ import numpy as np
 from scanlines.evaluation.bench_config import BenchConfig
 from scanlines.evaluation.report import MISSING, TableData, microseconds, number
 from scanlines.evaluation.timing import Timed
-from scanlines.io.outputs import write_text_atomically
+from scanlines.outputs import write_text_atomically
 
 __all__ = [
     "SCHEMA",

@@ -10,7 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from scanlines.evaluation.bench_results import BenchResult
-from scanlines.io.outputs import write_text_atomically
+from scanlines.outputs import write_text_atomically
 
 __all__ = ["render_markdown", "write_docs"]
 

@@ -187,7 +187,7 @@ def open_writer(
         ``"sensor"`` or ``"world"`` (see the module docstring).
     overwrite:
         Replace an existing output and its ``.meta.json``; without it an existing
-        one is an :class:`~scanlines.io.outputs.OutputError` before anything is
+        one is an :class:`~scanlines.outputs.OutputError` before anything is
         written (as is a folder that does not exist).
     **options:
         Format options (``Ros2BagWriter``: ``storage``, ``topic``,

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from scanlines._jit import kernel
-from scanlines.io.numbers import DECIMAL, INTEGER, NOT_A_NUMBER
+from scanlines.io.number_kinds import DECIMAL, INTEGER, NOT_A_NUMBER
 
 __all__ = ["POWERS_OF_TEN", "read_fields"]
 

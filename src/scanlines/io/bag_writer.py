@@ -19,7 +19,6 @@ import orjson
 
 from scanlines.errors import ParameterError
 from scanlines.extraction import END_X, END_Y, START_X, START_Y, ExtractionTable
-from scanlines.io.outputs import OutputError, discard, temp_path
 from scanlines.io.writers import (
     UNSTAMPED_PERIOD,
     Frame,
@@ -28,6 +27,7 @@ from scanlines.io.writers import (
     json_record,
     json_records,
 )
+from scanlines.outputs import OutputError, discard, temp_path
 from scanlines.scan import Scan
 
 #: Largest ``builtin_interfaces/msg/Time.sec`` (an int32).

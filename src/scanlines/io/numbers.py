@@ -26,12 +26,9 @@ from types import ModuleType
 import numpy as np
 
 from scanlines.interrupts import kernel_calls
+from scanlines.io.number_kinds import DECIMAL, INTEGER, NOT_A_NUMBER
 
 __all__ = ["DECIMAL", "INTEGER", "NOT_A_NUMBER", "NumberFields", "number_fields"]
-
-NOT_A_NUMBER, INTEGER, DECIMAL = 0, 1, 2
-"""Kinds of token: not one :func:`number_fields` reads, digits only (with a sign), any
-other number it reads."""
 
 
 class NumberFields:

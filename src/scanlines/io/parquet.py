@@ -49,7 +49,7 @@ from scanlines.extraction import (
     START_Y,
     ExtractionTable,
 )
-from scanlines.io.outputs import commit, discard, temp_path
+from scanlines.outputs import commit, discard, temp_path
 from scanlines.scan import Scan
 
 __all__ = [

@@ -42,8 +42,8 @@ import numpy as np
 
 from scanlines.errors import ParameterError
 from scanlines.extraction import END_X, END_Y, START_X, START_Y
-from scanlines.io.outputs import discard, temp_path, umask
 from scanlines.io.writers import Frame, ResultWriter, ScanFeatures
+from scanlines.outputs import discard, temp_path, umask
 
 __all__ = ["RerunWriter", "require_rerun", "segment_colors"]
 

@@ -18,7 +18,7 @@ Every writer streams (one scan in memory at a time) and is atomic: output
 goes to a hidden temporary file or directory next to the target
 (``.<name>.<process id>.<random>.tmp``) and is moved into place together with
 its ``.meta.json``, both or neither, only when the writer is closed without
-error (:mod:`scanlines.io.outputs`); an exception inside the ``with`` block
+error (:mod:`scanlines.outputs`); an exception inside the ``with`` block
 (or :meth:`ResultWriter.abort`) deletes it. A writer refuses, before writing
 anything, a target in a folder that does not exist, and an existing target
 (or ``.meta.json``) unless ``overwrite=True``.
@@ -104,9 +104,9 @@ from scanlines.extraction import (
     Extraction,
     ExtractionTable,
 )
-from scanlines.io.outputs import check_output, commit, discard, temp_path, umask
 from scanlines.io.transform import points_to_world, to_world
 from scanlines.json_values import jsonable
+from scanlines.outputs import check_output, commit, discard, temp_path, umask
 from scanlines.scan import Scan
 
 __all__ = [

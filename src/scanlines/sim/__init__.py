@@ -26,11 +26,17 @@ sensor family (randomised sensors and their four corner sensors) in
 
 from __future__ import annotations
 
-from scanlines.sim.family import corner_sensors, family_names, family_sensors, random_sensor
+from scanlines.sim.family import (
+    corner_sensors,
+    family_names,
+    family_sensors,
+    get_sensor,
+    random_sensor,
+)
 from scanlines.sim.noise import NO_RETURN, NoiseModel, NoisyRanges, apply_noise
 from scanlines.sim.raycast import RayHits, cast_rays
 from scanlines.sim.scenes import CLUTTER_KINDS, SCENE_KINDS, Scene, random_scene
-from scanlines.sim.sensors import SENSORS, SensorSpec, get_sensor
+from scanlines.sim.sensors import SENSORS, SensorSpec
 from scanlines.sim.simulate import SimScan, depth_jumps, simulate
 from scanlines.sim.truth import compute_truth, hesse_line, sensor_to_world, world_to_sensor
 from scanlines.sim.world import (

@@ -53,8 +53,9 @@ from functools import lru_cache
 
 import numpy as np
 
+from scanlines.errors import ParameterError
 from scanlines.sim.noise import NoiseModel
-from scanlines.sim.sensors import SensorSpec
+from scanlines.sim.sensors import SENSORS, SensorSpec
 
 __all__ = [
     "BIAS_FACTOR",
@@ -76,6 +77,7 @@ __all__ = [
     "family_names",
     "family_sensor",
     "family_sensors",
+    "get_sensor",
     "random_sensor",
 ]
 
@@ -276,3 +278,29 @@ def family_sensor(name: str) -> SensorSpec | None:
     if family_name(index, seed) != name:  # one spelling per member
         return None
     return _member(index, seed)
+
+
+def get_sensor(sensor: str | SensorSpec) -> SensorSpec:
+    """The preset called ``sensor`` (a :class:`SensorSpec` is returned unchanged).
+
+    Names of the sensor family (``"family-07"``, ``"family-s3-07"``,
+    ``"corner-fine-noisy"``) resolve to their sensors too.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown name; the message lists the presets and the family's names.
+    """
+    if isinstance(sensor, SensorSpec):
+        return sensor
+    try:
+        return SENSORS[sensor]
+    except KeyError:
+        member = family_sensor(sensor) if isinstance(sensor, str) else None
+        if member is not None:
+            return member
+        known = ", ".join(sorted(SENSORS))
+        raise ParameterError(
+            f"unknown sensor preset {sensor!r}; known: {known}; family: family-00, family-01, "
+            "..., family-s<seed>-<index>, corner-{fine,coarse}-{quiet,noisy}"
+        ) from None

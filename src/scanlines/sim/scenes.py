@@ -36,8 +36,9 @@ from typing import NamedTuple
 
 import numpy as np
 
+from scanlines.sim.family import get_sensor
 from scanlines.sim.noise import NoiseModel
-from scanlines.sim.sensors import SensorSpec, get_sensor
+from scanlines.sim.sensors import SensorSpec
 from scanlines.sim.simulate import SimScan, as_rng, simulate
 from scanlines.sim.world import Shape, World, box, polygon, polyline, round_pillar, wall
 

@@ -43,11 +43,10 @@ from typing import Any
 
 import numpy as np
 
-from scanlines.errors import ParameterError
 from scanlines.scan import is_full_circle
 from scanlines.sim.noise import NoiseModel
 
-__all__ = ["SENSORS", "SensorSpec", "get_sensor"]
+__all__ = ["SENSORS", "SensorSpec"]
 
 
 @dataclass(frozen=True)
@@ -185,31 +184,3 @@ _PRESETS = (
 
 SENSORS: MappingProxyType[str, SensorSpec] = MappingProxyType({s.name: s for s in _PRESETS})
 """The sensor presets by name (read-only)."""
-
-
-def get_sensor(sensor: str | SensorSpec) -> SensorSpec:
-    """The preset called ``sensor`` (a :class:`SensorSpec` is returned unchanged).
-
-    Names of the sensor family (:mod:`scanlines.sim.family`: ``"family-07"``,
-    ``"family-s3-07"``, ``"corner-fine-noisy"``) resolve to their sensors too.
-
-    Raises
-    ------
-    ParameterError
-        For an unknown name; the message lists the presets and the family's names.
-    """
-    if isinstance(sensor, SensorSpec):
-        return sensor
-    try:
-        return SENSORS[sensor]
-    except KeyError:
-        from scanlines.sim.family import family_sensor
-
-        member = family_sensor(sensor) if isinstance(sensor, str) else None
-        if member is not None:
-            return member
-        known = ", ".join(sorted(SENSORS))
-        raise ParameterError(
-            f"unknown sensor preset {sensor!r}; known: {known}; family: family-00, family-01, "
-            "..., family-s<seed>-<index>, corner-{fine,coarse}-{quiet,noisy}"
-        ) from None

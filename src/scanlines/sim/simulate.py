@@ -8,8 +8,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from scanlines.scan import Scan
+from scanlines.sim.family import get_sensor
 from scanlines.sim.noise import NoiseModel, apply_noise
-from scanlines.sim.sensors import SensorSpec, get_sensor
+from scanlines.sim.sensors import SensorSpec
 from scanlines.sim.truth import compute_truth
 from scanlines.sim.world import World
 from scanlines.truth import BeamStatus, Truth

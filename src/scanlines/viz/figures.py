@@ -32,7 +32,7 @@ def save(figure_or_axes: Any, path: str | Path, *, dpi: int = 130) -> Path:
     """Save a figure (or the figure of an axes) to ``path`` and close it; the file
     appears complete or not at all. The format is the suffix's (``.png``, ``.pdf``,
     ``.svg``...); another suffix is a :class:`~scanlines.ParameterError`."""
-    from scanlines.io.outputs import commit, discard, temp_path
+    from scanlines.outputs import commit, discard, temp_path
 
     figure = getattr(figure_or_axes, "figure", figure_or_axes)
     path = Path(path)
