@@ -1,4 +1,5 @@
-"""``scanlines bench``: JSON layout, generated docs, errors. Speed itself is never asserted."""
+"""``scanlines bench`` and ``python -m tools.bench``: JSON layout, the generated page, errors.
+Speed itself is never asserted."""
 
 from __future__ import annotations
 
@@ -6,21 +7,27 @@ import json
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
+from tools.bench.performance_page import render_markdown
 
 import scanlines
 from scanlines.evaluation import bench
 from scanlines.evaluation.bench_results import SCHEMA
-from scanlines.evaluation.performance_page import render_markdown
 from scanlines.evaluation.report import microseconds
 from scanlines.methods import REGISTRY
 from scanlines.methods.iepf import Iepf
 
+REPOSITORY = Path(__file__).parents[1]
 
-def run(*args: str) -> subprocess.CompletedProcess:
+
+def run(*args: str, page: Path | None = None) -> subprocess.CompletedProcess:
+    """``scanlines bench ARGS``; with ``page``, the repository's page writer instead."""
+    command = ["scanlines", "bench"] if page is None else ["tools.bench", "--out", str(page)]
     return subprocess.run(
-        [sys.executable, "-m", "scanlines", "bench", *args],
+        [sys.executable, "-m", *command, *args],
+        cwd=REPOSITORY,
         capture_output=True,
         text=True,
         timeout=120,
@@ -35,9 +42,7 @@ def quick_run(tmp_path_factory):
         "--quick",
         "--json",
         str(folder / "out.json"),
-        "--write-docs",
-        "--docs-path",
-        str(folder / "docs" / "PERFORMANCE.md"),
+        page=folder / "PERFORMANCE.md",
     )
     return out, folder
 
@@ -91,7 +96,7 @@ def test_quick_batch_and_profile(quick_run):
             assert row["loop_us"] > 0
             assert row["batch_us"] > 0
             assert row["ratio"] == pytest.approx(row["batch_us"] / row["loop_us"])
-    profile = data["profile"]  # --write-docs profiles adaptive
+    profile = data["profile"]  # the page writer profiles adaptive
     assert profile["method"] == "adaptive"
     assert profile["cumulative"]
     assert all(f["where"].startswith("scanlines/") for f in profile["cumulative"])
@@ -100,10 +105,10 @@ def test_quick_batch_and_profile(quick_run):
 def test_write_docs_to_docs_path(quick_run):
     out, folder = quick_run
     assert out.returncode == 0, out.stderr
-    page = folder / "docs" / "PERFORMANCE.md"
+    page = folder / "PERFORMANCE.md"
     text = page.read_text()
     assert "Generated" in text.split("## Machine")[0]
-    assert "scanlines bench" in text.split("## Machine")[0]
+    assert "python -m tools.bench" in text.split("## Machine")[0]
     for heading in (
         "## Machine",
         "## Summary",
@@ -115,7 +120,7 @@ def test_write_docs_to_docs_path(quick_run):
         assert heading in text
     assert "CPU:" in text
     assert "OPENBLAS environment variables:" in text
-    assert "--docs-path" in text  # the command line used is recorded
+    assert f"--out {page}" in text  # the command line used is recorded
     assert "| method | median us/scan | p90 us/scan | scans/s | x iepf |" in text
     # the numbers of the page are the numbers of the run
     data = json.loads((folder / "out.json").read_text())
@@ -198,10 +203,12 @@ def test_failing_method_is_reported_not_fatal(monkeypatch):
 
 def test_import_needs_no_rich():
     code = (
-        "import sys, scanlines.evaluation.bench, scanlines.evaluation.performance_page; "
+        "import sys, scanlines.evaluation.bench, tools.bench.performance_page; "
         "print(sorted(m for m in sys.modules if m.startswith(('rich', 'matplotlib', 'typer'))))"
     )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    out = subprocess.run(
+        [sys.executable, "-c", code], cwd=REPOSITORY, capture_output=True, text=True, check=True
+    )
     assert out.stdout.strip() == "[]"
 
 
@@ -223,6 +230,6 @@ def test_quick_pipeline_section(quick_run):
     assert 0.0 <= pipeline["other_cores_busy"] <= os.cpu_count()
     assert 0 < pipeline["floor_us"] < stages["extract (batch)"]
     assert pipeline["cold"] is None  # not in --quick: it compiles from an empty cache
-    page = (folder / "docs" / "PERFORMANCE.md").read_text()
+    page = (folder / "PERFORMANCE.md").read_text()
     assert "What a run costs besides the kernels" in page
     assert "one pass over the returns (floor)" in page

@@ -1,4 +1,4 @@
-"""The scripts in benchmarks/ run against the package as it is (their figures are not checked)."""
+"""The scripts in tools/benchmarks/ run against the package as it is (figures not checked)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-BENCHMARKS = Path(__file__).parent.parent / "benchmarks"
+BENCHMARKS = Path(__file__).parent.parent / "tools" / "benchmarks"
 
 
 def run(script: str, *args: str, code: int = 0) -> str:

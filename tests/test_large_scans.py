@@ -1,6 +1,6 @@
 """Huge scans cost time and memory linear in their beams, for every method.
 
-Three scans of one full turn (``benchmarks/large_scans.py``): a noise-free arc (every
+Three scans of one full turn (``tools/benchmarks/large_scans.py``): a noise-free arc (every
 point on one circle: the worst case of splitting at the worst residual), a room with
 1 cm noise, and uniform random ranges (the worst case of the consensus methods). Each
 method runs in a fresh process, so its peak memory is its own. CI uses 200,000 beams;
@@ -21,7 +21,7 @@ import pytest
 import scanlines
 from scanlines import Extractor, Scan
 
-BENCHMARK = Path(__file__).parents[1] / "benchmarks" / "large_scans.py"
+BENCHMARK = Path(__file__).parents[1] / "tools" / "benchmarks" / "large_scans.py"
 SECONDS, MEGABYTES = 10.0, 1024.0
 
 

@@ -1,4 +1,4 @@
-"""``scanlines reproduce``: the generated RESULTS.md, the label scoring, the paper's measures."""
+"""``python -m tools.reproduce``: RESULTS.md, the label scoring, the paper's measures."""
 
 from __future__ import annotations
 
@@ -6,16 +6,17 @@ import math
 import subprocess
 import sys
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import pytest
+from tools.reproduce.experiments import PAPER_SPEED_RATIO, Headline, headline, run_dataset
+from tools.reproduce.results_page import verdict_similarity, verdict_speed
 
 from scanlines import Extraction, Extractor, Scan
 from scanlines.data import sample
 from scanlines.evaluation.cases import Case, line_similarity, score_case, score_labelled
-from scanlines.evaluation.experiments import PAPER_SPEED_RATIO, Headline, headline, run_dataset
 from scanlines.evaluation.metrics import accuracy_rate, environmental_similarity
-from scanlines.evaluation.results_page import verdict_similarity, verdict_speed
 from scanlines.evaluation.scores import Tolerances
 from scanlines.evaluation.specs import parse_specs
 from scanlines.io import open_log
@@ -36,11 +37,15 @@ class Frame:
 # --------------------------------------------------------------------------- the command
 
 
+REPOSITORY = Path(__file__).parents[1]
+
+
 @pytest.fixture(scope="module")
 def quick_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("reproduce")
     proc = subprocess.run(
-        [sys.executable, "-m", "scanlines", "reproduce", "--quick", "--out", str(out)],
+        [sys.executable, "-m", "tools.reproduce", "--quick", "--out", str(out)],
+        cwd=REPOSITORY,
         capture_output=True,
         text=True,
         timeout=300,
@@ -52,7 +57,7 @@ def test_quick_run_writes_results_with_every_section(quick_run):
     proc, out = quick_run
     assert proc.returncode == 0, proc.stderr
     text = (out / "RESULTS.md").read_text()
-    assert f"Generated** by `scanlines reproduce --quick --out {out}`" in text
+    assert f"Generated** by `python -m tools.reproduce --quick --out {out}`" in text
     assert "never edited by hand" in text
     for heading in (
         "## Headline: the paper's two claims, measured",
@@ -97,8 +102,7 @@ def test_bad_option_is_one_line_and_exit_2(tmp_path):
         [
             sys.executable,
             "-m",
-            "scanlines",
-            "reproduce",
+            "tools.reproduce",
             "--quick",
             "--scenes-per-sensor",
             "0",
@@ -106,6 +110,7 @@ def test_bad_option_is_one_line_and_exit_2(tmp_path):
             str(tmp_path),
         ],
         capture_output=True,
+        cwd=REPOSITORY,
         text=True,
         timeout=60,
     )
@@ -116,10 +121,12 @@ def test_bad_option_is_one_line_and_exit_2(tmp_path):
 
 def test_import_needs_no_plotting_or_console_libraries():
     code = (
-        "import sys, scanlines.reproduce; "
+        "import sys, tools.reproduce; "
         "print(sorted(m for m in sys.modules if m.split('.')[0] in ('matplotlib', 'rich')))"
     )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    out = subprocess.run(
+        [sys.executable, "-c", code], cwd=REPOSITORY, capture_output=True, text=True, timeout=60
+    )
     assert out.stdout.strip() == "[]", out.stderr
 
 

@@ -13,8 +13,6 @@ if TYPE_CHECKING:
     from scanlines.evaluation.bench_results import BenchResult
     from scanlines.evaluation.report import TableData
 
-DEFAULT_DOCS = Path("docs/PERFORMANCE.md")
-
 TABLE_WIDTH = 160
 """Console width when the output is not a terminal."""
 
@@ -25,7 +23,7 @@ def register(app: typer.Typer) -> None:
         help=(
             "Time every method (median/p90 us per scan, scans/s, ratio to iepf) on the shipped "
             "real excerpts and simulated scans of each sensor preset; scaling over beam counts; "
-            "Extractor.batch vs the loop. Speed figures for docs/PERFORMANCE.md."
+            "Extractor.batch vs the loop; tables on stdout, --json for the numbers."
         ),
     )(guarded(bench_command))
 
@@ -90,23 +88,13 @@ def bench_command(
     ] = None,
     profile: Annotated[
         bool,
-        typer.Option(
-            "--profile", help="Profile adaptive over the intel excerpt (on with --write-docs)."
-        ),
+        typer.Option("--profile", help="Profile adaptive over the intel excerpt."),
     ] = False,
     json_path: Annotated[
         Path | None, typer.Option("--json", help="Also write the measurements as JSON.")
     ] = None,
-    write_docs: Annotated[
-        bool,
-        typer.Option("--write-docs", help="Regenerate the performance page (see --docs-path)."),
-    ] = False,
-    docs_path: Annotated[
-        Path,
-        typer.Option("--docs-path", help="Page written by --write-docs."),
-    ] = DEFAULT_DOCS,
-) -> None:
-    from scanlines.evaluation import bench, performance_page
+) -> object:  # the BenchResult (typer evaluates the annotation at start-up)
+    from scanlines.evaluation import bench
     from scanlines.evaluation.report import command_line
 
     changes = {
@@ -124,7 +112,7 @@ def bench_command(
         sensors=tuple(sensor or ()),
         seed=seed,
         batch=not no_batch,
-        profile=profile or write_docs,
+        profile=profile,
         pipeline=not no_pipeline,
         jobs=jobs,
     )
@@ -143,8 +131,7 @@ def bench_command(
     _print(result)
     if json_path is not None:
         typer.echo(f"wrote {result.to_json(json_path)}")
-    if write_docs:
-        typer.echo(f"wrote {performance_page.write_docs(result, docs_path)}")
+    return result  # for a caller that writes a page of it (the repository's tools)
 
 
 class _Progress:

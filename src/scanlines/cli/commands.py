@@ -6,7 +6,7 @@ from typing import Annotated
 
 import typer
 
-from scanlines.cli import bench, compile, evaluate, extract, logs, reproduce, ros2, view
+from scanlines.cli import bench, compile, evaluate, extract, logs, ros2, view
 
 app = typer.Typer(
     name="scanlines",
@@ -44,7 +44,6 @@ extract.register(app)
 logs.register(app)
 evaluate.register(app)
 bench.register(app)
-reproduce.register(app)
 compile.register(app)
 view.register(app)
 ros2.register(app)

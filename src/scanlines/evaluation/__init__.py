@@ -15,14 +15,11 @@ them). The truth types they score against are :mod:`scanlines.truth`::
     cases             a scan with truth, labels or neither, and one method's score on it
     registration      a point-to-line ICP: the relative pose of two scans
     repeatability     scan-to-scan repeatability on real logs, no labels (eval --real)
-    experiments       the paper's experiments (scanlines reproduce): what is measured
-    results_page      RESULTS.md from a measured run
     bench             the speed of every method (scanlines bench)
     bench_results     what bench measured, as JSON and tables
-    performance_page  PERFORMANCE.md from a bench run
 
-The figures are in :mod:`scanlines.viz`; :func:`scanlines.reproduce.reproduce` measures,
-draws and writes ``RESULTS.md``.
+The figures are in :mod:`scanlines.viz`. The repository's own pages (``RESULTS.md``,
+``PERFORMANCE.md``) are written by its ``tools/``, which are not installed.
 """
 
 __all__ = [
@@ -30,14 +27,11 @@ __all__ = [
     "bench_results",
     "cases",
     "evaluate",
-    "experiments",
     "machine",
     "metrics",
-    "performance_page",
     "registration",
     "repeatability",
     "report",
-    "results_page",
     "scenes",
     "scores",
     "specs",

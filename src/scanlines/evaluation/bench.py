@@ -33,7 +33,7 @@ not selected). A method that raises on a scan is reported as an error for that d
 comparison times whole passes over the stack (:data:`BATCH_VARIANTS`) by the same rule.
 
 The results are :mod:`scanlines.evaluation.bench_results`, the page
-:mod:`scanlines.evaluation.performance_page`. ``import scanlines.evaluation.bench`` needs
+:mod:`tools.bench.performance_page`. ``import scanlines.evaluation.bench`` needs
 only numpy; the command (``scanlines.cli.bench``) adds the rich tables and the progress
 bar.
 """

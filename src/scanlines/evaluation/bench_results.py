@@ -3,7 +3,7 @@
 :class:`BenchResult` holds everything one run measured (:func:`scanlines.evaluation.bench.run`)
 and gives it as JSON (:meth:`BenchResult.to_dict`, schema :data:`SCHEMA`) and as tables
 (:class:`~scanlines.evaluation.report.TableData`) for the command and the performance page
-(:mod:`scanlines.evaluation.performance_page`).
+(:mod:`tools.bench.performance_page`).
 """
 
 from __future__ import annotations

@@ -120,9 +120,9 @@ def write_csv(path: Path, rows: list[dict[str, Any]]) -> Path:
     return path
 
 
-def command_line(argv: Sequence[str] | None = None) -> str:
-    """``scanlines`` plus the arguments of this process, shell-quoted."""
+def command_line(argv: Sequence[str] | None = None, program: str = "scanlines") -> str:
+    """``program`` plus the arguments of this process, shell-quoted."""
     import shlex
 
     args = list(sys.argv[1:] if argv is None else argv)
-    return shlex.join(["scanlines", *args])
+    return " ".join([program, shlex.join(args)]) if args else program

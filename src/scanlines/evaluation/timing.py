@@ -1,6 +1,6 @@
 """The one way extraction times are taken: :func:`time_calls`.
 
-``scanlines eval``, ``scanlines reproduce`` and ``scanlines bench`` all time through
+``scanlines eval``, ``scanlines bench`` and the repository's tools all time through
 this module, by one rule:
 
 * **A sample** is the wall time of one call on one scan (:func:`time.perf_counter_ns`),

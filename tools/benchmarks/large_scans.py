@@ -1,6 +1,6 @@
 """Time and peak memory of every method on very large scans (10^6 beams by default).
 
-    python benchmarks/large_scans.py [--beams 1000000] [-m adaptive] [--case arc]
+    python tools/benchmarks/large_scans.py [--beams 1000000] [-m adaptive] [--case arc]
 
 Three scans, each over one full turn: a noise-free arc of radius 5 m (every beam on one
 circle), a 10 m x 6 m room seen from off its centre with 1 cm range noise, and uniform

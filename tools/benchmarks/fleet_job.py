@@ -1,6 +1,6 @@
 """The fleet job of docs/SCALE.md: many logs through local processes and a Dask LocalCluster.
 
-    python benchmarks/fleet_job.py --data ../shared/data --work /tmp/fleet [--copies 5] [--jobs 2]
+    python tools/benchmarks/fleet_job.py --data DATA --work /tmp/fleet [--copies 5] [--jobs 2]
 
 Builds a folder of ``copies`` copies of the shipped excerpts and of the real logs under
 ``--data`` (Intel raw and corrected, Freiburg 079 raw, scan-matched and corrected, both

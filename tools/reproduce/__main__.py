@@ -1,4 +1,4 @@
-"""``scanlines reproduce``: redo the paper's experiments and write ``docs/RESULTS.md``."""
+"""``python -m tools.reproduce``: redo the paper's experiments and write ``docs/RESULTS.md``."""
 
 from __future__ import annotations
 
@@ -14,7 +14,6 @@ from scanlines.cli.common import guarded, jobs_option
 
 def register(app: typer.Typer) -> None:
     app.command(
-        "reproduce",
         help=(
             "Redo the paper's experiments (Tables 1 and 3, Fig. 13, its similarity and speed "
             "claims) and every method on simulated ground truth, from the data shipped in the "
@@ -51,9 +50,9 @@ def reproduce_command(
         ),
     ] = None,
 ) -> None:
-    from scanlines.evaluation.experiments import ReproduceConfig
     from scanlines.evaluation.report import command_line
-    from scanlines.reproduce import reproduce
+    from tools.reproduce import reproduce
+    from tools.reproduce.experiments import ReproduceConfig
 
     config = ReproduceConfig.quick_config(seed=seed) if quick else ReproduceConfig(seed=seed)
     if scenes_per_sensor is not None:
@@ -61,9 +60,11 @@ def reproduce_command(
     config = replace(config, jobs=jobs_option(jobs))
 
     def stage(text: str) -> None:
-        print(f"scanlines reproduce: {text}", file=sys.stderr, flush=True)
+        print(f"tools.reproduce: {text}", file=sys.stderr, flush=True)
 
-    result, paths = reproduce(out, config, command=command_line(), on_stage=stage)
+    result, paths = reproduce(
+        out, config, command=command_line(program="python -m tools.reproduce"), on_stage=stage
+    )
     for h in result.headlines("adaptive"):
         g = h.similarity_gain_pct
         typer.echo(
@@ -76,3 +77,13 @@ def reproduce_command(
     typer.echo(f"took {result.elapsed_s:.0f} s")
     for path in paths:
         typer.echo(f"wrote {path}")
+
+
+def main() -> None:
+    app = typer.Typer(add_completion=False, pretty_exceptions_enable=False)
+    register(app)
+    app(prog_name="python -m tools.reproduce")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,7 +1,7 @@
 """Where the default method's breakpoint and corner errors come from, and what a scan can decide.
 
-    python docs/decisions/events.py            # 300 scenes per sensor, seed 0
-    python docs/decisions/events.py -n 20 --seed 1
+    python tools/decisions/events.py            # 300 scenes per sensor, seed 0
+    python tools/decisions/events.py -n 20 --seed 1
 
 Two tables per sensor preset, on the scenes, seeds and tolerances of ``scanlines eval``:
 

@@ -1,6 +1,6 @@
 """Where the adaptive kernel spends its time: each stage timed on its own, one simulated scan.
 
-    python benchmarks/stage_times.py [--sensor tim571] [--seed 3] [--repeats 300]
+    python tools/benchmarks/stage_times.py [--sensor tim571] [--seed 3] [--repeats 300]
 
 Each stage is called from Python with the inputs the full kernel would give it, so every line
 includes about 1 us of call overhead and the boxing of its outputs; the stages add up to a

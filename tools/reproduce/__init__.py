@@ -1,14 +1,11 @@
-"""The paper's experiments, redone on the data scanlines ships: ``scanlines reproduce``.
+"""The paper's experiments, redone on the data scanlines ships: ``python -m tools.reproduce``.
 
-The one place where measuring (:mod:`scanlines.evaluation`) and drawing
-(:mod:`scanlines.viz`) meet, so it stands above both.
-
-:func:`reproduce` measures (:func:`scanlines.evaluation.experiments.run`, whose module
-says what and how), draws the figures (:mod:`scanlines.viz.reproduce`) and writes the
-page (:mod:`scanlines.evaluation.results_page`): ``<out>/RESULTS.md`` and
+:func:`reproduce` measures (:func:`tools.reproduce.experiments.run`, whose module
+says what and how), draws the figures (:mod:`tools.reproduce.figures`) and writes the
+page (:mod:`tools.reproduce.results_page`): ``<out>/RESULTS.md`` and
 ``<out>/figures/*.png``.
 
-``import scanlines.reproduce`` needs numpy only; the figures import
+``import tools.reproduce`` needs numpy only; the figures import
 matplotlib when they are drawn.
 """
 
@@ -18,10 +15,10 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from scanlines.evaluation.cases import LabelledFrameLike
-from scanlines.evaluation.experiments import ReproduceConfig, ReproduceResult, Stage, run
-from scanlines.evaluation.results_page import render_markdown
 from scanlines.outputs import write_text_atomically
-from scanlines.viz.reproduce import write_figures
+from tools.reproduce.experiments import ReproduceConfig, ReproduceResult, Stage, run
+from tools.reproduce.figures import write_figures
+from tools.reproduce.results_page import render_markdown
 
 __all__ = ["reproduce"]
 
@@ -31,10 +28,10 @@ def reproduce(
     config: ReproduceConfig | None = None,
     *,
     labels: Sequence[LabelledFrameLike] | None = None,
-    command: str = "scanlines reproduce",
+    command: str = "python -m tools.reproduce",
     on_stage: Stage | None = None,
 ) -> tuple[ReproduceResult, list[Path]]:
-    """:func:`~scanlines.evaluation.experiments.run`, then write ``<out>/RESULTS.md`` and
+    """:func:`~tools.reproduce.experiments.run`, then write ``<out>/RESULTS.md`` and
     ``<out>/figures/*.png``.
 
     Returns the result and the written paths (markdown first).

@@ -1,6 +1,6 @@
 """The viewer's two targets, measured in real headless Chromium driven by Playwright.
 
-    python benchmarks/viewer.py [--changes 20] [--scans 50000] [--work /tmp/viewer-bench]
+    python tools/benchmarks/viewer.py [--changes 20] [--scans 50000] [--work /tmp/viewer-bench]
 
 1. A parameter change on a 1,000-beam scan, for every method (kernels warm): the time
    from the input event to the redrawn frame, as the page measures it (the event's

@@ -17,7 +17,7 @@ The numbers come from ``eval-300-summary.csv``, written by (300 scenes per senso
       -m 'adaptive?min_cluster_points=1@mcp=1' -m 'adaptive?min_cluster_points=3@mcp=3' \\
       -m 'adaptive?noise_model=range@noise_model=range'
 
-Run ``python docs/decisions/make_pages.py`` to regenerate the pages; do not edit them by hand.
+Run ``python tools/decisions/make_pages.py`` to regenerate the pages; do not edit them by hand.
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from __future__ import annotations
 import csv
 from pathlib import Path
 
-HERE = Path(__file__).parent
+HERE = Path(__file__).parents[2] / "docs" / "decisions"  # the pages and their data
 SOURCE = HERE / "eval-300-summary.csv"
 SENSORS = ("lms_1deg", "lms_05deg", "tim571", "urg04lx", "all")
 COMMAND = __doc__.split("\n\n")[2]
@@ -55,13 +55,13 @@ two at a depth jump usually is, and keeps a small object in front of both sides
 (`tests/test_adaptive.py::test_two_returns_between_two_surfaces`). It lifted breakpoint F1 on
 300 scenes per sensor from 0.930 / 0.948 / 0.947 / 0.910 to 0.937 / 0.951 / 0.954 / 0.917
 (lms_1deg, lms_05deg, tim571, urg04lx; commit `bbdd791`), corner F1 moved by at most 0.001, and
-the hand-labelled Intel frames did not change (`python docs/decisions/labelled_frames.py`).
+the hand-labelled Intel frames did not change (`python tools/decisions/labelled_frames.py`).
 
 `min_cluster_points` was 3 at first. The simulator counts events next to runs of fewer than three
 returns as don't care and prefers 3 (breakpoint F1 over all sensors 0.956 against 0.943 with 2;
 lms_1deg 0.963 against 0.949); the 10 hand-labelled Intel frames, whose labeller marked breakpoints
 around small objects, do not: breakpoint recall 0.40 with 3, 0.56 with 2 and 0.79 with 1
-(precision 0.96, 0.97, 0.97; `python docs/decisions/labelled_frames.py`). With 1 the simulated
+(precision 0.96, 0.97, 0.97; `python tools/decisions/labelled_frames.py`). With 1 the simulated
 breakpoint F1 falls to 0.786 (every mixed pixel becomes two breakpoints). 2 is the compromise:
 the simulator's don't-care rules do not count the small objects the real frames are full of.
 
@@ -149,7 +149,7 @@ lifts URG breakpoint F1 from 0.919 to 0.937 and TiM571 from 0.955 to 0.956, leav
 presets' breakpoints as they are, and moves corner F1 by -0.003 (lms_1deg), 0 (lms_05deg),
 +0.007 (TiM571) and -0.002 (URG). A second scene set (seed 1, 150 per preset, `scanlines eval -n
 150 --seed 1`) agrees: breakpoint F1 over all sensors 0.939 -> 0.946, corner F1 0.815 -> 0.814.
-On the 10 hand-labelled Intel frames (SICK LMS, `python docs/decisions/labelled_frames.py`)
+On the 10 hand-labelled Intel frames (SICK LMS, `python tools/decisions/labelled_frames.py`)
 breakpoints do not change (precision 0.97, recall 0.56) but one corner of ten is lost
 (precision 0.45 -> 0.40, recall 0.90 -> 0.80).""",
         "`constant` stays the default for now: `range` is better for breakpoints where the noise "
@@ -198,7 +198,7 @@ against 0.956 at 0.5 deg, 0.922 against 0.955 on the TiM571). At 1 deg, lambda =
 steps of up to 10 % of the range, so small depth steps pass as continuous and then look like
 corners: corner F1 0.779 with lambda = 10 against 0.870 with 15, and breakpoint F1 0.934
 against 0.949; the 10 hand-labelled Intel frames (1 deg; `python
-docs/decisions/labelled_frames.py`) agree: breakpoint precision/recall 0.93/0.51 -> 0.97/0.56,
+tools/decisions/labelled_frames.py`) agree: breakpoint precision/recall 0.93/0.51 -> 0.97/0.56,
 corner precision/recall 0.32/0.80 -> 0.45/0.90. At 1 deg, returns on a wall at 75-80 deg incidence
 are many noise sigmas apart, so the continuation keeps such walls whole without the wider bound;
 at fine resolution they are not.

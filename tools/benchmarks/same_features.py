@@ -1,7 +1,7 @@
 """Record every method's features, or check that this checkout gives the recorded ones bit for bit.
 
-    python benchmarks/same_features.py record features.pkl [-n 300]   # with the old version
-    python benchmarks/same_features.py compare features.pkl            # with the new one
+    python tools/benchmarks/same_features.py record features.pkl [-n 300]   # with the old version
+    python tools/benchmarks/same_features.py compare features.pkl            # with the new one
 
 For a change that must not change any result (a re-housing, a speed-up): record with the
 version before the change (run this file with that version's Python), then compare with

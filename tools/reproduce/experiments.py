@@ -3,8 +3,8 @@
 Everything here runs on what the repository holds: the two real excerpts of
 :mod:`scanlines.data` (Intel Research Lab, Freiburg 079), the hand labels of ten Intel
 frames (:mod:`scanlines.data.labels`) and the scan simulator (:mod:`scanlines.sim`).
-:func:`run` measures; :mod:`scanlines.evaluation.results_page` writes the page and
-:mod:`scanlines.viz.reproduce` its figures (:func:`scanlines.reproduce.reproduce`
+:func:`run` measures; :mod:`tools.reproduce.results_page` writes the page and
+:mod:`tools.reproduce.figures` its figures (:func:`tools.reproduce.reproduce`
 does all three).
 
 What is measured
@@ -472,7 +472,7 @@ def run(
     *,
     labels: Sequence[LabelledFrameLike] | None = None,
     specs: Sequence[str | MethodSpec] | None = None,
-    command: str = "scanlines reproduce",
+    command: str = "python -m tools.reproduce",
     on_stage: Stage | None = None,
 ) -> ReproduceResult:
     """Measure everything ``RESULTS.md`` shows (see the module docstring).

@@ -1,7 +1,7 @@
 """The README's screenshot of the viewer: the Freiburg 079 excerpt, the default adaptive
 method against the same with ``min_points`` 10, overlaid, with a segment selected.
 
-    python benchmarks/viewer_screenshot.py [--out docs/figures/viewer.png] [--scan 120]
+    python tools/benchmarks/viewer_screenshot.py [--out docs/figures/viewer.png] [--scan 120]
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Which tolerance the truth row's unmatched true segments fail on, per sensor preset.
 
-    python docs/decisions/ceiling.py            # 300 scenes per sensor, seed 0
-    python docs/decisions/ceiling.py -n 20 --seed 1
+    python tools/decisions/ceiling.py            # 300 scenes per sensor, seed 0
+    python tools/decisions/ceiling.py -n 20 --seed 1
 
 The truth row (``scanlines eval -m truth``, :func:`scanlines.evaluation.truth_row.truth_extraction`)
 has one segment per true segment, over the same beams. Every counted true segment

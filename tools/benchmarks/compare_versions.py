@@ -1,6 +1,6 @@
 """Per-scan time of this checkout against another installed version, in one process.
 
-    python benchmarks/compare_versions.py --other OTHER_SITE_PACKAGES [-m iepf] [--rounds 21]
+    python tools/benchmarks/compare_versions.py --other OTHER_SITE_PACKAGES [-m iepf] [--rounds 21]
 
 For a change that must not be slower: install the other version into a virtual
 environment of its own (``python -m venv /tmp/old && /tmp/old/bin/pip install .`` in a

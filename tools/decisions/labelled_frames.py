@@ -1,6 +1,6 @@
 """Breakpoint and corner precision/recall of adaptive variants on the 10 hand-labelled Intel frames.
 
-    python docs/decisions/labelled_frames.py
+    python tools/decisions/labelled_frames.py
 
 Matching: one-to-one within 2 beams, nearest first; a detection within 2 beams of an uncertain
 label is neither true nor false, and uncertain labels are never missed.

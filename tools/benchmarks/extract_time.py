@@ -1,7 +1,7 @@
 """Median time of one ``Extractor`` call, and of ``Extractor.batch`` per scan, on simulated
 481-beam and 181-beam scans.
 
-    python benchmarks/extract_time.py [--scenes 50] [--repeats 20]
+    python tools/benchmarks/extract_time.py [--scenes 50] [--repeats 20]
 
 481 beams: the SICK TiM571 preset (160 deg at 1/3 deg, the paper's sensor). 181 beams: the
 SICK LMS 1 deg preset widened to 181 beams (-90..+90 deg). Realistic noise, seeded scenes;

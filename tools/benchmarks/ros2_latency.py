@@ -1,6 +1,6 @@
 """Latency of the ROS 2 node, receipt to publish, per scan, at a fixed scan rate over DDS.
 
-    python benchmarks/ros2_latency.py [--rate 40] [--scans 400] [--log intel|sim1081]
+    python tools/benchmarks/ros2_latency.py [--rate 40] [--scans 400] [--log intel|sim1081]
 
 Starts ``scanlines ros2`` (the default method, loopback DDS) in a process of its own,
 publishes the scans to it at ``--rate`` Hz from this process, and prints the node's own

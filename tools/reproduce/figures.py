@@ -1,7 +1,7 @@
 """The figures of ``RESULTS.md``: the paper's Fig. 13 redone, and the ground-truth bars.
 
 :func:`write_figures` writes them (:data:`FIGURES`) for
-:func:`scanlines.reproduce.reproduce`.
+:func:`tools.reproduce.reproduce`.
 """
 
 from __future__ import annotations
@@ -13,15 +13,15 @@ import numpy as np
 
 from scanlines.evaluation.cases import point_distances
 from scanlines.evaluation.evaluate import ALL_SENSORS, EvalResult, tolerance_caption
-from scanlines.evaluation.experiments import (
+from scanlines.viz.evaluation import BAR_METRICS, TRUTH_MARK
+from scanlines.viz.figures import pyplot, save
+from scanlines.viz.scans import SEGMENT_COLOURS, plot_extraction
+from tools.reproduce.experiments import (
     FIG13_METHODS,
     PAPER_BOUND,
     ReproduceResult,
     fig13_case,
 )
-from scanlines.viz.evaluation import BAR_METRICS, TRUTH_MARK
-from scanlines.viz.figures import pyplot, save
-from scanlines.viz.scans import SEGMENT_COLOURS, plot_extraction
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
