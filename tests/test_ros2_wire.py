@@ -102,7 +102,7 @@ def test_published_types_serialise_as_rosbags(store, kind):
     message = {
         "segments": lambda: convert.line_segments(extraction, header),
         "markers": lambda: convert.markers(extraction, scan, header),
-        "features": lambda: convert.features(extraction, header),
+        "features": lambda: convert.features(extraction, scan, header),
     }[kind]()
     assert_same_wire(message, store)
 

@@ -27,6 +27,7 @@ from scanlines.io import (
     open_writer,
     to_world,
 )
+from scanlines.io.bag_writer import SCAN_FEATURES_TOPIC
 from scanlines.outputs import OutputError
 from scanlines.scan import Scan
 
@@ -263,7 +264,7 @@ class TestRos2Output:
         topics = [topic for topic, _, _ in messages]
         assert sorted(topics) == sorted(
             ["/scan", "/scanlines/markers", "/tf", "/scan", "/scanlines/markers"]
-            + ["/scanlines/features"] * 2
+            + ["/scanlines/features", "/scanlines/scan_features"] * 2
         )
         features = [json.loads(m.data) for t, _, m in messages if t == "/scanlines/features"]
         assert [f["scan"] for f in features] == [7, 25]
@@ -300,6 +301,31 @@ class TestRos2Output:
         assert (transform.header.frame_id, transform.child_frame_id) == ("map", "laser")
         assert transform.transform.translation.x == 1.0
         assert transform.transform.rotation.z == pytest.approx(math.sqrt(0.5))
+
+    def test_typed_features_read_back_from_the_definition_in_the_file(self, tmp_path) -> None:
+        path = tmp_path / "out.mcap"
+        scan = simple_scan(pose=(1.0, 2.0, math.pi / 2))
+        extraction = make_extraction(2, breakpoints=(0,), corners=(2,))
+        with open_writer(path) as writer:
+            writer.write(7, scan, extraction)
+        with AnyReader([path]) as reader:  # types from the file's own schema, not ours
+            (connection,) = [c for c in reader.connections if c.topic == SCAN_FEATURES_TOPIC]
+            assert connection.msgtype == "scanlines/msg/ScanFeatures"
+            assert "geometry_msgs/Point[] corner_points" in connection.msgdef.data
+            (raw,) = [raw for c, _, raw in reader.messages([connection])]
+            typed = reader.deserialize(raw, connection.msgtype)
+        assert typed.method == extraction.method
+        assert typed.header.frame_id == "laser"
+        assert [(s.first, s.last, s.n_points) for s in typed.segments] == [
+            (s.first, s.last, s.n_points) for s in extraction.segments
+        ]
+        np.testing.assert_allclose(
+            typed.segments[0].covariance, extraction.covariances[0].ravel(), rtol=1e-6
+        )
+        assert typed.breakpoints.tolist() == [0]
+        assert typed.corners.tolist() == [2]
+        assert [(p.x, p.y) for p in typed.breakpoint_points] == [(2.0, 0.0)]
+        assert typed.corner_points[0].y == pytest.approx(3.0)
 
     def test_markers_in_world_frame(self, tmp_path) -> None:
         path = tmp_path / "world"

@@ -19,6 +19,7 @@ import orjson
 
 from scanlines.errors import ParameterError
 from scanlines.extraction import END_X, END_Y, START_X, START_Y, ExtractionTable
+from scanlines.io.feature_messages import register_feature_messages
 from scanlines.io.writers import (
     UNSTAMPED_PERIOD,
     Frame,
@@ -35,6 +36,10 @@ MAX_STAMP_SECONDS = 2**31 - 1
 
 FEATURES_TOPIC = "/scanlines/features"
 """Topic of each scan's features as its JSON Lines record (``std_msgs/msg/String``)."""
+
+SCAN_FEATURES_TOPIC = "/scanlines/scan_features"
+"""Topic of each scan's features as the typed ``scanlines/msg/ScanFeatures``
+(:mod:`scanlines.io.feature_messages`; the definition is in the bag, the MCAP schema)."""
 
 __all__ = ["Ros2BagWriter"]
 
@@ -100,6 +105,7 @@ class Ros2BagWriter(ResultWriter):
         self.marker_frame = world_frame if frame == "world" else laser_frame
         self.world_frame = world_frame
         self._types = get_typestore(Stores.ROS2_HUMBLE)
+        register_feature_messages(self._types)
         self._tmpdir = temp_path(self.path)
         self._tmpdir.mkdir()
         self._bag_dir = self._tmpdir / (self.path.stem if self.single_file else self.path.name)
@@ -114,6 +120,9 @@ class Ros2BagWriter(ResultWriter):
             )
             self._tf_conn = add("/tf", "tf2_msgs/msg/TFMessage", typestore=self._types)
             self._features_conn = add(FEATURES_TOPIC, "std_msgs/msg/String", typestore=self._types)
+            self._typed_conn = add(
+                SCAN_FEATURES_TOPIC, "scanlines/msg/ScanFeatures", typestore=self._types
+            )
         except BaseException:
             self._abort()
             raise
@@ -233,6 +242,44 @@ class Ros2BagWriter(ResultWriter):
         ]
         return self._types.types["visualization_msgs/msg/MarkerArray"](markers=markers)
 
+    def _scan_features(self, features: ScanFeatures, stamp: Any) -> Any:
+        t = self._types.types
+        extraction = features.extraction
+        lines = extraction.lines.astype(np.float32)
+        covariances = extraction.covariances.astype(np.float32).reshape(-1, 4)
+        segment = t["scanlines/msg/Segment"]
+        segments = [
+            segment(
+                first=int(first), last=int(last), n_points=int(n), radius=float(row[0]),
+                angle=float(row[1]), covariance=covariance,
+                start=row[[START_X, START_Y]], end=row[[END_X, END_Y]], rms=float(row[6]),
+                start_kind=int(kinds[0]), end_kind=int(kinds[1]),
+            )
+            for first, last, n, row, covariance, kinds in zip(
+                extraction.first.tolist(), extraction.last.tolist(),
+                extraction.n_points.tolist(), lines, covariances,
+                extraction.end_kinds.tolist(), strict=True,
+            )
+        ]  # fmt: skip
+        point = t["geometry_msgs/msg/Point"]
+
+        def points(xy: np.ndarray) -> list[Any]:
+            return [point(x=x, y=y, z=0.0) for x, y in xy.tolist()]
+
+        def beams(values: np.ndarray) -> np.ndarray:
+            return np.asarray(values, dtype=np.int32)
+
+        return t["scanlines/msg/ScanFeatures"](
+            header=self._header(stamp, self.marker_frame),
+            method=extraction.method,
+            segments=segments,
+            breakpoints=beams(extraction.breakpoints),
+            corners=beams(extraction.corners),
+            outliers=beams(extraction.outliers),
+            breakpoint_points=points(features.breakpoint_points),
+            corner_points=points(features.corner_points),
+        )
+
     def _transform(self, pose: Sequence[float], stamp: Any) -> Any:
         t = self._types.types
         x, y, theta = pose
@@ -285,6 +332,10 @@ class Ros2BagWriter(ResultWriter):
             (self._scan_conn, serialize(scan_msg, "sensor_msgs/msg/LaserScan")),
             (self._marker_conn, serialize(markers, "visualization_msgs/msg/MarkerArray")),
             (self._features_conn, serialize(text, "std_msgs/msg/String")),
+            (
+                self._typed_conn,
+                serialize(self._scan_features(features, stamp), "scanlines/msg/ScanFeatures"),
+            ),
         ]
         if features.scan.pose is not None:
             tf = self._transform(features.scan.pose, stamp)

@@ -63,8 +63,13 @@ stamped with the scan time (``index * 0.1`` s when the scan has none):
   (``LINE_LIST``, green, two points per segment), ``breakpoints``
   (``SPHERE_LIST``, red) and ``corners`` (``SPHERE_LIST``, blue), in frame
   ``laser_frame`` or, with ``frame="world"``, ``world_frame`` (``"map"``);
-* the scan's JSON Lines record (above: every segment with its covariance and end
-  kinds) as ``std_msgs/msg/String`` on ``/scanlines/features``;
+* the scan's features as the project's typed ``scanlines/msg/ScanFeatures`` on
+  ``/scanlines/scan_features`` (every segment with its covariance and end kinds, the
+  breakpoints', corners' and outliers' beams, the breakpoints and corners as points, in
+  the markers' frame; :mod:`scanlines.io.feature_messages`): the bag and the MCAP
+  schema carry its definition, so Foxglove and rosbags decode, plot and filter it;
+* the scan's JSON Lines record (above) as ``std_msgs/msg/String`` on
+  ``/scanlines/features``, as before;
 * when the scan has a pose, a ``tf2_msgs/msg/TFMessage`` on ``/tf`` from
   ``world_frame`` to ``laser_frame``, so Foxglove/RViz can place the scan.
 

@@ -98,8 +98,9 @@ def line_segments(extraction: Extraction, header: msg.Header) -> msg.LineSegment
     )
 
 
-def features(extraction: Extraction, header: msg.Header) -> msg.ScanFeatures:
-    """The full result as the project's ``scanlines/msg/ScanFeatures``."""
+def features(extraction: Extraction, scan: Scan, header: msg.Header) -> msg.ScanFeatures:
+    """The full result as the project's ``scanlines/msg/ScanFeatures`` (the breakpoints'
+    and corners' returns as points of ``scan``)."""
     lines = extraction.lines.astype(np.float32).tolist()
     covariances = extraction.covariances.astype(np.float32).reshape(-1, 4).tolist()
     segments = [
@@ -133,7 +134,13 @@ def features(extraction: Extraction, header: msg.Header) -> msg.ScanFeatures:
         breakpoints=extraction.breakpoints.tolist(),
         corners=extraction.corners.tolist(),
         outliers=extraction.outliers.tolist(),
+        breakpoint_points=_points(scan, extraction.breakpoints),
+        corner_points=_points(scan, extraction.corners),
     )
+
+
+def _points(scan: Scan, beams) -> list[msg.Point]:
+    return [msg.Point(x, y, 0.0) for x, y in scan.points[beams].tolist()]
 
 
 assert len(END_KINDS) < 256  # end kinds travel as uint8

@@ -14,6 +14,8 @@ from dataclasses import dataclass, field
 from cyclonedds.idl import IdlStruct
 from cyclonedds.idl.types import array, float32, float64, int32, sequence, uint8, uint32
 
+from scanlines.io.feature_messages import FEATURE_MSGS
+
 __all__ = [
     "LINE_EXTRACTION_MSGS",
     "SCANLINES_MSGS",
@@ -191,22 +193,7 @@ class LineSegmentList(IdlStruct, typename=_dds("laser_line_extraction/msg/LineSe
 
 
 #: The project's messages (``scanlines/msg/...``): a scan's full result.
-SCANLINES_MSGS = {
-    "scanlines/msg/Segment": (
-        "# One fitted segment (scanlines.Segment); first > last: it crosses a full circle's seam\n"
-        "int32 first\nint32 last\nuint32 n_points\n"
-        "# Hesse form x cos(angle) + y sin(angle) = radius, radius >= 0\n"
-        "float32 radius\nfloat32 angle\n"
-        "# row-major 2 x 2 covariance of (radius, angle)\n"
-        "float32[4] covariance\nfloat32[2] start\nfloat32[2] end\nfloat32 rms\n"
-        "# what ends it: index into corner, jump, occluded, gap, edge, open\n"
-        "uint8 start_kind\nuint8 end_kind\n"
-    ),
-    "scanlines/msg/ScanFeatures": (
-        "std_msgs/Header header\nstring method\nscanlines/Segment[] segments\n"
-        "# beam indices\nint32[] breakpoints\nint32[] corners\nint32[] outliers\n"
-    ),
-}
+SCANLINES_MSGS = FEATURE_MSGS
 
 
 @dataclass
@@ -232,3 +219,5 @@ class ScanFeatures(IdlStruct, typename=_dds("scanlines/msg/ScanFeatures")):
     breakpoints: sequence[int32] = field(default_factory=list)
     corners: sequence[int32] = field(default_factory=list)
     outliers: sequence[int32] = field(default_factory=list)
+    breakpoint_points: sequence[Point] = field(default_factory=list)
+    corner_points: sequence[Point] = field(default_factory=list)

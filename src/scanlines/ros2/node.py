@@ -138,7 +138,7 @@ class LineNode:
         if "markers" in writers:
             writers["markers"].write(convert.markers(extraction, scan, header))
         if "features" in writers:
-            writers["features"].write(convert.features(extraction, header))
+            writers["features"].write(convert.features(extraction, scan, header))
         self.stats.latencies.append(time.perf_counter() - received)
         self.stats.published += 1
         return True
