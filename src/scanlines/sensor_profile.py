@@ -342,7 +342,9 @@ def scan_noise_line(scan: Scan) -> NoiseLine:
 def _returns_of(scan: Scan):
     n = len(scan)
     local = scan.angle_increment * np.arange(n)
-    returns = valid_returns(scan.ranges, scan.valid, np.cos(local), np.sin(local))
+    # writable copies: a scan's read-only arrays would compile the kernel a second time
+    ranges, valid = np.array(scan.ranges), np.array(scan.valid)
+    returns = valid_returns(ranges, valid, np.cos(local), np.sin(local))
     return returns, beam_gaps(returns.index, n)
 
 
