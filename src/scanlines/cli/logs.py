@@ -165,6 +165,8 @@ def _print_description(d) -> None:
     for key in ("topics", "topic"):
         if reader.get(key):
             table.add_row(key, str(reader[key]))
+    if reader.get("index_note"):
+        table.add_row("bag index", reader["index_note"])
     if reader.get("records"):
         table.add_row(
             "records", ", ".join(f"{k} {v}" for k, v in sorted(reader["records"].items()))

@@ -21,6 +21,15 @@ Per message:
 * ``pose`` is ``None`` (TF is not read).
 
 Record numbers in errors are 1-based message numbers within the topic.
+
+A ROS 1 bag is also walked record by record when opened
+(:mod:`scanlines.io.rosbag1`). Where its index disagrees with what its chunks
+hold (a lowered ``chunk_count``, a zeroed chunk-info ``count``), cannot be read,
+or is missing (a recording cut short), the bag is read by its chunks, as
+``rosbag reindex`` would, and ``info()["index_note"]`` says why. Damage (or the
+end of a truncated file) is reported at its byte offset, with the messages read
+before it and those the index lists that are lost; ``on_error="skip"`` reads on
+past it.
 """
 
 from __future__ import annotations
@@ -114,10 +123,74 @@ class RosbagReader(LogReader):
             path, on_error=on_error, max_beams=max_beams, max_record_bytes=max_record_bytes
         )
         self._paths = _bag_paths(self.path)
-        with self._open() as reader:
-            self.ros_version = 2 if reader.is2 else 1
-            self.topics = _topic_table(reader)
+        #: ROS 1: the bag as its chunks hold it, when its index disagrees (else None).
+        self._layout: Any = None
+        #: What was found wrong with a ROS 1 bag's index (for ``info``), or None.
+        self.index_note: str | None = None
+        if self._paths[0].suffix == ".bag" and self._paths[0].is_file():
+            self.ros_version = 1
+            self.topics = self._ros1_topics()
+        else:
+            with self._open() as reader:
+                self.ros_version = 2 if reader.is2 else 1
+                self.topics = _topic_table(reader)
         self.topic = self._choose_topic(topic)
+
+    def _ros1_topics(self) -> dict[str, tuple[str, int]]:
+        """The topic table of a ROS 1 bag. The bag is walked record by record (as
+        ``rosbag reindex`` would); where its index disagrees with what the chunks hold,
+        or cannot be read, the bag is read by its chunks (:mod:`scanlines.io.rosbag1`)."""
+        from scanlines.io.rosbag1 import walk
+
+        try:
+            layout = walk(self._paths[0])
+        except OSError as exc:
+            raise LogFormatError(f"cannot read the bag ({describe(exc)})", path=self.path) from None
+        try:
+            with self._open() as reader:
+                indexed: dict[str, tuple[str, int]] | None = _topic_table(reader)
+            index_error = None
+        except LogFormatError as error:
+            indexed, index_error = None, error
+        held = layout.topic_counts()
+        if indexed == held and layout.damage is None and layout.index_damage is None:
+            return indexed
+        if not layout.connections:
+            if layout.damage is not None:
+                raise LogFormatError(
+                    f"cannot open the bag: {layout.damage.describe()}", path=self.path
+                ) from None
+            if index_error is not None:
+                raise index_error
+        self._layout = layout
+        if indexed is None and layout.damage is not None and layout.damage.truncated:
+            self.index_note = (
+                f"the bag ends at byte {layout.damage.offset} of {layout.size}, before its "
+                "index (a recording cut short); read by its chunks"
+            )
+        elif indexed is None:
+            if layout.index_damage is not None:
+                reason = layout.index_damage.describe()
+            else:
+                reason = index_error.reason if index_error else "no index"
+            self.index_note = f"the bag's index cannot be read ({reason}); read by its chunks"
+        else:
+            changed = [
+                f"{t}: {indexed.get(t, ('', 0))[1]} in the index, {n} in the chunks"
+                for t, (_, n) in sorted(held.items())
+                if indexed.get(t, ("", 0))[1] != n
+            ]
+            self.index_note = (
+                f"the bag's index disagrees with its chunks ({'; '.join(changed) or 'damage'});"
+                " read by its chunks, as rosbag reindex would"
+            )
+        table = dict(held)
+        if layout.damage is not None:
+            # damage hides messages: what the index lists beyond what was found is lost
+            listed = layout.topic_counts(layout.index_counts) if layout.index_counts else {}
+            for t, (msgtype, n) in (indexed or listed).items():
+                table[t] = (msgtype, max(n, table.get(t, (msgtype, 0))[1]))
+        return table
 
     @property
     def laserscan_topics(self) -> list[str]:
@@ -143,7 +216,7 @@ class RosbagReader(LogReader):
             )
         if len(candidates) > 1:
             raise LogFormatError(
-                f"several LaserScan topics: {', '.join(candidates)}; choose one with topic=...",
+                f"several LaserScan topics: {', '.join(candidates)}; choose one with --topic",
                 path=self.path,
                 field="topic",
             )
@@ -171,16 +244,23 @@ class RosbagReader(LogReader):
         return {**super().options(), "topic": self.topic}
 
     def info(self) -> dict[str, Any]:
-        """Reader metadata plus the bag's topics and the scan count of the topic read."""
-        return {
+        """Reader metadata plus the bag's topics and the scan count of the topic read (and,
+        for a ROS 1 bag read by its chunks, ``index_note``: why)."""
+        info = {
             **super().info(),
             "ros_version": self.ros_version,
             "topic": self.topic,
             "topics": {t: {"type": m, "messages": n} for t, (m, n) in sorted(self.topics.items())},
             "scans_in_file": self.topics[self.topic][1],
         }
+        if self.index_note:
+            info["index_note"] = self.index_note
+        return info
 
     def _scans(self) -> Iterator[tuple[int, Scan]]:
+        if self._layout is not None:
+            yield from self._scans_by_chunks()
+            return
         with self._open() as reader:
             connections = [c for c in reader.connections if c.topic == self.topic]
             index = -1
@@ -207,6 +287,101 @@ class RosbagReader(LogReader):
             for topic in self.topics:
                 if topic != self.topic:
                     self.skipped[topic] = self.topics[topic][1]
+
+    def _scans_by_chunks(self) -> Iterator[tuple[int, Scan]]:
+        """A ROS 1 bag read by its chunks, in file order; the walk's damage (if any) is
+        reported where it is, with what it cost."""
+        from scanlines.io.rosbag1 import messages
+
+        layout = self._layout
+        wanted = {c.id: c for c in layout.connections.values() if c.topic == self.topic}
+        deserialize = self._ros1_deserializer(list(wanted.values()))
+        index = -1
+        damage_error: LogFormatError | None = None
+        for item in messages(self._paths[0], layout, set(wanted)):
+            if item is None:  # where the damage is: fail there, or count it at the end
+                damage_error = self._damage_error(read=index + 1)
+                if self.on_error == "fail":
+                    raise damage_error
+                continue
+            index += 1
+            conn, bag_time, raw = item
+            try:
+                message = deserialize(raw, wanted[conn].msgtype)
+                scan = self._scan(message, bag_time, index + 1)
+            except LogFormatError as error:
+                self._bad_record(error)
+                continue
+            except Exception as exc:  # a damaged message: any decoding error
+                self._bad_record(
+                    LogFormatError(
+                        f"cannot decode ({describe(exc)})",
+                        path=self.path,
+                        record=index + 1,
+                        unit="message",
+                    )
+                )
+                continue
+            self.counts[self.topic] += 1
+            yield index, scan
+        read = index + 1
+        if damage_error is not None:
+            msgtype, declared = self.topics[self.topic]
+            missing = max(declared - read, 1)
+            self._bad_record(damage_error, count=missing)
+            self.topics[self.topic] = (msgtype, read + missing)
+        else:
+            self._account_for_every_message(read=read)
+        for topic in self.topics:
+            if topic != self.topic:
+                self.skipped[topic] = self.topics[topic][1]
+
+    def _damage_error(self, read: int) -> LogFormatError:
+        """The walk's damage, met after ``read`` messages of the topic."""
+        declared = self.topics[self.topic][1]
+        held = self._layout.topic_counts().get(self.topic, ("", 0))[1]
+        lost = (
+            f"{declared - held} more that the index lists are lost"
+            if declared > held
+            else "the rest of the recording is lost"
+            if self._layout.damage.truncated
+            else "what it hid is lost"
+        )
+        return LogFormatError(
+            f"{self._layout.damage.describe()}: {read} messages of {self.topic} read before "
+            f"it; {lost}",
+            path=self.path,
+            record=read + 1,
+            unit="message",
+        )
+
+    def _ros1_deserializer(self, connections: list[Any]) -> Any:
+        """``deserialize(raw, msgtype)`` for the topic's connections: the types of their
+        message definitions (checked against their md5), else ROS 1 Noetic's."""
+        from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+        store = get_typestore(Stores.ROS1_NOETIC)
+        try:
+            types: dict[str, Any] = {}
+            for connection in connections:
+                if connection.msgdef.strip():
+                    types.update(get_types_from_msg(connection.msgdef, connection.msgtype))
+            if types:
+                store = get_typestore(Stores.EMPTY)
+                store.register(types)
+            for connection in connections:
+                have = store.generate_msgdef(connection.msgtype)[1]
+                if connection.md5sum and have != connection.md5sum:
+                    raise ValueError(
+                        f"md5 {connection.md5sum} of {connection.msgtype} does not match "
+                        f"its definition ({have})"
+                    )
+        except Exception as exc:  # rosbags raises several types on a bad definition
+            raise LogFormatError(
+                f"cannot read the message definition of {self.topic} ({describe(exc)})",
+                path=self.path,
+            ) from None
+        return store.deserialize_ros1
 
     def _guarded(self, reader: Any, connections: list[Any]) -> Iterator[Any]:
         """The topic's messages, a storage error mid-stream turned into a LogFormatError."""
