@@ -133,7 +133,7 @@ class RosbagReader(LogReader):
         else:
             with self._open() as reader:
                 self.ros_version = 2 if reader.is2 else 1
-                self.topics = _topic_table(reader)
+                self.topics = _topic_table(reader, self.path)
         self.topic = self._choose_topic(topic)
 
     def _ros1_topics(self) -> dict[str, tuple[str, int]]:
@@ -148,7 +148,7 @@ class RosbagReader(LogReader):
             raise LogFormatError(f"cannot read the bag ({describe(exc)})", path=self.path) from None
         try:
             with self._open() as reader:
-                indexed: dict[str, tuple[str, int]] | None = _topic_table(reader)
+                indexed: dict[str, tuple[str, int]] | None = _topic_table(reader, self.path)
             index_error = None
         except LogFormatError as error:
             indexed, index_error = None, error
@@ -426,14 +426,34 @@ class RosbagReader(LogReader):
             ) from None
 
 
-def _topic_table(reader: Any) -> dict[str, tuple[str, int]]:
+def _topic_table(reader: Any, path: Path) -> dict[str, tuple[str, int]]:
     """Topic -> (message type, message count the bag declares). A count that is not a
-    non-negative integer (a damaged ``metadata.yaml``) counts as 0: nothing is declared."""
+    non-negative integer (a damaged ``metadata.yaml``) counts as 0: nothing is declared.
+
+    A topic without a name or type (NULL in a damaged ``.db3``): a ``LaserScan`` one is an
+    error (its scans cannot be told apart); another is listed as ``<topic N without a
+    name>`` and skipped like any other topic."""
     table: dict[str, tuple[str, int]] = {}
     for connection in reader.connections:
-        msgtype, count = table.get(connection.topic, (connection.msgtype, 0))
+        topic, msgtype = connection.topic, connection.msgtype
+        if not isinstance(msgtype, str) or not msgtype:
+            raise LogFormatError(
+                f"topic {topic!r} of the bag has no message type (NULL or empty)",
+                path=path,
+                field="type",
+            )
+        if not isinstance(topic, str) or not topic:
+            if msgtype in LASERSCAN_TYPES:
+                raise LogFormatError(
+                    f"a {msgtype} topic of the bag has no name ({topic!r}): the bag's "
+                    "topic table is damaged",
+                    path=path,
+                    field="topic",
+                )
+            topic = f"<topic {connection.id} without a name>"
+        msgtype, count = table.get(topic, (msgtype, 0))
         declared = connection.msgcount
         if isinstance(declared, bool) or not isinstance(declared, int) or declared < 0:
             declared = 0
-        table[connection.topic] = (msgtype, count + declared)
+        table[topic] = (msgtype, count + declared)
     return table
