@@ -256,3 +256,38 @@ def test_an_interrupted_run_starts_its_logs_again(logs, tmp_path) -> None:
 
     with pytest.raises(OutputError, match="--overwrite"):
         run_fleet([log], dataset, params={"k": 4.0})
+
+
+def test_an_interrupted_dask_run_shows_no_row_of_an_unfinished_log(logs, tmp_path) -> None:
+    """Ctrl-C after the first of a log's three tasks: the log's parts stay staged, out of
+    the documented query's sight, until a run finishes the log."""
+    log, dataset = logs / "b" / "intel_excerpt.clf.gz", tmp_path / "features"
+
+    def interrupt(result) -> None:
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_fleet([log], dataset, jobs=1, scheduler="local", chunk_records=CHUNK,
+                  on_chunk=interrupt)  # fmt: skip
+    assert (dataset / "_logs" / "intel_excerpt.clf.gz.pending.json").exists()
+    assert list((dataset / "_staging" / "segments").rglob("*.parquet"))
+    assert segment_rows_or_none(dataset) == []
+    summary = run_fleet([log], dataset, jobs=1, scheduler="local", chunk_records=CHUNK)
+    assert summary.logs[0].status == "done"
+    scans = (
+        duckdb.connect()
+        .execute(
+            f"select count(*) from read_parquet('{dataset}/scans/*/*.parquet', "
+            "hive_partitioning = true)"
+        )
+        .fetchone()
+    )
+    assert scans == (300,)
+    assert not (dataset / "_staging").exists()
+
+
+def segment_rows_or_none(dataset: Path) -> list[tuple]:
+    """The documented query's rows; none when no table has a part yet."""
+    if not list((dataset / "segments").glob("*/*.parquet")):
+        return []
+    return segment_rows(dataset)

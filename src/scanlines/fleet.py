@@ -9,9 +9,12 @@ run on a local process pool (``jobs``) or on Dask (``scheduler``: an address, or
 
 Faults: a log that cannot be read is reported with its reason and the others go on; its
 rows are removed. A task whose worker dies is run again by Dask; a part written twice
-replaces itself, so no row is lost or doubled. When a log is done, ``_logs/NAME.json``
-records its input checksum, method, parameters and sensor profile option: running the
-same command again skips it; a different one is an error unless ``overwrite``.
+replaces itself, so no row is lost or doubled. Parts are written under the dataset's
+``_staging`` folder and moved into its tables only when every task of their log is done,
+so an interrupted run leaves no partial log in sight of a query. When a log is done,
+``_logs/NAME.json`` records its input checksum, method, parameters and sensor profile
+option: running the same command again skips it; a different one is an error unless
+``overwrite``.
 
 Every chunk of a log measures the log's sensor profile from the log's first scans (as
 ``scanlines run`` does), so the rows are those of a single-log run, bit for bit.
@@ -37,6 +40,7 @@ __all__ = [
     "ChunkTask",
     "FleetSummary",
     "LogOutcome",
+    "commit_chunks",
     "expand_inputs",
     "extract_chunk",
     "fleet_tasks",
@@ -65,6 +69,7 @@ class ChunkTask:
     params: dict[str, Any]
     reader_options: dict[str, Any]
     sensor_profile: str | None = None
+    staged: bool = True  # written under _staging until the log is committed
 
 
 @dataclass
@@ -250,7 +255,7 @@ def extract_chunk(task: ChunkTask) -> ChunkResult:
             scans += piece.scans
         skipped = reader.bad_scans if task.stop is None else None  # the whole log was read
     table = ExtractionTable.join(tables) if tables else _empty_table(extractor)
-    write_parts(Path(task.dataset), task.log, task.start, indices, scans, table)
+    write_parts(Path(task.dataset), task.log, task.start, indices, scans, table, staged=task.staged)
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     return ChunkResult(task.log, task.start, len(scans), len(table.first), skipped,
                        time.perf_counter() - started, peak_mb, os.getpid())  # fmt: skip
@@ -415,8 +420,12 @@ def _records(dataset: Path, log: str) -> tuple[dict[str, Any], dict[str, Any]]:
 
 
 def _has_rows(dataset: Path, log: str) -> bool:
+    from scanlines.io.parquet import STAGING, TABLES
+
     return (dataset / "_logs" / f"{log}.json").exists() or any(
-        (dataset / table / f"log={log}").exists() for table in ("segments", "events", "scans")
+        (root / table / f"log={log}").exists()
+        for root in (dataset, dataset / STAGING)
+        for table in TABLES
     )
 
 
@@ -482,9 +491,10 @@ def _collect(executor, tasks, outcomes, on_chunk) -> None:
 
 
 def _finish_logs(dataset: Path, tasks: list[ChunkTask], outcomes: dict[str, LogOutcome]) -> None:
-    """Remove the rows of failed logs; record the finished ones."""
+    """Remove the rows of failed logs; move the finished ones' parts into the tables and
+    record them."""
     from scanlines.io.outputs import write_text_atomically
-    from scanlines.io.parquet import remove_log
+    from scanlines.io.parquet import commit_log, remove_log
 
     first_task = {}
     for task in tasks:
@@ -497,21 +507,51 @@ def _finish_logs(dataset: Path, tasks: list[ChunkTask], outcomes: dict[str, LogO
         record = {"log": name, "input": task.path, "scans": outcome.scans,
                   "segments": outcome.segments, "skipped_scans": outcome.skipped_scans,
                   "fingerprint": _fingerprint(task, checksum(Path(task.path)))}  # fmt: skip
+        commit_log(dataset, name)
         (dataset / "_logs").mkdir(exist_ok=True)
         write_text_atomically(dataset / "_logs" / f"{name}.json", json.dumps(record, indent=2))
         (dataset / "_logs" / f"{name}.pending.json").unlink(missing_ok=True)
 
 
 def fleet_tasks(inputs: Iterable[str | Path], dataset: str | Path, **options: Any) -> list[Any]:
-    """The tasks of a fleet run as ``dask.delayed`` objects, for a notebook with a Dask
-    cluster of its own: ``dask.compute(*fleet_tasks(logs, "features"))``. ``options``
-    are those of :func:`plan`. Finished-log records are not written (use
-    :func:`run_fleet` with ``scheduler=`` for that)."""
+    """The work of a fleet run as ``dask.delayed`` objects, for a notebook with a Dask
+    cluster of its own: ``dask.compute(*fleet_tasks(logs, "features"))``. One object per
+    log: its chunk tasks, then the move of its parts into the tables (a
+    :class:`ChunkResult` of the whole log). ``options`` are those of :func:`plan`.
+    Finished-log records are not written (use :func:`run_fleet` with ``scheduler=`` for
+    that)."""
     import dask
+
+    from scanlines.io.parquet import discard_staged
 
     dataset = Path(dataset)
     dataset.mkdir(exist_ok=True)
     tasks, failed = plan(expand_inputs(inputs), dataset, **options)
     if failed:
         raise ParameterError("; ".join(f"{o.log}: {o.reason}" for o in failed))
-    return [dask.delayed(extract_chunk)(task) for task in tasks]
+    by_log: dict[str, list[Any]] = {}
+    for task in tasks:
+        if task.log not in by_log:
+            discard_staged(dataset, task.log)  # left by an earlier, interrupted compute
+        by_log.setdefault(task.log, []).append(dask.delayed(extract_chunk)(task))
+    return [
+        dask.delayed(commit_chunks)(str(dataset), log, chunks) for log, chunks in by_log.items()
+    ]
+
+
+def commit_chunks(dataset: str, log: str, chunks: list[ChunkResult]) -> ChunkResult:
+    """Move the parts of ``log`` (written by ``chunks``) into the tables; the log's totals."""
+    from scanlines.io.parquet import commit_log
+
+    commit_log(Path(dataset), log)
+    skipped = [c.skipped_scans for c in chunks if c.skipped_scans is not None]
+    return ChunkResult(
+        log,
+        0,
+        sum(c.scans for c in chunks),
+        sum(c.segments for c in chunks),
+        skipped[-1] if skipped else None,
+        sum(c.seconds for c in chunks),
+        max((c.peak_mb for c in chunks), default=0.0),
+        chunks[0].worker if chunks else 0,
+    )

@@ -6,11 +6,14 @@ Layout of a dataset folder::
     DATASET/events/log=NAME/part-FIRST.parquet     one row per breakpoint or corner
     DATASET/scans/log=NAME/part-FIRST.parquet      one row per scan
     DATASET/_logs/NAME.json                        what made a log's rows (see scanlines.fleet)
+    DATASET/_staging/TABLE/log=NAME/part-*.parquet the parts of a log not done yet
 
 ``FIRST`` is the first scan record of the part (zero-padded), so a part written again
-(a retried task) replaces itself: no row is ever written twice. Every file carries the
-package version, the method and its resolved parameters in its schema metadata (key
-``scanlines``). Columns:
+(a retried task) replaces itself: no row is ever written twice. A fleet run writes a log's
+parts under ``_staging`` and moves them into the tables (:func:`commit_log`) only once the
+log is done, so a query of ``DATASET/segments/*/*.parquet`` never sees an unfinished log.
+Every file carries the package version, the method and its resolved parameters in its
+schema metadata (key ``scanlines``). Columns:
 
 * ``segments``: ``scan`` (record index in the log), ``segment`` (its order in the scan),
   ``timestamp``, ``method``, ``first``, ``last``, ``n_points``, ``rho``, ``alpha``,
@@ -28,6 +31,7 @@ pyarrow is imported here only: ``pip install "scanlines[fleet]"`` brings it.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import shutil
@@ -53,8 +57,11 @@ from scanlines.io.outputs import commit, discard, temp_path
 from scanlines.scan import Scan
 
 __all__ = [
+    "STAGING",
     "TABLES",
+    "commit_log",
     "dataset_exists",
+    "discard_staged",
     "part_name",
     "remove_log",
     "require_pyarrow",
@@ -63,6 +70,8 @@ __all__ = [
 
 #: The dataset's tables.
 TABLES = ("segments", "events", "scans")
+#: The folder of a dataset holding the parts of logs not done yet.
+STAGING = "_staging"
 
 
 def require_pyarrow() -> Any:
@@ -89,11 +98,14 @@ def write_parts(
     indices: Sequence[int],
     scans: Sequence[Scan],
     table: ExtractionTable,
+    *,
+    staged: bool = False,
 ) -> dict[str, int]:
     """Write the three tables of one chunk of a log's scans; return rows per table.
 
     Each file appears whole or not at all and replaces a part of the same name (a
-    retried task writes the same rows again)."""
+    retried task writes the same rows again). ``staged``: under ``_staging``, out of the
+    tables' sight until :func:`commit_log`."""
     pa = require_pyarrow()
     metadata = {
         b"scanlines": json.dumps(
@@ -105,8 +117,9 @@ def write_parts(
         "events": _events(pa, indices, table),
         "scans": _scans(pa, indices, scans, table),
     }
+    root = dataset / STAGING if staged else dataset
     for name, columns in tables.items():
-        folder = dataset / name / f"log={log}"
+        folder = root / name / f"log={log}"
         folder.mkdir(parents=True, exist_ok=True)
         _write_atomically(pa, folder / part_name(first_record), columns, metadata)
     return {name: columns.num_rows for name, columns in tables.items()}
@@ -211,9 +224,33 @@ def dataset_exists(dataset: Path) -> bool:
     return any((dataset / name).is_dir() for name in TABLES) if dataset.is_dir() else False
 
 
+def commit_log(dataset: Path, log: str) -> None:
+    """Move the staged parts of ``log`` into the tables, replacing its rows there (a folder
+    rename per table)."""
+    for name in TABLES:
+        staged = dataset / STAGING / name / f"log={log}"
+        target = dataset / name / f"log={log}"
+        if not staged.is_dir():
+            continue
+        target.parent.mkdir(parents=True, exist_ok=True)
+        shutil.rmtree(target, ignore_errors=True)
+        staged.rename(target)
+    for folder in [*(dataset / STAGING / name for name in TABLES), dataset / STAGING]:
+        with contextlib.suppress(OSError):  # only when empty: other logs may be staged
+            folder.rmdir()
+
+
+def discard_staged(dataset: Path, log: str) -> None:
+    """Delete the staged parts of ``log`` (those of an interrupted run)."""
+    for name in TABLES:
+        shutil.rmtree(dataset / STAGING / name / f"log={log}", ignore_errors=True)
+
+
 def remove_log(dataset: Path, log: str) -> None:
-    """Delete every part of ``log`` (a failed or replaced log leaves no rows behind)."""
+    """Delete every part of ``log``, staged or not (a failed or replaced log leaves no rows
+    behind)."""
     for name in TABLES:
         shutil.rmtree(dataset / name / f"log={log}", ignore_errors=True)
+        shutil.rmtree(dataset / STAGING / name / f"log={log}", ignore_errors=True)
     (dataset / "_logs" / f"{log}.json").unlink(missing_ok=True)
     (dataset / "_logs" / f"{log}.pending.json").unlink(missing_ok=True)
