@@ -20,7 +20,14 @@ from scanlines.cli.common import (
     writable,
 )
 
-LogArgument = Annotated[Path, typer.Argument(help="CARMEN log, ROS bag, .dat, .csv or .npz.")]
+LogArgument = Annotated[
+    Path,
+    typer.Argument(
+        help="CARMEN log, ROS bag, .dat, .csv or .npz (keys ranges, angle_min, "
+        "angle_increment, and range_max: without it, a range held by 1 % of the beams "
+        "at the top is read as a no-return code)."
+    ),
+]
 FovOption = Annotated[
     float | None, typer.Option("--fov", help="CARMEN FLASER: field of view, degrees.")
 ]
@@ -136,7 +143,11 @@ def _print_description(d) -> None:
     table.add_column("value")
 
     def fmt(value, unit="", digits=3):
-        return "-" if value is None else f"{value:.{digits}f}{unit}"
+        if value is None:
+            return "-"
+        if not math.isfinite(value) or abs(value) >= 1e9:
+            return f"{value:.4g}{unit}"
+        return f"{value:.{digits}f}{unit}"
 
     reader = d.reader
     table.add_row("format", d.format)
@@ -155,18 +166,25 @@ def _print_description(d) -> None:
     if d.time_first is not None:
         table.add_row(
             "time",
-            f"{fmt(d.time_first, ' s')} .. {fmt(d.time_last, ' s')} "
+            f"{_when(d.time_first, fmt)} .. {_when(d.time_last, fmt)} "
             f"(span {fmt(d.time_max - d.time_min, ' s')}, "
             f"{d.time_backwards_steps} steps backwards)",
         )
     else:
         table.add_row("time", "no timestamps")
     table.add_row("poses", f"{d.with_pose} of {d.scans} scans")
-    for key in ("topics", "topic"):
-        if reader.get(key):
-            table.add_row(key, str(reader[key]))
-    if reader.get("index_note"):
-        table.add_row("bag index", reader["index_note"])
+    if reader.get("topics"):
+        table.add_row(
+            "topics",
+            "\n".join(
+                f"{name}: {t['type']}, {t['messages']} messages"
+                for name, t in sorted(reader["topics"].items())
+            ),
+        )
+    if reader.get("topic"):
+        table.add_row("topic", str(reader["topic"]))
+    for note in reader.get("notes", []):
+        table.add_row("note", note)
     if reader.get("records"):
         table.add_row(
             "records", ", ".join(f"{k} {v}" for k, v in sorted(reader["records"].items()))
@@ -185,11 +203,26 @@ def _print_description(d) -> None:
     Console().print(table)
 
 
+#: Timestamps from this on (1990-01-01) are taken for Unix time and shown as UTC dates.
+_EPOCH_LIKE = 631_152_000.0
+
+
+def _when(stamp: float, fmt) -> str:
+    """A timestamp: a UTC date and time for Unix time, else seconds (a log's own clock)."""
+    import datetime
+
+    if _EPOCH_LIKE <= stamp < 253_402_300_800:  # before the year 10000
+        moment = datetime.datetime.fromtimestamp(stamp, tz=datetime.UTC)
+        return moment.isoformat(timespec="milliseconds").replace("+00:00", "Z")
+    return fmt(stamp, " s")
+
+
 def run_command(
     logs: Annotated[
         list[Path],
         typer.Argument(
-            help="Logs (CARMEN, ROS bag, .dat, .csv, .npz), folders of logs, or globs.",
+            help="Logs (CARMEN, ROS bag, .dat, .csv, .npz with a range_max key), folders "
+            "of logs, or globs.",
             metavar="LOG...",
         ),
     ],
@@ -264,6 +297,15 @@ def run_command(
         raise ParameterError(f"--on-error must be fail or skip, got {on_error!r}")
     Extractor(method, preset, **params)  # bad parameters fail before the log is read
     selection = parse_slice(scans)
+    if out is not None:
+        from scanlines.io import writer_class
+
+        writer_class(out)  # an unknown output suffix before the log is read
+    else:
+        typer.echo(
+            "scanlines: no --out given: the features are extracted and summarised, not written",
+            err=True,
+        )
     writable(out, overwrite, with_meta=True)  # and a taken output before any work
     if out is not None and out.suffix.lower() == ".rrd":
         from scanlines.io.rerun_writer import require_rerun
@@ -284,8 +326,9 @@ def run_command(
     gc.freeze()
     with open_log(log, **options) as reader:
         summary = _run_with_progress(reader, extractor, selection, out, frame, log, jobs, overwrite)
+        notes = reader.notes
     summary.compile_seconds += compiled.seconds
-    _print_summary(summary, out)
+    _print_summary(summary, out, notes)
 
 
 def calibrate_command(
@@ -434,7 +477,7 @@ def compiled_for(method: str):
     clock.seconds = kernel_seconds() - before
 
 
-def _print_summary(summary, out) -> None:
+def _print_summary(summary, out, notes=()) -> None:
     from rich.console import Console
     from rich.table import Table
 
@@ -455,6 +498,8 @@ def _print_summary(summary, out) -> None:
     )
     if out is not None:
         table.add_row("output", str(out))
+    for note in notes:
+        table.add_row("note", note)
     Console().print(table)
 
 

@@ -53,6 +53,15 @@ __all__ = ["LASERSCAN_TYPES", "RosbagReader", "is_ros2_bag_dir"]
 #: Message type names of ``LaserScan`` in ROS 2 and ROS 1 (as rosbags names them).
 LASERSCAN_TYPES = ("sensor_msgs/msg/LaserScan",)
 _STORAGE_SUFFIXES = (".db3", ".mcap")
+#: Fewest bytes a stored message takes (a serialized empty ``LaserScan`` takes more).
+MIN_MESSAGE_BYTES = 32
+
+
+def _storage_bytes(path: Path) -> int:
+    """Bytes of a bag file, or of the files of a bag directory."""
+    if path.is_dir():
+        return sum(p.stat().st_size for p in path.rglob("*") if p.is_file())
+    return path.stat().st_size
 
 
 def is_ros2_bag_dir(path: Path) -> bool:
@@ -134,7 +143,24 @@ class RosbagReader(LogReader):
             with self._open() as reader:
                 self.ros_version = 2 if reader.is2 else 1
                 self.topics = _topic_table(reader, self.path)
+            self._drop_impossible_counts()
         self.topic = self._choose_topic(topic)
+
+    def _drop_impossible_counts(self) -> None:
+        """A declared count the storage could not hold (more messages than its bytes over
+        :data:`MIN_MESSAGE_BYTES`: a damaged ``metadata.yaml``) declares nothing, like a
+        count that is not a number; ``index_note`` says so. The messages read are then
+        all there is, and no absurd number is reported as skipped."""
+        stored = sum(_storage_bytes(p) for p in self._paths)
+        most = stored // MIN_MESSAGE_BYTES
+        for topic, (msgtype, declared) in list(self.topics.items()):
+            if declared > most:
+                self.topics[topic] = (msgtype, 0)
+                note = (
+                    f"the bag declares {declared} messages on {topic}, more than its "
+                    f"{stored} bytes of storage could hold: the count is ignored"
+                )
+                self.index_note = note if self.index_note is None else f"{self.index_note}; {note}"
 
     def _ros1_topics(self) -> dict[str, tuple[str, int]]:
         """The topic table of a ROS 1 bag. The bag is walked record by record (as
@@ -188,9 +214,15 @@ class RosbagReader(LogReader):
         if layout.damage is not None:
             # damage hides messages: what the index lists beyond what was found is lost
             listed = layout.topic_counts(layout.index_counts) if layout.index_counts else {}
+            most = layout.size // MIN_MESSAGE_BYTES  # a damaged count is no more than this
             for t, (msgtype, n) in (indexed or listed).items():
-                table[t] = (msgtype, max(n, table.get(t, (msgtype, 0))[1]))
+                table[t] = (msgtype, max(min(n, most), table.get(t, (msgtype, 0))[1]))
         return table
+
+    @property
+    def notes(self) -> list[str]:
+        """The index note, if any (see ``index_note``)."""
+        return [self.index_note] if self.index_note else []
 
     @property
     def laserscan_topics(self) -> list[str]:
