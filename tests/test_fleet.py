@@ -204,7 +204,9 @@ def test_without_the_extra_the_message_names_it() -> None:
         "try:\n    require_pyarrow()\nexcept Exception as e:\n    print(e)\n"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    assert out.stdout.strip() == 'Parquet output needs pyarrow: pip install "scanlines[fleet]"'
+    assert out.stdout.strip() == (
+        'Parquet output needs pyarrow: pip install ".[fleet]" in a scanlines checkout'
+    )
 
 
 def test_a_notebook_computes_the_tasks_on_its_own_cluster(logs, local_dataset, tmp_path) -> None:

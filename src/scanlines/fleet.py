@@ -445,7 +445,8 @@ class _executor:
             from distributed import Client, LocalCluster
         except ImportError:
             raise ParameterError(
-                'a Dask scheduler needs dask and distributed: pip install "scanlines[fleet]"'
+                "a Dask scheduler needs dask and distributed: "
+                'pip install ".[fleet]" in a scanlines checkout'
             ) from None
         if self.scheduler == "local":
             self._cluster = LocalCluster(n_workers=self.jobs, threads_per_worker=1,

@@ -26,7 +26,8 @@ schema metadata (key ``scanlines``). Columns:
 The ``log`` column comes from the partition folder (hive partitioning): DuckDB reads it as
 ``read_parquet('DATASET/segments/*/*.parquet', hive_partitioning = true)``.
 
-pyarrow is imported here only: ``pip install "scanlines[fleet]"`` brings it.
+pyarrow is imported here only: the ``fleet`` extra brings it (``pip install ".[fleet]"`` in a
+checkout of the repository).
 """
 
 from __future__ import annotations
@@ -81,7 +82,7 @@ def require_pyarrow() -> Any:
         import pyarrow.parquet
     except ImportError:
         raise ParameterError(
-            'Parquet output needs pyarrow: pip install "scanlines[fleet]"'
+            'Parquet output needs pyarrow: pip install ".[fleet]" in a scanlines checkout'
         ) from None
     return pyarrow
 
