@@ -171,7 +171,7 @@ def test_duckdb_reads_the_dataset_with_the_documented_schema(local_dataset) -> N
     assert {"var_rho", "cov_rho_alpha", "var_alpha", "start_kind", "end_kind", "log"} <= set(
         columns["segments"]
     )
-    assert columns["events"] == ["scan", "kind", "beam", "log"]
+    assert columns["events"] == ["scan", "kind", "beam", "x", "y", "log"]
     assert {"pose_x", "beams", "segments", "corners", "log"} <= set(columns["scans"])
     per_log = dict(con.execute(
         f"select log, count(*) from read_parquet('{local_dataset}/scans/*/*.parquet', "

@@ -19,7 +19,8 @@ schema metadata (key ``scanlines``). Columns:
   ``timestamp``, ``method``, ``first``, ``last``, ``n_points``, ``rho``, ``alpha``,
   ``start_x``, ``start_y``, ``end_x``, ``end_y``, ``rms``, ``var_rho``,
   ``cov_rho_alpha``, ``var_alpha``, ``start_kind``, ``end_kind``;
-* ``events``: ``scan``, ``kind`` (``breakpoint`` or ``corner``), ``beam``;
+* ``events``: ``scan``, ``kind`` (``breakpoint`` or ``corner``), ``beam``, ``x``, ``y``
+  (the beam's point in the sensor frame; null without a return);
 * ``scans``: ``scan``, ``timestamp``, ``pose_x``, ``pose_y``, ``pose_theta``, ``beams``,
   ``segments``, ``breakpoints``, ``corners``.
 
@@ -115,7 +116,7 @@ def write_parts(
     }
     tables = {
         "segments": _segments(pa, indices, scans, table),
-        "events": _events(pa, indices, table),
+        "events": _events(pa, indices, scans, table),
         "scans": _scans(pa, indices, scans, table),
     }
     root = dataset / STAGING if staged else dataset
@@ -169,18 +170,28 @@ def _segments(pa: Any, indices, scans, table: ExtractionTable) -> Any:
     )
 
 
-def _events(pa: Any, indices, table: ExtractionTable) -> Any:
+def _events(pa: Any, indices, scans, table: ExtractionTable) -> Any:
+    from scanlines.io.writers import beam_xy
+
     parts = []
     for kind in ("breakpoints", "corners"):
         owner = np.repeat(np.arange(len(table)), table.counts(kind))
-        parts.append((np.asarray(indices, dtype=np.int64)[owner], kind[:-1], table.columns[kind]))
+        offsets = table.offsets[kind]
+        beams = table.columns[kind]
+        xy = [beam_xy(scan, beams[offsets[k] : offsets[k + 1]]) for k, scan in enumerate(scans)]
+        points = np.concatenate(xy) if xy else np.zeros((0, 2))
+        parts.append((np.asarray(indices, dtype=np.int64)[owner], kind[:-1], beams, points))
+    points = np.concatenate([p for *_, p in parts])
+    missing = np.isnan(points[:, 0])
     return pa.table(
         {
-            "scan": np.concatenate([scan for scan, _, _ in parts]),
+            "scan": np.concatenate([scan for scan, *_ in parts]),
             "kind": pa.array(
-                [kind for scan, kind, _ in parts for _ in range(len(scan))], pa.string()
+                [kind for scan, kind, *_ in parts for _ in range(len(scan))], pa.string()
             ),
-            "beam": np.concatenate([beams for _, _, beams in parts]).astype(np.int64),
+            "beam": np.concatenate([beams for _, _, beams, _ in parts]).astype(np.int64),
+            "x": pa.array(points[:, 0], pa.float64(), mask=missing),
+            "y": pa.array(points[:, 1], pa.float64(), mask=missing),
         }
     )
 
