@@ -211,3 +211,18 @@ def test_unindexed_damage_is_one_lost_record(tmp_path, bag_data) -> None:
     assert len(list(reader)) == SCANS - chunk_counts(bag_data)[1]
     assert reader.error_count == 1
     assert reader.info()["scans_in_file"] == SCANS - chunk_counts(bag_data)[1] + 1
+
+
+@pytest.mark.parametrize("where", ["into a chunk", "past the end", "zero"])
+def test_a_wrong_index_pos_reads_the_data(tmp_path, bag_data, where) -> None:
+    """``index_pos`` pointing into a chunk, past the end of the file, or 0 (not indexed):
+    every chunk is still read."""
+    header = records(bag_data)[0]
+    at = field_offset(bag_data, header[0], "index_pos")
+    second = [r for r in records(bag_data) if r[2] == 0x05][1]
+    value = {"into a chunk": second[0] + 50, "past the end": len(bag_data) + 99, "zero": 0}
+    data = bag_data[:at] + struct.pack("<Q", value[where]) + bag_data[at + 8 :]
+    reader = open_log(write(tmp_path, data), on_error="skip")
+    assert len(list(reader)) == SCANS
+    assert reader.error_count == 0
+    assert reader.info()["index_note"].startswith("the bag's index cannot be read")

@@ -242,9 +242,15 @@ def walk(path: Path) -> Ros1Layout:
         layout.index_pos = int.from_bytes(header.fields.get("index_pos", b"")[:8], "little")
         layout.chunk_count = int.from_bytes(header.fields.get("chunk_count", b"")[:4], "little")
         offset = header.data_offset + header.data_length
-        indexed = offset < layout.index_pos < size
+        indexed = offset < layout.index_pos < size and _is_index(fh, layout.index_pos, size)
         if indexed:
             _read_index(fh, layout)
+        elif layout.index_pos:
+            layout.index_damage = BagDamage(
+                min(layout.index_pos, size),
+                f"{_NO_INDEX} {layout.index_pos} points at no index record",
+                layout.index_pos >= size,
+            )
         end = layout.index_pos if indexed else size
         while offset < end:
             try:
@@ -294,12 +300,26 @@ def walk(path: Path) -> Ros1Layout:
     return layout
 
 
+_NO_INDEX = "the bag header's index_pos"
+
+
+def _is_index(fh: BinaryIO, offset: int, size: int) -> bool:
+    """Whether a connection or chunk-info record (the index section) starts at ``offset``."""
+    try:
+        return _read_record(fh, offset, size, 0).op in (OP_CONNECTION, OP_CHUNK_INFO)
+    except _Damage:
+        return False
+
+
 def _note(layout: Ros1Layout, damage: BagDamage) -> bool:
     """Keep ``damage`` (after the chunks walked so far) if it is the first; damage in
     the index section (from ``index_pos`` on) is ``index_damage``. True: stop the walk
     (the file ends there)."""
-    if 0 < layout.index_pos <= damage.offset:
-        if layout.index_damage is None:
+    last = layout.chunks[-1] if layout.chunks else None
+    data_end = last.data_offset + last.data_length if last else 0
+    if 0 < layout.index_pos <= damage.offset and data_end <= layout.index_pos:
+        # past the last chunk, where the index starts: the data is whole
+        if layout.index_damage is None or layout.index_damage.reason.startswith(_NO_INDEX):
             layout.index_damage = damage
         return True
     if layout.damage is None:
