@@ -226,3 +226,25 @@ def test_a_wrong_index_pos_reads_the_data(tmp_path, bag_data, where) -> None:
     assert len(list(reader)) == SCANS
     assert reader.error_count == 0
     assert reader.info()["index_note"].startswith("the bag's index cannot be read")
+
+
+def test_damage_inside_a_chunk_of_an_indexed_bag(tmp_path, bag_data) -> None:
+    """A message record inside the second chunk with a wrong op code: the chunks are
+    counted by their index data, so this damage is met while reading; it is located, and
+    the rest of that chunk is counted as lost."""
+    second = [r for r in records(bag_data) if r[2] == 0x05][1]
+    start = second[0] + 8 + second[1]
+    (length,) = struct.unpack_from("<I", bag_data, start - 4)
+    ops = [m for m in range(start, start + length) if bag_data.startswith(b"op=\x02", m)]
+    at = ops[2] + 3  # the third message of the chunk
+    path = write(tmp_path, bag_data[:at] + b"\x09" + bag_data[at + 1 :])
+    first = chunk_counts(bag_data)[0]
+    scans = []
+    with pytest.raises(LogFormatError, match=f"message {first + 3}: the bag is damaged"):
+        scans.extend(open_log(path))
+    assert len(scans) == first + 2
+    reader = open_log(path, on_error="skip")
+    lost = chunk_counts(bag_data)[1] - 2
+    assert len(list(reader)) == SCANS - lost
+    assert reader.error_count == lost
+    assert reader.info()["scans_in_file"] == SCANS

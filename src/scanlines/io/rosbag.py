@@ -34,6 +34,7 @@ past it.
 
 from __future__ import annotations
 
+from collections import Counter
 from collections.abc import Iterator
 from contextlib import contextmanager, suppress
 from pathlib import Path
@@ -296,7 +297,11 @@ class RosbagReader(LogReader):
         with self._open() as reader:
             connections = [c for c in reader.connections if c.topic == self.topic]
             index = -1
-            for index, (connection, bag_time, raw) in enumerate(self._guarded(reader, connections)):
+            stream = self._guarded(reader, connections, lambda error: damages.append(error))
+            damages: list[LogFormatError] = []
+            times: Counter[int] = Counter()
+            for index, (connection, bag_time, raw) in enumerate(stream):
+                times[bag_time] += 1
                 try:
                     message = reader.deserialize(raw, connection.msgtype)
                     scan = self._scan(message, bag_time, index + 1)
@@ -315,26 +320,43 @@ class RosbagReader(LogReader):
                     continue
                 self.counts[self.topic] += 1
                 yield index, scan
-            self._account_for_every_message(read=index + 1)
+            if damages and self.ros_version == 1:  # skip mode: the rest by the chunks
+                from scanlines.io.rosbag1 import walk
+
+                layout = walk(self._paths[0], inside=True)
+                yield from self._scans_by_chunks(layout, times, start=index + 1)
+                return
+            if damages:  # skip mode, and the index says what the damage cost
+                (damage,) = damages
+                self._bad_record(damage, count=self.topics[self.topic][1] - (index + 1))
+            else:
+                self._account_for_every_message(read=index + 1)
             for topic in self.topics:
                 if topic != self.topic:
                     self.skipped[topic] = self.topics[topic][1]
 
-    def _scans_by_chunks(self) -> Iterator[tuple[int, Scan]]:
-        """A ROS 1 bag read by its chunks, in file order; the walk's damage (if any) is
-        reported where it is, with what it cost."""
-        from scanlines.io.rosbag1 import messages
+    def _scans_by_chunks(
+        self, layout: Any = None, seen: Counter[int] | None = None, start: int = 0
+    ) -> Iterator[tuple[int, Scan]]:
+        """A ROS 1 bag read by its chunks, in file order; damage is reported where it is,
+        with what it cost. ``seen``: receive times of messages read already (through the
+        index, before damage there), not read again; ``start``: how many those were."""
+        from scanlines.io.rosbag1 import BagDamage, messages
 
-        layout = self._layout
+        layout = self._layout if layout is None else layout
+        seen = Counter() if seen is None else seen
         wanted = {c.id: c for c in layout.connections.values() if c.topic == self.topic}
         deserialize = self._ros1_deserializer(list(wanted.values()))
-        index = -1
-        damage_error: LogFormatError | None = None
+        index = start - 1
+        damages: list[LogFormatError] = []
         for item in messages(self._paths[0], layout, set(wanted)):
-            if item is None:  # where the damage is: fail there, or count it at the end
-                damage_error = self._damage_error(read=index + 1)
+            if isinstance(item, BagDamage):  # fail there, or count it at the end
+                damages.append(self._damage_error(index + 1, item, layout))
                 if self.on_error == "fail":
-                    raise damage_error
+                    raise damages[0]
+                continue
+            if seen[item[1]] > 0:
+                seen[item[1]] -= 1
                 continue
             index += 1
             conn, bag_time, raw = item
@@ -357,10 +379,12 @@ class RosbagReader(LogReader):
             self.counts[self.topic] += 1
             yield index, scan
         read = index + 1
-        if damage_error is not None:
+        if damages:
             msgtype, declared = self.topics[self.topic]
-            missing = max(declared - read, 1)
-            self._bad_record(damage_error, count=missing)
+            missing = max(declared - read, len(damages))
+            self._bad_record(damages[0], count=missing - len(damages) + 1)
+            for error in damages[1:]:
+                self._bad_record(error)
             self.topics[self.topic] = (msgtype, read + missing)
         else:
             self._account_for_every_message(read=read)
@@ -368,20 +392,20 @@ class RosbagReader(LogReader):
             if topic != self.topic:
                 self.skipped[topic] = self.topics[topic][1]
 
-    def _damage_error(self, read: int) -> LogFormatError:
-        """The walk's damage, met after ``read`` messages of the topic."""
+    def _damage_error(self, read: int, damage: Any, layout: Any) -> LogFormatError:
+        """``damage`` (a :class:`~scanlines.io.rosbag1.BagDamage`), met after ``read``
+        messages of the topic."""
         declared = self.topics[self.topic][1]
-        held = self._layout.topic_counts().get(self.topic, ("", 0))[1]
+        held = layout.topic_counts().get(self.topic, ("", 0))[1]
         lost = (
             f"{declared - held} more that the index lists are lost"
             if declared > held
             else "the rest of the recording is lost"
-            if self._layout.damage.truncated
+            if damage.truncated
             else "what it hid is lost"
         )
         return LogFormatError(
-            f"{self._layout.damage.describe()}: {read} messages of {self.topic} read before "
-            f"it; {lost}",
+            f"{damage.describe()}: {read} messages of {self.topic} read before it; {lost}",
             path=self.path,
             record=read + 1,
             unit="message",
@@ -415,20 +439,25 @@ class RosbagReader(LogReader):
             ) from None
         return store.deserialize_ros1
 
-    def _guarded(self, reader: Any, connections: list[Any]) -> Iterator[Any]:
-        """The topic's messages, a storage error mid-stream turned into a LogFormatError."""
+    def _guarded(self, reader: Any, connections: list[Any], skipped: Any = None) -> Iterator[Any]:
+        """The topic's messages, a storage error mid-stream turned into a LogFormatError:
+        raised, or (skip mode, with ``skipped``, when the bag declares more messages than
+        were read, so that the loss is counted) handed to ``skipped`` and the stream ended."""
         count = 0
         try:
             for item in reader.messages(connections):
                 count += 1
                 yield item
         except Exception as exc:  # rosbags raises several unrelated types here
-            raise LogFormatError(
+            error = LogFormatError(
                 f"the bag is damaged after message {count} of {self.topic} ({describe(exc)})",
                 path=self.path,
                 record=count + 1,
                 unit="message",
-            ) from None
+            )
+            if skipped is None or self.on_error != "skip" or self.topics[self.topic][1] <= count:
+                raise error from None
+            skipped(error)
 
     def _account_for_every_message(self, read: int) -> None:
         """The bag's index says how many messages the topic has: fewer read is damage,

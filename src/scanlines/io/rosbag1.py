@@ -218,13 +218,17 @@ def _connection(fh: BinaryIO, record: _Record, base: int) -> Ros1Connection:
     )
 
 
-def walk(path: Path) -> Ros1Layout:
+def walk(path: Path, *, inside: bool = False) -> Ros1Layout:
     """Read the bag at ``path`` by its records (see the module docstring). Raises
     ``OSError`` only; a file that is not a ROS 1 bag 2.0 at all has its damage at byte 0.
 
     After damage between chunks the walk goes on at the next chunk the index places
     after it; after damage inside a chunk, at the chunk's end. Only the first damage is
-    kept (``damage``, with ``damage_chunk``: the chunk it is in or before)."""
+    kept (``damage``, with ``damage_chunk``: the chunk it is in or before).
+
+    The messages of a chunk are counted by the index-data records after it when the bag
+    has an index (cheap: damage inside the chunk is then met while reading it), else,
+    or with ``inside``, by walking the chunk's records."""
     size = path.stat().st_size
     layout = Ros1Layout(size)
     with path.open("rb") as fh:
@@ -252,52 +256,112 @@ def walk(path: Path) -> Ros1Layout:
                 layout.index_pos >= size,
             )
         end = layout.index_pos if indexed else size
-        while offset < end:
+        counting = _Counting(fh, layout, by_index_data=indexed and not inside)
+        try:
+            _walk_records(fh, layout, offset, end, indexed, counting)
+        finally:
+            counting.finish()
+    return layout
+
+
+def _walk_records(
+    fh: BinaryIO, layout: Ros1Layout, offset: int, end: int, indexed: bool, counting: _Counting
+) -> None:
+    """The records from ``offset`` to ``end`` (the index, or the end of the file)."""
+    while offset < end:
+        try:
+            record = _read_record(fh, offset, end, 0, clip=not indexed, at_end=not indexed)
+        except _Damage as damage:
+            if _note(layout, damage.damage):
+                break
+            later = [p for p in layout.chunk_positions if p > offset]
+            if not later:
+                break
+            offset = min(later)
+            continue
+        if record.op == OP_CHUNK:
             try:
-                record = _read_record(fh, offset, end, 0, clip=not indexed, at_end=not indexed)
+                counting.chunk(record)
             except _Damage as damage:
                 if _note(layout, damage.damage):
                     break
-                later = [p for p in layout.chunk_positions if p > offset]
-                if not later:
-                    break
-                offset = min(later)
-                continue
-            if record.op == OP_CHUNK:
-                try:
-                    _walk_chunk(fh, record, layout)
-                except _Damage as damage:
-                    if _note(layout, damage.damage):
-                        break
-                if record.data_length < record.declared_length:
-                    _note(
-                        layout,
-                        BagDamage(
-                            offset,
-                            f"the file ends {record.data_length} bytes into a chunk of "
-                            f"{record.declared_length}",
-                            True,
-                        ),
-                    )
-                    break
-            elif record.op == OP_CONNECTION:
-                try:
-                    connection = _connection(fh, record, 0)
-                except _Damage as damage:
-                    _note(layout, damage.damage)
-                    break
-                layout.connections.setdefault(connection.id, connection)
-            elif record.op not in (OP_INDEX_DATA, OP_CHUNK_INFO):
-                if _note(
+            if record.data_length < record.declared_length:
+                _note(
                     layout,
-                    BagDamage(offset, f"a record of unknown op {record.op:#04x}", False),
-                ):
-                    break
-            elif record.data_length < record.declared_length:
-                _note(layout, BagDamage(offset, "the file ends inside a record", True))
+                    BagDamage(
+                        offset,
+                        f"the file ends {record.data_length} bytes into a chunk of "
+                        f"{record.declared_length}",
+                        True,
+                    ),
+                )
                 break
-            offset = record.data_offset + record.data_length
-    return layout
+        elif record.op == OP_CONNECTION:
+            try:
+                connection = _connection(fh, record, 0)
+            except _Damage as damage:
+                _note(layout, damage.damage)
+                break
+            layout.connections.setdefault(connection.id, connection)
+        elif record.op == OP_INDEX_DATA:
+            counting.index_data(record)
+        elif record.op != OP_CHUNK_INFO:
+            if _note(
+                layout,
+                BagDamage(offset, f"a record of unknown op {record.op:#04x}", False),
+            ):
+                break
+        elif record.data_length < record.declared_length:
+            _note(layout, BagDamage(offset, "the file ends inside a record", True))
+            break
+        offset = record.data_offset + record.data_length
+
+
+class _Counting:
+    """Counts the messages of each chunk: in an indexed bag by the index-data records
+    (op 0x04) written after the chunk, one per connection (as many records as the chunk
+    holds, at most: ``count`` is bounded by the record's length); else, or for a chunk
+    without them, by walking the chunk's own records."""
+
+    def __init__(self, fh: BinaryIO, layout: Ros1Layout, *, by_index_data: bool) -> None:
+        self.fh, self.layout, self.by_index_data = fh, layout, by_index_data
+        self.pending: _Chunk | None = None
+        self.counts: Counter[int] = Counter()
+
+    def chunk(self, record: _Record) -> None:
+        self.finish()
+        compression = _text(record, "compression", 0)
+        size = _u32(record, "size", 0)
+        short = record.data_length < record.declared_length
+        chunk = _Chunk(
+            record.offset, compression, size, record.data_offset, record.data_length, short
+        )
+        self.layout.chunks.append(chunk)
+        if self.by_index_data and not short:
+            self.pending, self.counts = chunk, Counter()
+        else:
+            _count_inside(self.fh, chunk, self.layout)
+
+    def index_data(self, record: _Record) -> None:
+        if self.pending is None:
+            return
+        conn, count = record.fields.get("conn", b""), record.fields.get("count", b"")
+        if len(conn) == 4 and len(count) == 4:
+            most = record.data_length // 12  # (time, offset) entries of 12 bytes
+            self.counts[_U32.unpack(conn)[0]] += min(_U32.unpack(count)[0], most)
+
+    def finish(self) -> None:
+        """Settle the pending chunk: its index-data counts, or a walk of its records."""
+        chunk, self.pending = self.pending, None
+        if chunk is None:
+            return
+        if self.counts:
+            self.layout.counts.update(self.counts)
+            return
+        try:
+            _count_inside(self.fh, chunk, self.layout)
+        except _Damage as damage:
+            _note(self.layout, damage.damage)
 
 
 _NO_INDEX = "the bag header's index_pos"
@@ -395,27 +459,24 @@ def _inner(
         offset = record.data_offset + record.data_length
 
 
-def _walk_chunk(fh: BinaryIO, record: _Record, layout: Ros1Layout) -> None:
-    compression = _text(record, "compression", 0)
-    size = _u32(record, "size", 0)
-    short = record.data_length < record.declared_length
-    chunk = _Chunk(record.offset, compression, size, record.data_offset, record.data_length, short)
-    layout.chunks.append(chunk)
+def _count_inside(fh: BinaryIO, chunk: _Chunk, layout: Ros1Layout) -> None:
+    """Count the chunk's messages (and note its connections) by walking its records."""
     for message, _ in _inner(fh, chunk, layout):
         layout.counts[_u32(message, "conn", 0)] += 1
 
 
 def messages(
     path: Path, layout: Ros1Layout, connection_ids: set[int]
-) -> Iterator[tuple[int, int, bytes] | None]:
+) -> Iterator[tuple[int, int, bytes] | BagDamage]:
     """``(connection id, receive time in ns, serialized message)`` of the connections
-    ``connection_ids``, in file order, from the chunks :func:`walk` found; ``None`` where
-    the walk's first damage is (the caller reports it)."""
+    ``connection_ids``, in file order, from the chunks :func:`walk` found; a
+    :class:`BagDamage` where damage is (the walk's first, and any it did not look for
+    inside a chunk it counted by its index data). The caller reports them."""
+    known = layout.damage
     with path.open("rb") as fh:
-        if layout.damage is not None and layout.damage_chunk < 0:
-            yield None
+        if known is not None and layout.damage_chunk < 0:
+            yield known
         for number, chunk in enumerate(layout.chunks):
-            damaged_here = layout.damage is not None and number == layout.damage_chunk
             try:
                 for record, stream in _inner(fh, chunk, None):
                     conn = _u32(record, "conn", 0)
@@ -428,7 +489,8 @@ def messages(
                     stream.seek(record.data_offset)
                     payload = stream.read(record.data_length)
                     yield conn, sec * 1_000_000_000 + nsec, payload
-            except _Damage:
-                pass  # the walk met this damage too
-            if damaged_here:
-                yield None
+            except _Damage as damage:
+                if known is None or damage.damage.offset != known.offset:
+                    yield damage.damage
+            if known is not None and number == layout.damage_chunk:
+                yield known
