@@ -49,8 +49,17 @@ def test_an_unknown_output_suffix_is_refused_before_the_log_is_read(tmp_path) ->
 def test_run_without_out_says_it_writes_nothing() -> None:
     out = scanlines("run", sample("intel"), "--scans", "0:5")
     assert out.returncode == 0, out.stderr
-    assert "no --out given" in out.stderr
+    assert out.stderr.strip().splitlines()[-1].startswith("scanlines: no --out given")
     assert "not written" in out.stderr
+    assert "none (no --out given)" in out.stdout
+
+
+def test_an_error_without_out_is_still_one_line(tmp_path) -> None:
+    broken = tmp_path / "broken.bag"
+    broken.write_bytes(b"#ROSBAG V2.0\n" + b"\x00" * 64)
+    out = scanlines("run", broken)
+    assert out.returncode == 2
+    assert len(out.stderr.strip().splitlines()) == 1, out.stderr
 
 
 def test_a_taken_output_names_the_flag(tmp_path) -> None:

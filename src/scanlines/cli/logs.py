@@ -301,11 +301,6 @@ def run_command(
         from scanlines.io import writer_class
 
         writer_class(out)  # an unknown output suffix before the log is read
-    else:
-        typer.echo(
-            "scanlines: no --out given: the features are extracted and summarised, not written",
-            err=True,
-        )
     writable(out, overwrite, with_meta=True)  # and a taken output before any work
     if out is not None and out.suffix.lower() == ".rrd":
         from scanlines.io.rerun_writer import require_rerun
@@ -329,6 +324,11 @@ def run_command(
         notes = reader.notes
     summary.compile_seconds += compiled.seconds
     _print_summary(summary, out, notes)
+    if out is None:
+        typer.echo(
+            "scanlines: no --out given: the features were extracted and summarised, not written",
+            err=True,
+        )
 
 
 def calibrate_command(
@@ -496,8 +496,7 @@ def _print_summary(summary, out, notes=()) -> None:
     table.add_row(
         "other records skipped", _with_breakdown(summary.skipped_other, summary.ignored_records)
     )
-    if out is not None:
-        table.add_row("output", str(out))
+    table.add_row("output", str(out) if out is not None else "none (no --out given)")
     for note in notes:
         table.add_row("note", note)
     Console().print(table)
