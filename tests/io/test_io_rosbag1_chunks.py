@@ -248,3 +248,14 @@ def test_damage_inside_a_chunk_of_an_indexed_bag(tmp_path, bag_data) -> None:
     assert len(list(reader)) == SCANS - lost
     assert reader.error_count == lost
     assert reader.info()["scans_in_file"] == SCANS
+
+
+def test_topic_names_are_compared_as_rosbags_names_them(tmp_path) -> None:
+    """A topic written ``//front//scan`` is ``/front/scan`` to rosbags and to the walk:
+    a sound bag is not taken for one whose index disagrees."""
+    path = tmp_path / "slashes.bag"
+    write_bag(path, "ros1", list(islice(open_log(sample("intel")), 3)), topics=("//front//scan",))
+    reader = open_log(path)
+    assert reader.topic == "/front/scan"
+    assert len(list(reader)) == 3
+    assert "index_note" not in reader.info()

@@ -202,6 +202,8 @@ def _text(record: _Record, name: str, base: int) -> str:
 def _connection(fh: BinaryIO, record: _Record, base: int) -> Ros1Connection:
     conn = _u32(record, "conn", base)
     topic = _text(record, "topic", base)
+    if topic:  # as rosbags names it: no empty parts (//scan/ -> /scan)
+        topic = "/" * topic.startswith("/") + "/".join(part for part in topic.split("/") if part)
     fh.seek(record.data_offset)
     details = _fields(fh.read(record.data_length), base + record.data_offset)
     info = _Record(record.offset, record.op, details, 0, 0, 0)
