@@ -169,3 +169,45 @@ def test_an_absurd_declared_count_is_not_reported_as_skipped(tmp_path) -> None:
 def _no_leftovers(tmp_path):
     yield
     shutil.rmtree(tmp_path, ignore_errors=True)
+
+
+def limited(*args: object) -> subprocess.CompletedProcess:
+    """``scanlines ARGS`` with files limited to 20 kB (as a full disk would stop them):
+    writes past it fail with EFBIG."""
+    import resource
+
+    def limit() -> None:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (20_000, 20_000))
+
+    return subprocess.run(
+        [sys.executable, "-m", "scanlines", *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        preexec_fn=limit,
+        env={**os.environ, "COLUMNS": "200"},
+    )
+
+
+def test_a_write_error_names_the_output(tmp_path) -> None:
+    target = tmp_path / "features.jsonl"
+    out = limited("run", sample("intel"), "--out", target)
+    assert out.returncode == 2, out.stderr
+    last = out.stderr.strip().splitlines()[-1]
+    assert last.startswith(f"scanlines: error: {target}: cannot write the output")
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+def test_a_parquet_write_error_names_the_part_on_stderr_and_leaves_no_folder(tmp_path) -> None:
+    pytest.importorskip("pyarrow")
+    logs = tmp_path / "logs"
+    logs.mkdir()
+    shutil.copy(sample("intel"), logs)
+    dataset = tmp_path / "features"
+    out = limited("run", logs, "--out", dataset, "--format", "parquet", "-j", "1")
+    assert out.returncode == 2, out.stderr
+    last = out.stderr.strip().splitlines()[-1]
+    assert last.startswith("scanlines: error: intel_excerpt.clf.gz: ")
+    assert f"{dataset}/_staging/segments/log=intel_excerpt.clf.gz/part-" in last
+    assert "cannot write the part" in last
+    assert not dataset.exists()

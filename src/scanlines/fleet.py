@@ -23,6 +23,7 @@ Every chunk of a log measures the log's sensor profile from the log's first scan
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
 import glob
 import hashlib
 import json
@@ -340,6 +341,7 @@ def run_fleet(
     dataset = Path(dataset)
     if not dataset.parent.is_dir():
         raise ParameterError(f"{dataset}: the folder {dataset.parent} does not exist")
+    created = not dataset.exists()
     dataset.mkdir(exist_ok=True)
     paths = expand_inputs(inputs)
     if not paths:
@@ -362,11 +364,23 @@ def run_fleet(
     with _executor(jobs, scheduler) as (executor, engine):
         _collect(executor, tasks, outcomes, record)
     _finish_logs(dataset, tasks, outcomes)
+    _tidy(dataset, created)
     order = {name: k for k, name in enumerate(log_names(paths))}
     summary = FleetSummary(sorted(outcomes.values(), key=lambda o: order.get(o.log, 0)))
     summary.seconds, summary.engine = time.perf_counter() - started, engine
     summary.worker_peak_mb = peaks
     return summary
+
+
+def _tidy(dataset: Path, created: bool) -> None:
+    """No empty folder left behind: those of failed logs, and the dataset itself when this
+    run made it and every log failed."""
+    from scanlines.io.parquet import remove_empty_folders
+
+    remove_empty_folders(dataset)
+    if created:
+        with contextlib.suppress(OSError):  # only when empty
+            dataset.rmdir()
 
 
 def _skip_finished(

@@ -43,7 +43,7 @@ from typing import Any
 
 import numpy as np
 
-from scanlines.errors import ParameterError
+from scanlines.errors import ParameterError, describe
 from scanlines.extraction import (
     ALPHA,
     END_KINDS,
@@ -55,7 +55,7 @@ from scanlines.extraction import (
     START_Y,
     ExtractionTable,
 )
-from scanlines.io.outputs import commit, discard, temp_path
+from scanlines.io.outputs import OutputError, commit, discard, temp_path
 from scanlines.scan import Scan
 
 __all__ = [
@@ -65,6 +65,7 @@ __all__ = [
     "dataset_exists",
     "discard_staged",
     "part_name",
+    "remove_empty_folders",
     "remove_log",
     "require_pyarrow",
     "write_parts",
@@ -134,6 +135,10 @@ def _write_atomically(pa: Any, target: Path, columns: Any, metadata: dict) -> No
     try:
         pq.write_table(columns.replace_schema_metadata(metadata), temporary)
         commit([(temporary, target)], overwrite=True)
+    except OutputError:
+        raise
+    except OSError as exc:  # a full disk, a file size limit: name the part
+        raise OutputError(f"{target}: cannot write the part ({describe(exc)})") from None
     finally:
         discard(temporary)
 
@@ -252,6 +257,16 @@ def commit_log(dataset: Path, log: str) -> None:
             folder.rmdir()
 
 
+def remove_empty_folders(dataset: Path) -> None:
+    """Remove the dataset's table, staging and ``_logs`` folders that hold nothing (left
+    by failed or moved logs)."""
+    folders = [dataset / STAGING / name for name in TABLES] + [dataset / STAGING]
+    folders += [dataset / name for name in TABLES] + [dataset / "_logs"]
+    for folder in folders:
+        with contextlib.suppress(OSError):  # not there, or not empty
+            folder.rmdir()
+
+
 def discard_staged(dataset: Path, log: str) -> None:
     """Delete the staged parts of ``log`` (those of an interrupted run)."""
     for name in TABLES:
@@ -264,5 +279,6 @@ def remove_log(dataset: Path, log: str) -> None:
     for name in TABLES:
         shutil.rmtree(dataset / name / f"log={log}", ignore_errors=True)
         shutil.rmtree(dataset / STAGING / name / f"log={log}", ignore_errors=True)
+    remove_empty_folders(dataset)
     (dataset / "_logs" / f"{log}.json").unlink(missing_ok=True)
     (dataset / "_logs" / f"{log}.pending.json").unlink(missing_ok=True)

@@ -87,7 +87,8 @@ from __future__ import annotations
 import json
 import os
 from abc import ABC, abstractmethod
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from functools import cached_property
 from pathlib import Path
 from types import TracebackType
@@ -96,7 +97,7 @@ from typing import Any, ClassVar, Literal, Self
 import numpy as np
 import orjson
 
-from scanlines.errors import ParameterError
+from scanlines.errors import ParameterError, describe
 from scanlines.extraction import (
     ALPHA,
     END_KINDS,
@@ -109,7 +110,7 @@ from scanlines.extraction import (
     Extraction,
     ExtractionTable,
 )
-from scanlines.io.outputs import check_output, commit, discard, temp_path, umask
+from scanlines.io.outputs import OutputError, check_output, commit, discard, temp_path, umask
 from scanlines.io.transform import points_to_world, to_world
 from scanlines.json_values import jsonable
 from scanlines.scan import Scan
@@ -430,7 +431,8 @@ class ResultWriter(ABC):
             The features, in the sensor frame.
         """
         self._check_open()
-        self._write(ScanFeatures(index, scan, extraction, self.frame))
+        with self._naming_the_output():
+            self._write(ScanFeatures(index, scan, extraction, self.frame))
         self._count(extraction, 1, len(extraction), extraction.breakpoints, extraction.corners)
 
     def encode_chunk(
@@ -455,13 +457,25 @@ class ResultWriter(ABC):
             for index, scan, extraction in zip(indices, scans, table, strict=True):
                 self.write(index, scan, extraction)
             return
-        self._write_encoded(encoded)
+        with self._naming_the_output():
+            self._write_encoded(encoded)
         first = table[0] if len(table) else None
         self._count(first, len(table), len(table.first), table.breakpoints, table.corners)
 
     def _check_open(self) -> None:
         if self._closed:
             raise ValueError(f"{self.path}: writer is closed")
+
+    @contextmanager
+    def _naming_the_output(self) -> Iterator[None]:
+        """An OS error while writing (a full disk, a file size limit) as an
+        :class:`OutputError` naming the output."""
+        try:
+            yield
+        except OutputError:
+            raise
+        except OSError as exc:
+            raise OutputError(f"{self.path}: cannot write the output ({describe(exc)})") from None
 
     def _count(self, first: Extraction | None, scans: int, segments: int, breakpoints, corners):
         if self._first_extraction is None:
@@ -490,8 +504,9 @@ class ResultWriter(ABC):
         self._closed = True
         meta_temporary = temp_path(self.meta_path)
         try:
-            self._finish()
-            _write_json(meta_temporary, self._meta_document())
+            with self._naming_the_output():
+                self._finish()
+                _write_json(meta_temporary, self._meta_document())
             commit(
                 [(self._temporary, self.path), (meta_temporary, self.meta_path)],
                 overwrite=self.overwrite,
