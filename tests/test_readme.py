@@ -56,3 +56,13 @@ def test_the_parquet_query_reads_what_the_commands_write() -> None:
 def test_extras_are_installed_from_a_checkout() -> None:
     """scanlines is not on the package index: ``pip install "scanlines[...]"`` cannot work."""
     assert 'pip install "scanlines[' not in README.read_text()
+
+
+def test_the_live_ros_hint_names_the_sensor_profile() -> None:
+    """The one-line hint for live users leads to the extraction ``run`` does, with the
+    sensor's profile, not to a bare ``extract`` without a word about the difference."""
+    text = re.sub(r"\s+", " ", README.read_text())
+    hint = text[text.index("Live ROS users") :][:700]
+    assert "Scan.from_laserscan(msg)" in hint
+    assert "Extractor(sensor_profile=" in hint
+    assert "scanlines calibrate" in hint
