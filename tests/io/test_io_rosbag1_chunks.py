@@ -225,7 +225,7 @@ def test_a_wrong_index_pos_reads_the_data(tmp_path, bag_data, where) -> None:
     reader = open_log(write(tmp_path, data), on_error="skip")
     assert len(list(reader)) == SCANS
     assert reader.error_count == 0
-    assert reader.info()["index_note"].startswith("the bag's index cannot be read")
+    assert reader.info()["index_note"].startswith("the bag cannot be read through its index")
 
 
 def test_damage_inside_a_chunk_of_an_indexed_bag(tmp_path, bag_data) -> None:
@@ -259,3 +259,26 @@ def test_topic_names_are_compared_as_rosbags_names_them(tmp_path) -> None:
     assert reader.topic == "/front/scan"
     assert len(list(reader)) == 3
     assert "index_note" not in reader.info()
+
+
+def test_a_damaged_length_in_a_small_address_space(tmp_path, bag_data) -> None:
+    """Under a 1 GB address-space limit a header length of 2^31 made rosbags fail with
+    MemoryError ("cannot open the bag (MemoryError)"); the walk checks it against the file
+    first, locates the damage and reads the other chunks."""
+    third = [r for r in records(bag_data) if r[2] == 0x05][2]
+    path = write(tmp_path, put_u32(bag_data, third[0], 2**31))
+    code = (
+        "import resource, sys\n"
+        "resource.setrlimit(resource.RLIMIT_AS, (1 << 30, 1 << 30))\n"
+        "from scanlines.io import open_log\n"
+        "reader = open_log(sys.argv[1], on_error='skip')\n"
+        "print(len(list(reader)), reader.errors[0])\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code, str(path)], capture_output=True, text=True, timeout=120
+    )
+    assert done.returncode == 0, done.stderr
+    read, message = done.stdout.split(" ", 1)
+    assert int(read) == SCANS - chunk_counts(bag_data)[2]
+    assert f"the bag is damaged at byte {third[0]}" in message
+    assert "MemoryError" not in done.stdout

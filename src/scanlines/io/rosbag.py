@@ -196,11 +196,14 @@ class RosbagReader(LogReader):
                 "index (a recording cut short); read by its chunks"
             )
         elif indexed is None:
-            if layout.index_damage is not None:
-                reason = layout.index_damage.describe()
+            found = layout.index_damage or layout.damage
+            if found is not None:
+                reason = found.describe()
             else:
                 reason = index_error.reason if index_error else "no index"
-            self.index_note = f"the bag's index cannot be read ({reason}); read by its chunks"
+            self.index_note = (
+                f"the bag cannot be read through its index ({reason}); read by its chunks"
+            )
         else:
             changed = [
                 f"{t}: {indexed.get(t, ('', 0))[1]} in the index, {n} in the chunks"
