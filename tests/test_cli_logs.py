@@ -67,7 +67,10 @@ def test_run_writes_one_json_object_per_scan_and_meta(tmp_path):
         "segments",
         "breakpoints",
         "corners",
+        "breakpoint_xy",
+        "corner_xy",
     }
+    assert len(records[0]["corner_xy"]) == len(records[0]["corners"])
     meta = json.loads((tmp_path / "features.jsonl.meta.json").read_text())
     assert meta["method"] == "adaptive"
     assert meta["params"]["k"] == 3.0
@@ -99,6 +102,13 @@ def test_run_csv_in_world_frame(tmp_path):
         "var_alpha",
         "start_kind",
         "end_kind",
+        "pose_x",
+        "pose_y",
+        "pose_theta",
+        "feature",
+        "beam",
+        "x",
+        "y",
     ]
     assert {int(r[0]) for r in rows[1:]} == set(range(5))
 

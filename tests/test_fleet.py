@@ -171,7 +171,7 @@ def test_duckdb_reads_the_dataset_with_the_documented_schema(local_dataset) -> N
     assert {"var_rho", "cov_rho_alpha", "var_alpha", "start_kind", "end_kind", "log"} <= set(
         columns["segments"]
     )
-    assert columns["events"] == ["scan", "kind", "beam", "log"]
+    assert columns["events"] == ["scan", "kind", "beam", "x", "y", "log"]
     assert {"pose_x", "beams", "segments", "corners", "log"} <= set(columns["scans"])
     per_log = dict(con.execute(
         f"select log, count(*) from read_parquet('{local_dataset}/scans/*/*.parquet', "
@@ -204,7 +204,9 @@ def test_without_the_extra_the_message_names_it() -> None:
         "try:\n    require_pyarrow()\nexcept Exception as e:\n    print(e)\n"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    assert out.stdout.strip() == 'Parquet output needs pyarrow: pip install "scanlines[fleet]"'
+    assert out.stdout.strip() == (
+        'Parquet output needs pyarrow: pip install ".[fleet]" in a scanlines checkout'
+    )
 
 
 def test_a_notebook_computes_the_tasks_on_its_own_cluster(logs, local_dataset, tmp_path) -> None:
@@ -256,3 +258,64 @@ def test_an_interrupted_run_starts_its_logs_again(logs, tmp_path) -> None:
 
     with pytest.raises(OutputError, match="--overwrite"):
         run_fleet([log], dataset, params={"k": 4.0})
+
+
+def test_an_interrupted_dask_run_shows_no_row_of_an_unfinished_log(logs, tmp_path) -> None:
+    """Ctrl-C after the first of a log's three tasks: the log's parts stay staged, out of
+    the documented query's sight, until a run finishes the log."""
+    log, dataset = logs / "b" / "intel_excerpt.clf.gz", tmp_path / "features"
+
+    def interrupt(result) -> None:
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_fleet([log], dataset, jobs=1, scheduler="local", chunk_records=CHUNK,
+                  on_chunk=interrupt)  # fmt: skip
+    assert (dataset / "_logs" / "intel_excerpt.clf.gz.pending.json").exists()
+    assert list((dataset / "_staging" / "segments").rglob("*.parquet"))
+    assert segment_rows_or_none(dataset) == []
+    summary = run_fleet([log], dataset, jobs=1, scheduler="local", chunk_records=CHUNK)
+    assert summary.logs[0].status == "done"
+    scans = (
+        duckdb.connect()
+        .execute(
+            f"select count(*) from read_parquet('{dataset}/scans/*/*.parquet', "
+            "hive_partitioning = true)"
+        )
+        .fetchone()
+    )
+    assert scans == (300,)
+    assert not (dataset / "_staging").exists()
+
+
+def segment_rows_or_none(dataset: Path) -> list[tuple]:
+    """The documented query's rows; none when no table has a part yet."""
+    if not list((dataset / "segments").glob("*/*.parquet")):
+        return []
+    return segment_rows(dataset)
+
+
+@pytest.mark.parametrize("when", ["while the workers start", "after the first part"])
+def test_ctrl_c_on_a_dask_run_prints_one_line(logs, tmp_path, when) -> None:
+    """Ctrl-C reaches the whole process group, Dask's workers included: they ignore it,
+    the command stops the cluster and says so in one line (exit 130)."""
+    import time
+
+    dataset = tmp_path / "features"
+    process = subprocess.Popen(
+        [sys.executable, "-m", "scanlines", "run", logs / "b", "--out", dataset, "--format",
+         "parquet", "--scheduler", "local", "-j", "2", "--chunk-records", "20"],
+        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, start_new_session=True,
+    )  # fmt: skip
+    deadline = time.monotonic() + 120
+    if when == "while the workers start":
+        time.sleep(0.8)
+    else:
+        while not list(dataset.glob("_staging/segments/*/*.parquet")):
+            assert time.monotonic() < deadline
+            assert process.poll() is None
+            time.sleep(0.05)
+    os.killpg(process.pid, signal.SIGINT)
+    _, stderr = process.communicate(timeout=120)
+    assert process.returncode == 130, stderr
+    assert stderr.strip().splitlines() == ["scanlines: interrupted"], stderr

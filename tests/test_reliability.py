@@ -150,7 +150,7 @@ def test_d9_an_enormous_line_is_a_record_error_without_reading_it_whole(tmp_path
     with gzip.open(path, "wt") as fh:
         fh.write(f"FLASER {count} " + "1 " * count + "0 0 0 0 0 0 1.0 robot 1.0\n")
         fh.write("FLASER 3 1 1 1 0 0 0 0 0 0 2.0 robot 2.0\n")
-    with pytest.raises(LogFormatError, match=r"over the limit .*max_beams"):
+    with pytest.raises(LogFormatError, match=r"over the limit .*--max-beams"):
         list(open_log(path))
     reader = open_log(path, on_error="skip", max_record_bytes=1_000_000)
     assert len(list(reader)) == 1

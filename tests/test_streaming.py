@@ -128,7 +128,10 @@ def test_cli_jobs_output_is_byte_identical(tmp_path):
         texts.append(out.read_bytes())
     assert texts[0] == texts[1]
     first = json.loads(texts[0].splitlines()[0])
-    assert set(first) == {"scan", "timestamp", "pose", "segments", "breakpoints", "corners"}
+    assert set(first) == {
+        "scan", "timestamp", "pose", "segments", "breakpoints", "corners",
+        "breakpoint_xy", "corner_xy",
+    }  # fmt: skip
 
 
 def test_csv_chunk_has_one_row_per_segment_and_empty_cells_for_nan(tmp_path, intel):
@@ -138,7 +141,10 @@ def test_csv_chunk_has_one_row_per_segment_and_empty_cells_for_nan(tmp_path, int
     rows = extractor(intel[0])
     table = ExtractionTable.concatenate([rows], "adaptive", rows.params)
     lines = encode_csv_rows([7], [intel[0]], table).decode().splitlines()
-    assert len(lines) == len(rows)
+    events = len(rows.breakpoints) + len(rows.corners)  # a row each, after the segments
+    assert len(lines) == len(rows) + events
+    feature = CSV_COLUMNS.index("feature")
+    assert all(line.split(",")[feature] == "segment" for line in lines[: len(rows)])
     cells = lines[0].split(",")
     assert len(cells) == len(CSV_COLUMNS)
     assert cells[0] == "7"

@@ -9,9 +9,12 @@ run on a local process pool (``jobs``) or on Dask (``scheduler``: an address, or
 
 Faults: a log that cannot be read is reported with its reason and the others go on; its
 rows are removed. A task whose worker dies is run again by Dask; a part written twice
-replaces itself, so no row is lost or doubled. When a log is done, ``_logs/NAME.json``
-records its input checksum, method, parameters and sensor profile option: running the
-same command again skips it; a different one is an error unless ``overwrite``.
+replaces itself, so no row is lost or doubled. Parts are written under the dataset's
+``_staging`` folder and moved into its tables only when every task of their log is done,
+so an interrupted run leaves no partial log in sight of a query. When a log is done,
+``_logs/NAME.json`` records its input checksum, method, parameters and sensor profile
+option: running the same command again skips it; a different one is an error unless
+``overwrite``.
 
 Every chunk of a log measures the log's sensor profile from the log's first scans (as
 ``scanlines run`` does), so the rows are those of a single-log run, bit for bit.
@@ -20,9 +23,11 @@ Every chunk of a log measures the log's sensor profile from the log's first scan
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
 import glob
 import hashlib
 import json
+import logging
 import multiprocessing
 import time
 from collections.abc import Callable, Iterable, Sequence
@@ -37,6 +42,7 @@ __all__ = [
     "ChunkTask",
     "FleetSummary",
     "LogOutcome",
+    "commit_chunks",
     "expand_inputs",
     "extract_chunk",
     "fleet_tasks",
@@ -65,6 +71,7 @@ class ChunkTask:
     params: dict[str, Any]
     reader_options: dict[str, Any]
     sensor_profile: str | None = None
+    staged: bool = True  # written under _staging until the log is committed
 
 
 @dataclass
@@ -250,7 +257,7 @@ def extract_chunk(task: ChunkTask) -> ChunkResult:
             scans += piece.scans
         skipped = reader.bad_scans if task.stop is None else None  # the whole log was read
     table = ExtractionTable.join(tables) if tables else _empty_table(extractor)
-    write_parts(Path(task.dataset), task.log, task.start, indices, scans, table)
+    write_parts(Path(task.dataset), task.log, task.start, indices, scans, table, staged=task.staged)
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     return ChunkResult(task.log, task.start, len(scans), len(table.first), skipped,
                        time.perf_counter() - started, peak_mb, os.getpid())  # fmt: skip
@@ -335,6 +342,7 @@ def run_fleet(
     dataset = Path(dataset)
     if not dataset.parent.is_dir():
         raise ParameterError(f"{dataset}: the folder {dataset.parent} does not exist")
+    created = not dataset.exists()
     dataset.mkdir(exist_ok=True)
     paths = expand_inputs(inputs)
     if not paths:
@@ -357,11 +365,23 @@ def run_fleet(
     with _executor(jobs, scheduler) as (executor, engine):
         _collect(executor, tasks, outcomes, record)
     _finish_logs(dataset, tasks, outcomes)
+    _tidy(dataset, created)
     order = {name: k for k, name in enumerate(log_names(paths))}
     summary = FleetSummary(sorted(outcomes.values(), key=lambda o: order.get(o.log, 0)))
     summary.seconds, summary.engine = time.perf_counter() - started, engine
     summary.worker_peak_mb = peaks
     return summary
+
+
+def _tidy(dataset: Path, created: bool) -> None:
+    """No empty folder left behind: those of failed logs, and the dataset itself when this
+    run made it and every log failed."""
+    from scanlines.io.parquet import remove_empty_folders
+
+    remove_empty_folders(dataset)
+    if created:
+        with contextlib.suppress(OSError):  # only when empty
+            dataset.rmdir()
 
 
 def _skip_finished(
@@ -415,9 +435,49 @@ def _records(dataset: Path, log: str) -> tuple[dict[str, Any], dict[str, Any]]:
 
 
 def _has_rows(dataset: Path, log: str) -> bool:
+    from scanlines.io.parquet import STAGING, TABLES
+
     return (dataset / "_logs" / f"{log}.json").exists() or any(
-        (dataset / table / f"log={log}").exists() for table in ("segments", "events", "scans")
+        (root / table / f"log={log}").exists()
+        for root in (dataset, dataset / STAGING)
+        for table in TABLES
     )
+
+
+@contextlib.contextmanager
+def _interrupts_held() -> Any:
+    """SIGINT ignored while the worker processes start, so that they start with it ignored
+    (and their preload, :func:`dask_setup`, keeps it so), and blocked meanwhile, so that a
+    Ctrl-C then is held (Linux keeps a blocked signal pending even when ignored) and reaches
+    the command once the workers are up."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
+def dask_setup(worker: Any) -> None:
+    """Dask preload of the workers of the LocalCluster a fleet run starts: SIGINT ignored,
+    so that a Ctrl-C (sent to the whole process group) reaches the command alone, which
+    stops the cluster; and the workers' own logs (their tornado and distributed loggers)
+    kept off the console, where a cluster stopped under them would print tracebacks. A
+    task's error still reaches the command, with its log."""
+    import signal
+    import threading
+
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    for name in ("distributed", "tornado", "tornado.application"):
+        logging.getLogger(name).setLevel(logging.CRITICAL)
 
 
 class _executor:
@@ -426,6 +486,7 @@ class _executor:
     def __init__(self, jobs: int, scheduler: str | None) -> None:
         self.jobs, self.scheduler = jobs, scheduler
         self._client = self._cluster = self._pool = None
+        self._quieted: list[tuple[logging.Logger, int]] = []
 
     def __enter__(self) -> tuple[cf.Executor, str]:
         if self.scheduler is None:
@@ -436,11 +497,21 @@ class _executor:
             from distributed import Client, LocalCluster
         except ImportError:
             raise ParameterError(
-                'a Dask scheduler needs dask and distributed: pip install "scanlines[fleet]"'
+                "a Dask scheduler needs dask and distributed: "
+                'pip install ".[fleet]" in a scanlines checkout'
             ) from None
+        # The client's and the scheduler's logs (a tornado traceback when an interrupt
+        # closes the cluster under a pending gather) stay off the console while they run;
+        # a task's error still reaches the command, with its log.
+        self._quieted = _quiet_loggers(("tornado", "tornado.application", "distributed"))
         if self.scheduler == "local":
-            self._cluster = LocalCluster(n_workers=self.jobs, threads_per_worker=1,
-                                         processes=True, dashboard_address=None)  # fmt: skip
+            # silence_logs: the workers' warnings (a task cancelled on Ctrl-C) stay off
+            # the console
+            with _interrupts_held():  # Ctrl-C is the command's to handle, not the workers'
+                self._cluster = LocalCluster(n_workers=self.jobs, threads_per_worker=1,
+                                             processes=True, dashboard_address=None,
+                                             silence_logs=logging.ERROR,
+                                             preload=["scanlines.fleet"])  # fmt: skip
             self._client = Client(self._cluster)
             engine = f"Dask LocalCluster of {self.jobs} workers"
         else:
@@ -449,12 +520,26 @@ class _executor:
         return self._client.get_executor(), engine
 
     def __exit__(self, *exc: object) -> None:
-        if self._pool is not None:
-            self._pool.shutdown(cancel_futures=True)
-        if self._client is not None:
-            self._client.close()
-        if self._cluster is not None:
-            self._cluster.close()
+        try:
+            if self._pool is not None:
+                self._pool.shutdown(cancel_futures=True)
+            if self._client is not None:
+                self._client.close()
+            if self._cluster is not None:
+                self._cluster.close()
+        finally:
+            for logger, level in self._quieted:
+                logger.setLevel(level)
+
+
+def _quiet_loggers(names: Sequence[str]) -> list[tuple[logging.Logger, int]]:
+    """Raise the loggers ``names`` to CRITICAL; their loggers and former levels."""
+    quieted = []
+    for name in names:
+        logger = logging.getLogger(name)
+        quieted.append((logger, logger.level))
+        logger.setLevel(logging.CRITICAL)
+    return quieted
 
 
 def _collect(executor, tasks, outcomes, on_chunk) -> None:
@@ -482,8 +567,9 @@ def _collect(executor, tasks, outcomes, on_chunk) -> None:
 
 
 def _finish_logs(dataset: Path, tasks: list[ChunkTask], outcomes: dict[str, LogOutcome]) -> None:
-    """Remove the rows of failed logs; record the finished ones."""
-    from scanlines.io.parquet import remove_log
+    """Remove the rows of failed logs; move the finished ones' parts into the tables and
+    record them."""
+    from scanlines.io.parquet import commit_log, remove_log
     from scanlines.outputs import write_text_atomically
 
     first_task = {}
@@ -497,21 +583,51 @@ def _finish_logs(dataset: Path, tasks: list[ChunkTask], outcomes: dict[str, LogO
         record = {"log": name, "input": task.path, "scans": outcome.scans,
                   "segments": outcome.segments, "skipped_scans": outcome.skipped_scans,
                   "fingerprint": _fingerprint(task, checksum(Path(task.path)))}  # fmt: skip
+        commit_log(dataset, name)
         (dataset / "_logs").mkdir(exist_ok=True)
         write_text_atomically(dataset / "_logs" / f"{name}.json", json.dumps(record, indent=2))
         (dataset / "_logs" / f"{name}.pending.json").unlink(missing_ok=True)
 
 
 def fleet_tasks(inputs: Iterable[str | Path], dataset: str | Path, **options: Any) -> list[Any]:
-    """The tasks of a fleet run as ``dask.delayed`` objects, for a notebook with a Dask
-    cluster of its own: ``dask.compute(*fleet_tasks(logs, "features"))``. ``options``
-    are those of :func:`plan`. Finished-log records are not written (use
-    :func:`run_fleet` with ``scheduler=`` for that)."""
+    """The work of a fleet run as ``dask.delayed`` objects, for a notebook with a Dask
+    cluster of its own: ``dask.compute(*fleet_tasks(logs, "features"))``. One object per
+    log: its chunk tasks, then the move of its parts into the tables (a
+    :class:`ChunkResult` of the whole log). ``options`` are those of :func:`plan`.
+    Finished-log records are not written (use :func:`run_fleet` with ``scheduler=`` for
+    that)."""
     import dask
+
+    from scanlines.io.parquet import discard_staged
 
     dataset = Path(dataset)
     dataset.mkdir(exist_ok=True)
     tasks, failed = plan(expand_inputs(inputs), dataset, **options)
     if failed:
         raise ParameterError("; ".join(f"{o.log}: {o.reason}" for o in failed))
-    return [dask.delayed(extract_chunk)(task) for task in tasks]
+    by_log: dict[str, list[Any]] = {}
+    for task in tasks:
+        if task.log not in by_log:
+            discard_staged(dataset, task.log)  # left by an earlier, interrupted compute
+        by_log.setdefault(task.log, []).append(dask.delayed(extract_chunk)(task))
+    return [
+        dask.delayed(commit_chunks)(str(dataset), log, chunks) for log, chunks in by_log.items()
+    ]
+
+
+def commit_chunks(dataset: str, log: str, chunks: list[ChunkResult]) -> ChunkResult:
+    """Move the parts of ``log`` (written by ``chunks``) into the tables; the log's totals."""
+    from scanlines.io.parquet import commit_log
+
+    commit_log(Path(dataset), log)
+    skipped = [c.skipped_scans for c in chunks if c.skipped_scans is not None]
+    return ChunkResult(
+        log,
+        0,
+        sum(c.scans for c in chunks),
+        sum(c.segments for c in chunks),
+        skipped[-1] if skipped else None,
+        sum(c.seconds for c in chunks),
+        max((c.peak_mb for c in chunks), default=0.0),
+        chunks[0].worker if chunks else 0,
+    )

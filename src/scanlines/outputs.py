@@ -60,9 +60,7 @@ def check_output(target: str | Path, *, overwrite: bool, companions: Sequence[Pa
         if path is not target and path.is_dir():
             raise OutputError(f"{path} is a directory; it is in the way of the output {target}")
         if not overwrite and (path.exists() or path.is_symlink()):
-            raise OutputError(
-                f"{path} exists; not replacing it (pass --overwrite, or overwrite=True)"
-            )
+            raise OutputError(f"{path} exists; not replacing it (--overwrite replaces it)")
     for path in (target, *companions):
         remove_stale_temps(path)
     return target

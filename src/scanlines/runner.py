@@ -185,7 +185,7 @@ def describe_log(reader: Any) -> LogDescription:
     """Read the whole log once and summarise it (streaming)."""
     info = LogDescription(format=reader.format_name, path=str(reader.path))
     total_beams = valid_beams = 0
-    range_sum = 0.0
+    range_mean = 0.0  # a running mean: a sum of ranges near 1e308 would overflow
     low, high = math.inf, -math.inf
     previous_time = None
     for scan in reader:
@@ -199,7 +199,8 @@ def describe_log(reader: Any) -> LogDescription:
         total_beams += n
         valid_beams += valid.size
         if valid.size:
-            range_sum += float(valid.sum())
+            scan_mean = float(np.sum(valid / valid.size))  # no term can overflow
+            range_mean += (scan_mean - range_mean) * (valid.size / valid_beams)
             low, high = min(low, float(valid.min())), max(high, float(valid.max()))
         info.with_pose += scan.pose is not None
         stamp = scan.timestamp
@@ -213,7 +214,7 @@ def describe_log(reader: Any) -> LogDescription:
             previous_time = stamp
     if valid_beams:
         info.range_min, info.range_max = low, high
-        info.range_mean = range_sum / valid_beams
+        info.range_mean = range_mean
     if total_beams:
         info.no_return_share = 1.0 - valid_beams / total_beams
     info.reader = reader.info()

@@ -225,6 +225,56 @@ def ros1_range_signaling_nan(path: Path) -> None:
     path.write_bytes(set_at(data, data.index(ranges), struct.pack("<I", 0x7F800001)))
 
 
+def ros1_header_field(data: bytes, name: str) -> int:
+    """The offset of the value of the bag header's field ``name``."""
+    offset, header_length, _ = ros1_records(data)[0]
+    return data.index(name.encode() + b"=", offset, offset + 4 + header_length) + len(name) + 1
+
+
+@entry("ros1_chunk_count_zero.bag")
+def ros1_chunk_count_zero(path: Path) -> None:
+    """The bag header's ``chunk_count`` set to 0 (silent loss: 0 scans of 20, exit 0)."""
+    data = bag_bytes("ros1", 20, path.parent)
+    path.write_bytes(set_at(data, ros1_header_field(data, "chunk_count"), struct.pack("<I", 0)))
+
+
+@entry("ros1_chunk_info_count_zero.bag")
+def ros1_chunk_info_count_zero(path: Path) -> None:
+    """The chunk-info record's ``count`` set to 0 (silent loss: 0 scans of 20, exit 0)."""
+    data = bag_bytes("ros1", 20, path.parent)
+    offset, header_length, _ = next(r for r in ros1_records(data) if r[2] == 0x06)
+    at = data.index(b"count=", offset, offset + 4 + header_length) + len(b"count=")
+    path.write_bytes(set_at(data, at, struct.pack("<I", 0)))
+
+
+@entry("ros1_truncated_in_chunk.bag")
+def ros1_truncated_in_chunk(path: Path) -> None:
+    """The bag cut 20,000 bytes into its chunk, before the index (a crash while recording):
+    refused even with ``--on-error skip``."""
+    data = bag_bytes("ros1", 20, path.parent)
+    offset, header_length, _ = next(r for r in ros1_records(data) if r[2] == 0x05)
+    path.write_bytes(data[: offset + 8 + header_length + 20_000])
+
+
+@entry("db3_dir_topic_name_null")
+def db3_topic_name_null(path: Path) -> None:
+    """A ``.db3`` (no ``metadata.yaml``) with /scan and /notes, the name of /notes NULL
+    (``info``: TypeError sorting the topics)."""
+    import sqlite3
+
+    write_bag(path, "sqlite3", intel_scans(5), string_topic="/notes")
+    (path / "metadata.yaml").unlink()
+    database = next(path.glob("*.db3"))
+    with sqlite3.connect(database) as db:
+        (sql,) = db.execute("SELECT sql FROM sqlite_master WHERE name = 'topics'").fetchone()
+        db.execute("ALTER TABLE topics RENAME TO old_topics")
+        db.execute(sql.replace("NOT NULL", ""))
+        db.execute("INSERT INTO topics SELECT * FROM old_topics")
+        db.execute("DROP TABLE old_topics")
+        db.execute("UPDATE topics SET name = NULL WHERE name = '/notes'")
+    db.close()
+
+
 # -- NPZ ----------------------------------------------------------------------------------
 
 

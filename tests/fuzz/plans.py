@@ -4,9 +4,11 @@ A :class:`Plan` names a mutator and, for a ROS 2 bag directory, the file it
 damages. Plain text seeds get the byte and line mutators; gzip text seeds the
 byte mutators on the compressed bytes (``gz-bytes/...``) and every text mutator
 on the content (``text/...``); the NPZ seed the byte and NPZ mutators; bag
-directories the byte mutators on the storage file (``storage/...``) and the
-text mutators on ``metadata.yaml`` (``metadata/...``); other binary seeds the
-byte mutators.
+directories the byte mutators on the storage file (``storage/...``; a ``.db3``
+also NULL fields, ``mutate_bags.py``) and the text mutators on ``metadata.yaml``
+(``metadata/...``); the ROS 1 bag the byte mutators and the bag-structure ones (chunk
+counts, index position, truncation inside the chunks); other binary seeds the byte
+mutators.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .mutate import BYTE_MUTATORS, LINE_MUTATORS, Mutator, inside_gzip
+from .mutate_bags import DB3_MUTATORS, ROS1_MUTATORS
 from .mutate_npz import NPZ_MUTATORS
 
 PLAIN_TEXT_SEEDS = ("carmen-log", "carmen-robotlaser", "coreslam-dat", "csv")
@@ -57,9 +60,15 @@ def plans_for(seed_name: str) -> list[Plan]:
             [Plan(name, m) for name, m in NPZ_MUTATORS.items()],
             [Plan(name, m) for name, m in BYTE_MUTATORS.items()],
         )
-    if seed_name in BAG_DIRECTORY_SEEDS:
+    if seed_name == "ros1-bag":
         return interleave(
-            [Plan(f"storage/{name}", m, "storage") for name, m in BYTE_MUTATORS.items()],
+            [Plan(name, m) for name, m in BYTE_MUTATORS.items()],
+            [Plan(name, m) for name, m in ROS1_MUTATORS.items()],
+        )
+    if seed_name in BAG_DIRECTORY_SEEDS:
+        storage = BYTE_MUTATORS | (DB3_MUTATORS if seed_name == "ros2-db3-dir" else {})
+        return interleave(
+            [Plan(f"storage/{name}", m, "storage") for name, m in storage.items()],
             [Plan(f"metadata/{name}", m, "metadata.yaml") for name, m in text_mutators.items()],
         )
     return [Plan(name, m) for name, m in BYTE_MUTATORS.items()]

@@ -50,8 +50,13 @@ def write_bag(
     topics: Sequence[str] = ("/scan",),
     string_topic: str | None = None,
     zero_stamps: bool = False,
+    chunk_bytes: int | None = None,
+    compression: str | None = None,
 ) -> None:
     """Write ``scans`` to every topic in ``topics`` (and strings to ``string_topic``).
+
+    ``chunk_bytes`` (ROS 1): start a new chunk past this many bytes (rosbags: 1 MiB);
+    ``compression`` (ROS 1): ``"bz2"`` or ``"lz4"`` chunks.
 
     ``kind`` is ``"ros1"``, ``"sqlite3"`` or ``"mcap"``. Bag time is the scan time
     plus 1000 s, so a reader using the header stamp can be told apart.
@@ -61,6 +66,10 @@ def write_bag(
     serialize = store.serialize_ros1 if ros1 else store.serialize_cdr
     if ros1:
         writer = Writer1(path)
+        if chunk_bytes is not None:
+            writer.chunk_threshold = chunk_bytes
+        if compression is not None:
+            writer.set_compression(getattr(Writer1.CompressionFormat, compression.upper()))
     else:
         plugin = StoragePlugin.MCAP if kind == "mcap" else StoragePlugin.SQLITE3
         writer = Writer2(path, version=9, storage_plugin=plugin)

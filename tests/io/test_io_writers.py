@@ -65,7 +65,10 @@ class TestJsonl:
         records = [json.loads(line) for line in lines]
         assert [r["scan"] for r in records] == [0, 2, 4]
         first = records[0]
-        assert list(first) == ["scan", "timestamp", "pose", "segments", "breakpoints", "corners"]
+        assert list(first) == [
+            "scan", "timestamp", "pose", "segments", "breakpoints", "corners",
+            "breakpoint_xy", "corner_xy",
+        ]  # fmt: skip
         assert first["timestamp"] == scans[0].timestamp
         assert first["pose"] == list(scans[0].pose)
         assert first["segments"][1] == {
@@ -109,10 +112,14 @@ class TestCsv:
         assert (
             ",".join(rows[0])
             == "scan,timestamp,first,last,start_x,start_y,end_x,end_y,rho,alpha,n_points,rms,"
-            "var_rho,cov_rho_alpha,var_alpha,start_kind,end_kind"
+            "var_rho,cov_rho_alpha,var_alpha,start_kind,end_kind,"
+            "pose_x,pose_y,pose_theta,feature,beam,x,y"
         )
+        # segment rows only (then each scan's breakpoints and corners: TestFeaturePoints)
+        rows = [row for row in rows[1:] if row[CSV_COLUMNS.index("feature")] == "segment"]
+        rows.insert(0, list(CSV_COLUMNS))
         assert len(rows) == 1 + 2 + 0 + 1
-        assert rows[1] == [
+        assert rows[1][:17] == [
             "0",
             repr(scans[0].timestamp),
             "0",
@@ -131,9 +138,81 @@ class TestCsv:
             "open",
             "open",
         ]
+        assert [float(v) for v in rows[1][17:20]] == list(scans[0].pose)
+        assert rows[1][20:] == ["segment", "", "", ""]
         assert rows[2][:4] == ["0", repr(scans[0].timestamp), "10", "19"]
         assert rows[3][0] == "4"
         assert rows[3][CSV_COLUMNS.index("rms")] == ""  # NaN rms
+
+
+class TestFeaturePoints:
+    """Breakpoints and corners carry their x, y in JSON Lines, CSV and Parquet."""
+
+    @staticmethod
+    def expected(scan: Scan, beam: int, pose=None) -> tuple[float, float]:
+        angle = scan.angle_min + scan.angle_increment * beam
+        x, y = scan.ranges[beam] * math.cos(angle), scan.ranges[beam] * math.sin(angle)
+        if pose is None:
+            return x, y
+        px, py, theta = pose
+        c, s = math.cos(theta), math.sin(theta)
+        return px + c * x - s * y, py + s * x + c * y
+
+    @pytest.mark.parametrize("frame", ["sensor", "world"])
+    def test_jsonl(self, tmp_path, frame) -> None:
+        pose = (1.0, 2.0, 0.5)
+        scan = simple_scan(pose=pose)
+        path = tmp_path / "out.jsonl"
+        write_all(path, [scan], [make_extraction(1, breakpoints=(0, 1), corners=(2,))],
+                  frame=frame)  # fmt: skip
+        record = json.loads(path.read_text())
+        world = pose if frame == "world" else None
+        assert record["breakpoint_xy"][0] == pytest.approx(self.expected(scan, 0, world))
+        assert record["breakpoint_xy"][1] == [None, None]  # beam 1 has no return
+        assert record["corner_xy"][0] == pytest.approx(self.expected(scan, 2, world))
+
+    def test_csv_has_breakpoints_corners_and_pose(self, tmp_path) -> None:
+        pose = (1.0, 2.0, 0.5)
+        scan = simple_scan(pose=pose)
+        path = tmp_path / "out.csv"
+        write_all(path, [scan], [make_extraction(1, breakpoints=(0, 1), corners=(2,))])
+        with path.open() as fh:
+            rows = list(csv.DictReader(fh))
+        assert [row["feature"] for row in rows] == ["segment", "breakpoint", "breakpoint", "corner"]
+        assert all(
+            (row["pose_x"], row["pose_y"], row["pose_theta"]) == ("1.0", "2.0", "0.5")
+            for row in rows
+        )
+        corner = rows[3]
+        assert corner["beam"] == "2"
+        assert (float(corner["x"]), float(corner["y"])) == pytest.approx(self.expected(scan, 2))
+        assert corner["first"] == corner["rho"] == corner["end_kind"] == ""
+        assert (rows[2]["x"], rows[2]["y"]) == ("", "")
+
+    def test_csv_scan_with_only_a_breakpoint_writes_it(self, tmp_path) -> None:
+        path = tmp_path / "out.csv"
+        write_all(path, [simple_scan()], [make_extraction(0, breakpoints=(0,), corners=())])
+        with path.open() as fh:
+            rows = list(csv.DictReader(fh))
+        assert [(row["feature"], row["beam"]) for row in rows] == [("breakpoint", "0")]
+        assert rows[0]["pose_x"] == ""
+
+    def test_parquet_events(self, tmp_path) -> None:
+        pq = pytest.importorskip("pyarrow.parquet")
+        from scanlines.extraction import ExtractionTable
+        from scanlines.io.parquet import write_parts
+
+        scan = simple_scan()
+        extraction = make_extraction(1, breakpoints=(0, 1), corners=(2,))
+        table = ExtractionTable.concatenate([extraction], extraction.method, extraction.params)
+        write_parts(tmp_path, "log", 0, [7], [scan], table)
+        events = pq.read_table(tmp_path / "events" / "log=log").to_pylist()
+        assert [(e["kind"], e["beam"]) for e in events] == [
+            ("breakpoint", 0), ("breakpoint", 1), ("corner", 2)
+        ]  # fmt: skip
+        assert (events[0]["x"], events[0]["y"]) == pytest.approx(self.expected(scan, 0))
+        assert (events[1]["x"], events[1]["y"]) == (None, None)
+        assert (events[2]["x"], events[2]["y"]) == pytest.approx(self.expected(scan, 2))
 
 
 class TestMeta:

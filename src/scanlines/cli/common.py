@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import contextlib
-import functools
 import math
 import sys
 import threading
@@ -15,8 +14,7 @@ from typing import Annotated, Any, Literal, TypeVar
 import typer
 
 from scanlines.builtin_methods import BUILTIN_METHODS
-from scanlines.errors import ParameterError, ScanlinesError
-from scanlines.interrupts import Terminated, any_terminated, is_interrupt
+from scanlines.errors import ParameterError
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -26,7 +24,14 @@ INTERRUPTED = 130
 TERMINATED = 143
 
 
-LogArgument = Annotated[Path, typer.Argument(help="CARMEN log, ROS bag, .dat, .csv or .npz.")]
+LogArgument = Annotated[
+    Path,
+    typer.Argument(
+        help="CARMEN log, ROS bag, .dat, .csv or .npz (keys ranges, angle_min, "
+        "angle_increment, and range_max: without it, a range held by 1 % of the beams "
+        "at the top is read as a no-return code)."
+    ),
+]
 FovOption = Annotated[
     float | None, typer.Option("--fov", help="CARMEN FLASER: field of view, degrees.")
 ]
@@ -65,32 +70,6 @@ ProfileOption = Annotated[
         help="Sensor profile from `scanlines calibrate` (default: measured from the log).",
     ),
 ]
-
-
-def guarded(command: F, *, show_compilation: bool = True) -> F:
-    """Turn an input error raised by ``command`` into one line on stderr and exit code 2,
-    and Ctrl-C or SIGTERM into a one-line note and exit code 130 or 143 (the interrupt's
-    notes, if any, in brackets; outputs being written are deleted on the way out); show
-    kernel compilation on stderr while it runs (:class:`CompileProgress`)."""
-
-    @functools.wraps(command)
-    def wrapper(*args: Any, **kwargs: Any) -> Any:
-        try:
-            with compile_progress() if show_compilation else contextlib.nullcontext():
-                return command(*args, **kwargs)
-        except (ScanlinesError, OSError, EOFError) as error:
-            print(f"scanlines: error: {error}", file=sys.stderr)
-            raise typer.Exit(INPUT_ERROR) from None
-        except (KeyboardInterrupt, Terminated, SystemError) as stop:
-            if not is_interrupt(stop):
-                raise
-            terminated = any_terminated(stop)
-            notes = "; ".join(getattr(stop, "__notes__", ()))
-            word = "terminated" if terminated else "interrupted"
-            print(f"scanlines: {word}" + (f" ({notes})" if notes else ""), file=sys.stderr)
-            raise typer.Exit(TERMINATED if terminated else INTERRUPTED) from None
-
-    return wrapper  # type: ignore[return-value]
 
 
 class CompileProgress:

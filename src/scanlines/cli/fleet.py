@@ -131,6 +131,7 @@ def _print(summary, out: Path) -> None:
     Console().print(table)
     for log in summary.failed:
         typer.echo(f"failed: {log.log}: {log.reason}")
+        typer.echo(f"scanlines: error: {log.log}: {log.reason}", err=True)
     done = [log for log in summary.logs if log.status == "done"]
     scans = sum(log.scans for log in done)
     rate = scans / summary.seconds if summary.seconds else 0.0

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import gc
+import math
 from pathlib import Path
 from typing import Annotated, Literal
 
@@ -89,7 +90,11 @@ def _print_description(d) -> None:
     table.add_column("value")
 
     def fmt(value, unit="", digits=3):
-        return "-" if value is None else f"{value:.{digits}f}{unit}"
+        if value is None:
+            return "-"
+        if not math.isfinite(value) or abs(value) >= 1e9:
+            return f"{value:.4g}{unit}"
+        return f"{value:.{digits}f}{unit}"
 
     reader = d.reader
     table.add_row("format", d.format)
@@ -108,16 +113,25 @@ def _print_description(d) -> None:
     if d.time_first is not None:
         table.add_row(
             "time",
-            f"{fmt(d.time_first, ' s')} .. {fmt(d.time_last, ' s')} "
+            f"{_when(d.time_first, fmt)} .. {_when(d.time_last, fmt)} "
             f"(span {fmt(d.time_max - d.time_min, ' s')}, "
             f"{d.time_backwards_steps} steps backwards)",
         )
     else:
         table.add_row("time", "no timestamps")
     table.add_row("poses", f"{d.with_pose} of {d.scans} scans")
-    for key in ("topics", "topic"):
-        if reader.get(key):
-            table.add_row(key, str(reader[key]))
+    if reader.get("topics"):
+        table.add_row(
+            "topics",
+            "\n".join(
+                f"{name}: {t['type']}, {t['messages']} messages"
+                for name, t in sorted(reader["topics"].items())
+            ),
+        )
+    if reader.get("topic"):
+        table.add_row("topic", str(reader["topic"]))
+    for note in reader.get("notes", []):
+        table.add_row("note", note)
     if reader.get("records"):
         table.add_row(
             "records", ", ".join(f"{k} {v}" for k, v in sorted(reader["records"].items()))
@@ -136,11 +150,26 @@ def _print_description(d) -> None:
     Console().print(table)
 
 
+#: Timestamps from this on (1990-01-01) are taken for Unix time and shown as UTC dates.
+_EPOCH_LIKE = 631_152_000.0
+
+
+def _when(stamp: float, fmt) -> str:
+    """A timestamp: a UTC date and time for Unix time, else seconds (a log's own clock)."""
+    import datetime
+
+    if _EPOCH_LIKE <= stamp < 253_402_300_800:  # before the year 10000
+        moment = datetime.datetime.fromtimestamp(stamp, tz=datetime.UTC)
+        return moment.isoformat(timespec="milliseconds").replace("+00:00", "Z")
+    return fmt(stamp, " s")
+
+
 def run_command(
     logs: Annotated[
         list[Path],
         typer.Argument(
-            help="Logs (CARMEN, ROS bag, .dat, .csv, .npz), folders of logs, or globs.",
+            help="Logs (CARMEN, ROS bag, .dat, .csv, .npz with a range_max key), folders "
+            "of logs, or globs.",
             metavar="LOG...",
         ),
     ],
@@ -215,6 +244,10 @@ def run_command(
         raise ParameterError(f"--on-error must be fail or skip, got {on_error!r}")
     Extractor(method, preset, **params)  # bad parameters fail before the log is read
     selection = parse_slice(scans)
+    if out is not None:
+        from scanlines.io import writer_class
+
+        writer_class(out)  # an unknown output suffix before the log is read
     writable(out, overwrite, with_meta=True)  # and a taken output before any work
     if out is not None and out.suffix.lower() == ".rrd":
         from scanlines.io.rerun_writer import require_rerun
@@ -235,8 +268,14 @@ def run_command(
     gc.freeze()
     with open_log(log, **options) as reader:
         summary = _run_with_progress(reader, extractor, selection, out, frame, log, jobs, overwrite)
+        notes = reader.notes
     summary.compile_seconds += compiled.seconds
-    _print_summary(summary, out)
+    _print_summary(summary, out, notes)
+    if out is None:
+        typer.echo(
+            "scanlines: no --out given: the features were extracted and summarised, not written",
+            err=True,
+        )
 
 
 def calibrate_command(
@@ -322,7 +361,7 @@ def _run_with_progress(reader, extractor, selection, out, frame, log, jobs, over
     return summary
 
 
-def _print_summary(summary, out) -> None:
+def _print_summary(summary, out, notes=()) -> None:
     from rich.console import Console
     from rich.table import Table
 
@@ -341,8 +380,9 @@ def _print_summary(summary, out) -> None:
     table.add_row(
         "other records skipped", _with_breakdown(summary.skipped_other, summary.ignored_records)
     )
-    if out is not None:
-        table.add_row("output", str(out))
+    table.add_row("output", str(out) if out is not None else "none (no --out given)")
+    for note in notes:
+        table.add_row("note", note)
     Console().print(table)
 
 

@@ -94,6 +94,7 @@ __all__ = [
     "points_to_world",
     "reader_options",
     "to_world",
+    "writer_class",
 ]
 
 #: Format name -> reader class.
@@ -165,6 +166,26 @@ WRITERS: dict[str, type[ResultWriter]] = {
 }
 
 
+def writer_class(path: str | Path) -> type[ResultWriter]:
+    """The writer of an output path, by its suffix (checked before any work is done).
+
+    Raises
+    ------
+    ParameterError
+        For a suffix no writer has.
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix in WRITERS:
+        return WRITERS[suffix]
+    if suffix == "" or (path.is_dir() and (path / "metadata.yaml").exists()):
+        return Ros2BagWriter
+    raise ParameterError(
+        f"{path}: unknown output format {suffix!r}; use .jsonl, .csv, .mcap, .rrd or a "
+        f"directory path without suffix (ROS 2 bag)"
+    )
+
+
 def open_writer(
     path: str | Path,
     *,
@@ -206,16 +227,7 @@ def open_writer(
     ...     writer.update_meta(counts={"skipped_scan_records": reader.bad_scans})
     """
     path = Path(path)
-    suffix = path.suffix.lower()
-    if suffix in WRITERS:
-        cls = WRITERS[suffix]
-    elif suffix == "" or (path.is_dir() and (path / "metadata.yaml").exists()):
-        cls = Ros2BagWriter
-    else:
-        raise ParameterError(
-            f"{path}: unknown output format {suffix!r}; use .jsonl, .csv, .mcap, .rrd or a "
-            f"directory path without suffix (ROS 2 bag)"
-        )
+    cls = writer_class(path)
     if options and cls is not Ros2BagWriter:
         raise ParameterError(f"{path}: options {sorted(options)} apply only to ROS 2 bag output")
     return cls(path, meta=meta, frame=frame, overwrite=overwrite, **options)

@@ -310,7 +310,7 @@ class Ros2BagWriter(ResultWriter):
             table = ExtractionTable.concatenate(
                 [f.extraction for f in features], table.method, table.params
             )
-        records = json_records(indices, scans, table)
+        records = json_records(indices, scans, table, self.frame)
         return [
             message
             for scan_features, record in zip(features, records, strict=True)

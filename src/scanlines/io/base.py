@@ -131,6 +131,12 @@ class LogReader(ABC):
         self.scan_count: int | None = None
 
     @property
+    def notes(self) -> list[str]:
+        """What the reader had to decide about the file (a damaged index read past, a
+        no-return code found): one sentence each, for ``info`` and ``run``'s summary."""
+        return []
+
+    @property
     def recorded_mounting(self) -> tuple[float, float, float] | None:
         """See the class docstring; ``None`` for formats that record no robot pose."""
         return None
@@ -191,7 +197,7 @@ class LogReader(ABC):
         """A record of more than ``max_beams`` beams is malformed (raised before parsing it)."""
         if beams > self.max_beams:
             raise LogFormatError(
-                f"{beams} beams exceed the limit of {self.max_beams} (option max_beams)",
+                f"{beams} beams exceed the limit of {self.max_beams} (--max-beams)",
                 path=self.path,
                 record=record,
                 field=field,
@@ -241,6 +247,7 @@ class LogReader(ABC):
             "bad_scan_records": self.bad_scans,
             "bad_other_records": self.bad_other,
             "skip_reasons": dict(self.skip_reasons),
+            **({"notes": self.notes} if self.notes else {}),
         }
 
     def options(self) -> dict[str, Any]:

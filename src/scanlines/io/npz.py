@@ -7,7 +7,10 @@ Keys
 ``angle_min``, ``angle_increment``
     Radians; a scalar or one value per scan (shape ``S``). Required.
 ``range_min``, ``range_max``
-    Optional, scalar or per scan (default 0 and infinity).
+    Optional, scalar or per scan (default 0 and infinity). Without ``range_max`` (and
+    without ``valid``), a largest range held by at least 1 % of all beams is taken for a
+    no-return code (the SICK LMS writes 81.83 m, say), not a wall: those beams read as no
+    return, and :attr:`NpzReader.notes` says so. A ``range_max`` key decides instead.
 ``timestamps`` or ``timestamp``
     Optional, shape ``S`` (or scalar for one scan), seconds; ``NaN`` -> ``None``.
 ``poses`` or ``pose``, else ``odom_pose``
@@ -58,6 +61,9 @@ _TIMESTAMP_KEYS = ("timestamps", "timestamp")
 _POSE_KEYS = ("poses", "pose", "odom_pose")
 _SCALAR_KEYS = ("angle_min", "angle_increment", "range_min", "range_max")
 _DEFAULTS = {"range_min": 0.0, "range_max": math.inf}
+#: Without ``range_max``: the share of all beams at the largest range that makes it a
+#: no-return code.
+NO_RETURN_SHARE = 0.01
 
 
 #: Largest ratio of uncompressed to compressed size deflate can reach (about 1032);
@@ -126,6 +132,45 @@ class NpzReader(LogReader):
         self.headers = self._read_headers()
         self.n_scans, self.n_beams = self._check_layout()
         self._verify_data()
+        #: Without ``range_max``: the no-return code found in ``ranges`` (else None).
+        self.no_return_code: float | None = None
+        self._code_beams = 0
+        if "range_max" not in self.headers and "valid" not in self.headers:
+            self.no_return_code, self._code_beams = self._find_no_return_code()
+
+    def _find_no_return_code(self) -> tuple[float | None, int]:
+        """The largest finite range, when at least :data:`NO_RETURN_SHARE` of all beams
+        hold exactly it (a saturation code, not a measurement); and how many do."""
+        top, count = -math.inf, 0
+        with self._open_zip() as archive:
+            rows = self._rows(archive, "ranges")
+            for _ in range(self.n_scans):
+                row = np.asarray(next(rows), dtype=np.float64)
+                finite = row[np.isfinite(row)]
+                if not finite.size:
+                    continue
+                high = float(finite.max())
+                if high > top:
+                    top, count = high, 0
+                if high == top:
+                    count += int(np.count_nonzero(finite == top))
+            rows.close()
+        total = self.n_scans * self.n_beams
+        if count >= 2 and count >= NO_RETURN_SHARE * total and top > 0:
+            return top, count
+        return None, 0
+
+    @property
+    def notes(self) -> list[str]:
+        """The no-return code read as no return, if one was found."""
+        if self.no_return_code is None:
+            return []
+        share = self._code_beams / max(self.n_scans * self.n_beams, 1)
+        return [
+            f"no range_max key: {self._code_beams} beams ({share:.1%}) at exactly "
+            f"{self.no_return_code:g} m, the largest range, are read as no return (a "
+            "no-return code such as the SICK 81.83 m); a range_max key in the archive decides"
+        ]
 
     # -- layout ---------------------------------------------------------------------------
 
@@ -231,6 +276,7 @@ class NpzReader(LogReader):
             "beams": self.n_beams,
             "keys": used,
             "ignored_keys": sorted(set(self.headers) - set(used)),
+            **({"no_return_code": self.no_return_code} if self.no_return_code else {}),
         }
 
     # -- streaming ------------------------------------------------------------------------
@@ -327,6 +373,8 @@ class NpzReader(LogReader):
         pose = _first_present(row, _POSE_KEYS)
         pose_ok = pose is not None and bool(np.isfinite(pose).all())
         scalars = {k: float(row[k]) if k in row else _DEFAULTS[k] for k in _SCALAR_KEYS}
+        if self.no_return_code is not None:  # the code is no return: just below it is
+            scalars["range_max"] = float(np.nextafter(self.no_return_code, 0.0))
         try:
             return Scan(
                 ranges,

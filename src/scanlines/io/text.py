@@ -119,7 +119,7 @@ def check_record_size(
     if separators > max_fields:
         raise LogFormatError(
             f"about {separators} fields, over the limit of {max_fields} for scans of at most "
-            "max_beams beams (option max_beams)",
+            "--max-beams beams",
             path=path,
             record=record,
         )

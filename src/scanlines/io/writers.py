@@ -43,15 +43,20 @@ Record layouts
 --------------
 JSON Lines: ``{"scan", "timestamp", "pose", "segments": [{"first", "last",
 "start", "end", "rho", "alpha", "n_points", "rms", "covariance", "start_kind",
-"end_kind"}], "breakpoints", "corners"}``, where ``scan`` is the record index in the
-log, breakpoints and corners are beam indices, ``covariance`` is the 2 x 2
+"end_kind"}], "breakpoints", "corners", "breakpoint_xy", "corner_xy"}``, where ``scan``
+is the record index in the log, breakpoints and corners are beam indices and
+``breakpoint_xy``/``corner_xy`` their points ``[x, y]`` in the output frame, in the same
+order (``[null, null]`` for a beam without a return), ``covariance`` is the 2 x 2
 covariance of ``(rho, alpha)`` as ``[[var_rho, cov], [cov, var_alpha]]``, the kinds
 say what ends the segment (:data:`scanlines.extraction.END_KINDS`), and missing or
 non-finite numbers are ``null``.
 
 CSV columns: ``scan,timestamp,first,last,start_x,start_y,end_x,end_y,rho,alpha,n_points,rms,
-var_rho,cov_rho_alpha,var_alpha,start_kind,end_kind``; missing or non-finite values
-are empty cells. A scan without segments writes no row.
+var_rho,cov_rho_alpha,var_alpha,start_kind,end_kind,pose_x,pose_y,pose_theta,feature,beam,x,y``.
+Per scan, one row per segment (``feature`` ``segment``, ``beam``, ``x``, ``y`` empty), then
+one per breakpoint and per corner (``feature`` ``breakpoint`` or ``corner``, the beam and
+its point in the output frame, the segment cells empty); the scan's pose on every row;
+missing or non-finite values are empty cells. A scan without features writes no row.
 
 ROS 2 (``rosbags.rosbag2.Writer``, ``Stores.ROS2_HUMBLE`` types), per scan,
 stamped with the scan time (``index * 0.1`` s when the scan has none):
@@ -87,7 +92,8 @@ from __future__ import annotations
 import json
 import os
 from abc import ABC, abstractmethod
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from functools import cached_property
 from pathlib import Path
 from types import TracebackType
@@ -96,7 +102,7 @@ from typing import Any, ClassVar, Literal, Self
 import numpy as np
 import orjson
 
-from scanlines.errors import ParameterError
+from scanlines.errors import ParameterError, describe
 from scanlines.extraction import (
     ALPHA,
     END_KINDS,
@@ -111,7 +117,7 @@ from scanlines.extraction import (
 )
 from scanlines.io.transform import points_to_world, to_world
 from scanlines.json_values import jsonable
-from scanlines.outputs import check_output, commit, discard, temp_path, umask
+from scanlines.outputs import OutputError, check_output, commit, discard, temp_path, umask
 from scanlines.scan import Scan
 
 __all__ = [
@@ -146,6 +152,13 @@ CSV_COLUMNS = (
     "var_alpha",
     "start_kind",
     "end_kind",
+    "pose_x",
+    "pose_y",
+    "pose_theta",
+    "feature",
+    "beam",
+    "x",
+    "y",
 )
 #: Bag time step used for scans without a timestamp (seconds per record index).
 UNSTAMPED_PERIOD = 0.1
@@ -202,6 +215,21 @@ class ScanFeatures:
         return points if self.frame == "sensor" else points_to_world(points, self.scan.pose)
 
 
+def beam_xy(scan: Scan, beams: np.ndarray, frame: Frame = "sensor") -> np.ndarray:
+    """``K x 2`` positions of the beams ``beams`` (a breakpoint or corner list), aligned
+    with it: NaN for a beam without a return; in the world frame with ``frame="world"``."""
+    beams = np.asarray(beams, dtype=np.intp)
+    points = np.full((len(beams), 2), np.nan)
+    inside = (beams >= 0) & (beams < len(scan))
+    chosen = beams[inside]
+    r = np.where(scan.valid[chosen], scan.ranges[chosen], np.nan)
+    angles = scan.angle_min + scan.angle_increment * chosen.astype(np.float64)
+    points[inside] = np.column_stack((r * np.cos(angles), r * np.sin(angles)))
+    if frame == "world" and scan.pose is not None:
+        points = points_to_world(points, scan.pose)
+    return points
+
+
 def _beam_points(scan: Scan, indices: np.ndarray) -> np.ndarray:
     """Points of the beams ``indices`` that have a return (rows of ``scan.points``)."""
     indices = np.asarray(indices, dtype=np.intp)
@@ -215,10 +243,14 @@ def _beam_points(scan: Scan, indices: np.ndarray) -> np.ndarray:
 
 
 def json_records(
-    indices: Sequence[int], scans: Sequence[Scan], table: ExtractionTable
+    indices: Sequence[int],
+    scans: Sequence[Scan],
+    table: ExtractionTable,
+    frame: Frame = "sensor",
 ) -> list[dict[str, Any]]:
     """The JSON Lines records (the module docstring) of a chunk of scans and their
-    features (in the output frame); non-finite numbers are left to the encoder (null)."""
+    features (in the output frame ``frame``); non-finite numbers are left to the encoder
+    (null)."""
     lines = table.lines
     columns = (
         table.first.tolist(),
@@ -267,39 +299,49 @@ def json_records(
     records = []
     for k, (index, scan) in enumerate(zip(indices, scans, strict=True)):
         segments = every_segment[segment_offsets[k] : segment_offsets[k + 1]]
+        scan_breakpoints = breakpoints[breakpoint_offsets[k] : breakpoint_offsets[k + 1]]
+        scan_corners = corners[corner_offsets[k] : corner_offsets[k + 1]]
         records.append(
             {
                 "scan": int(index),
                 "timestamp": scan.timestamp,
                 "pose": None if scan.pose is None else [float(v) for v in scan.pose],
                 "segments": segments,
-                "breakpoints": breakpoints[breakpoint_offsets[k] : breakpoint_offsets[k + 1]],
-                "corners": corners[corner_offsets[k] : corner_offsets[k + 1]],
+                "breakpoints": scan_breakpoints,
+                "corners": scan_corners,
+                "breakpoint_xy": beam_xy(scan, scan_breakpoints, frame).tolist(),
+                "corner_xy": beam_xy(scan, scan_corners, frame).tolist(),
             }
         )
     return records
 
 
 def encode_json_lines(
-    indices: Sequence[int], scans: Sequence[Scan], table: ExtractionTable
+    indices: Sequence[int], scans: Sequence[Scan], table: ExtractionTable, frame: Frame = "sensor"
 ) -> bytes:
     """The JSON Lines text of a chunk (:func:`json_records`), UTF-8, one line per scan.
 
     orjson writes NaN and infinities as ``null`` and each float in its shortest
     round-trip form."""
-    return b"".join(orjson.dumps(r) + b"\n" for r in json_records(indices, scans, table))
+    records = json_records(indices, scans, table, frame)
+    return b"".join(orjson.dumps(r) + b"\n" for r in records)
 
 
 def json_record(features: ScanFeatures) -> str:
     """The JSON Lines record of one scan (the module docstring), without the newline."""
     extraction = features.extraction
     table = ExtractionTable.concatenate([extraction], extraction.method, extraction.params)
-    return orjson.dumps(json_records([features.index], [features.scan], table)[0]).decode()
+    records = json_records([features.index], [features.scan], table, features.frame)
+    return orjson.dumps(records[0]).decode()
 
 
-def encode_csv_rows(indices: Sequence[int], scans: Sequence[Scan], table: ExtractionTable) -> bytes:
-    """The CSV rows (:data:`CSV_COLUMNS`) of a chunk, UTF-8: one per segment, numbers as
-    in JSON Lines, empty cells for missing or non-finite values."""
+def encode_csv_rows(
+    indices: Sequence[int], scans: Sequence[Scan], table: ExtractionTable, frame: Frame = "sensor"
+) -> bytes:
+    """The CSV rows (:data:`CSV_COLUMNS`) of a chunk, UTF-8: per scan, one row per
+    segment (``feature`` ``segment``), then one per breakpoint and per corner (``beam``,
+    ``x``, ``y``, the segment cells empty); numbers as in JSON Lines, empty cells for
+    missing or non-finite values; the scan's pose on every row."""
     numbers = np.column_stack(
         (
             table.lines[:, [START_X, START_Y, END_X, END_Y, RHO, ALPHA]],
@@ -310,13 +352,27 @@ def encode_csv_rows(indices: Sequence[int], scans: Sequence[Scan], table: Extrac
     ).tolist()
     stamps = [scan.timestamp for scan in scans]
     first, last, n_points = table.first.tolist(), table.last.tolist(), table.n_points.tolist()
-    kinds = [f"{END_KINDS[a]},{END_KINDS[b]}\n".encode() for a, b in table.end_kinds.tolist()]
+    kinds = [f"{END_KINDS[a]},{END_KINDS[b]}".encode() for a, b in table.end_kinds.tolist()]
+    segment_offsets = table.offsets["segments"].tolist()
+    no_segment = b"," * 14  # first .. end_kind, empty
     rows = []
-    for j, k in enumerate(table.segment_scan.tolist()):
-        values = numbers[j]
-        values[6] = n_points[j]
-        cells = orjson.dumps([indices[k], stamps[k], first[j], last[j], *values])[1:-1]
-        rows.append(cells + b"," + kinds[j])
+    for k, scan in enumerate(scans):
+        pose = list(scan.pose) if scan.pose is not None else [None] * 3
+        tail = orjson.dumps(pose)[1:-1]
+        for j in range(segment_offsets[k], segment_offsets[k + 1]):
+            values = numbers[j]
+            values[6] = n_points[j]
+            cells = orjson.dumps([indices[k], stamps[k], first[j], last[j], *values])[1:-1]
+            rows.append(cells + b"," + kinds[j] + b"," + tail + b",segment,,,\n")
+        head = orjson.dumps([indices[k], stamps[k]])[1:-1]
+        for kind in ("breakpoints", "corners"):
+            start, stop = table.offsets[kind][k], table.offsets[kind][k + 1]
+            beams = table.columns[kind][start:stop]
+            for beam, (x, y) in zip(
+                beams.tolist(), beam_xy(scan, beams, frame).tolist(), strict=True
+            ):
+                event = orjson.dumps([kind[:-1], beam, x, y])[1:-1].replace(b'"', b"")
+                rows.append(head + b"," + no_segment + b"," + tail + b"," + event + b"\n")
     return b"".join(rows).replace(b"null", b"")
 
 
@@ -380,7 +436,8 @@ class ResultWriter(ABC):
             The features, in the sensor frame.
         """
         self._check_open()
-        self._write(ScanFeatures(index, scan, extraction, self.frame))
+        with self._naming_the_output():
+            self._write(ScanFeatures(index, scan, extraction, self.frame))
         self._count(extraction, 1, len(extraction), extraction.breakpoints, extraction.corners)
 
     def encode_chunk(
@@ -405,13 +462,25 @@ class ResultWriter(ABC):
             for index, scan, extraction in zip(indices, scans, table, strict=True):
                 self.write(index, scan, extraction)
             return
-        self._write_encoded(encoded)
+        with self._naming_the_output():
+            self._write_encoded(encoded)
         first = table[0] if len(table) else None
         self._count(first, len(table), len(table.first), table.breakpoints, table.corners)
 
     def _check_open(self) -> None:
         if self._closed:
             raise ValueError(f"{self.path}: writer is closed")
+
+    @contextmanager
+    def _naming_the_output(self) -> Iterator[None]:
+        """An OS error while writing (a full disk, a file size limit) as an
+        :class:`OutputError` naming the output."""
+        try:
+            yield
+        except OutputError:
+            raise
+        except OSError as exc:
+            raise OutputError(f"{self.path}: cannot write the output ({describe(exc)})") from None
 
     def _count(self, first: Extraction | None, scans: int, segments: int, breakpoints, corners):
         if self._first_extraction is None:
@@ -440,8 +509,9 @@ class ResultWriter(ABC):
         self._closed = True
         meta_temporary = temp_path(self.meta_path)
         try:
-            self._finish()
-            _write_json(meta_temporary, self._meta_document())
+            with self._naming_the_output():
+                self._finish()
+                _write_json(meta_temporary, self._meta_document())
             commit(
                 [(self._temporary, self.path), (meta_temporary, self.meta_path)],
                 overwrite=self.overwrite,
@@ -542,7 +612,7 @@ class _TextFileWriter(ResultWriter):
     def _write(self, features: ScanFeatures) -> None:
         extraction = features.extraction
         table = ExtractionTable.concatenate([extraction], extraction.method, extraction.params)
-        self._handle.write(self._encode([features.index], [features.scan], table))
+        self._handle.write(self._encode([features.index], [features.scan], table, self.frame))
 
     def encode_chunk(self, indices, scans, table) -> str | bytes:
         if self.frame == "world":
@@ -553,13 +623,13 @@ class _TextFileWriter(ResultWriter):
             table = ExtractionTable.concatenate(
                 [f.extraction for f in features], table.method, table.params
             )
-        return self._encode(indices, scans, table)
+        return self._encode(indices, scans, table, self.frame)
 
     def _write_encoded(self, encoded: str | bytes) -> None:
         self._handle.write(encoded)
 
     @staticmethod
-    def _encode(indices, scans, table) -> str | bytes:
+    def _encode(indices, scans, table, frame) -> str | bytes:
         raise NotImplementedError
 
     @property
