@@ -195,6 +195,26 @@ def test_world_view_moves_the_features_by_the_poses():
     assert np.isfinite(world["segments"]).all()
 
 
+FIXTURES = Path(__file__).parent / "io" / "fixtures"
+
+
+@pytest.mark.parametrize(
+    ("path", "options", "note"),
+    [
+        (sample("intel"), None, "poses as recorded in the log (may be raw odometry)"),
+        (FIXTURES / "carmen_new_formats.log", {"message": "RAWLASER1"},
+         "poses: raw odometry (the log's ODOM records)"),
+        (FIXTURES / "intel_every5th_rows1098-1109.npz", None,
+         "poses: raw odometry (the file's odom_pose)"),
+    ],
+)  # fmt: skip
+def test_the_log_says_which_poses_the_world_view_stands_on(path, options, note):
+    with ScanStore(path, options) as store:
+        store.wait_for(10**9, timeout=60)
+        assert store.finished
+        assert ViewerSession(store).log()["poses_note"] == note
+
+
 # -- the JSON API --------------------------------------------------------------------------
 
 

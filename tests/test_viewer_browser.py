@@ -237,3 +237,170 @@ def test_a_malformed_record_stops_reading_with_a_message_on_the_page(browser):
         assert "line 3" in state.inner_text()
         assert page.evaluate("window.viewer.stats.drawn.index") == 0
         page.close()
+
+
+# -- controls, legend and layout ----------------------------------------------------------
+
+#: Canvas pixels that are drawn on (not transparent), in view A.
+INKED_PIXELS = """() => {
+  const canvas = document.querySelector('#view-0 canvas');
+  const data = canvas.getContext('2d').getImageData(0, 0, canvas.width, canvas.height).data;
+  let inked = 0;
+  for (let i = 3; i < data.length; i += 4) if (data[i] > 0) inked += 1;
+  return inked;
+}"""
+
+
+def layer_box(page, layer: str):
+    return page.locator(f'#layers input[data-layer="{layer}"]')
+
+
+@pytest.mark.parametrize(
+    "layer", ["returns", "segments", "breakpoints", "corners", "outliers", "sensor"]
+)
+def test_each_layer_can_be_switched_off_and_on(page, layer):
+    drawn = page.evaluate("window.viewer.stats.drawn")
+    assert drawn["layers"][layer] > 0, drawn
+    inked = page.evaluate(INKED_PIXELS)
+    layer_box(page, layer).uncheck()
+    drawn = page.evaluate("window.viewer.stats.drawn")
+    assert drawn["layers"][layer] == 0
+    assert all(n > 0 for name, n in drawn["layers"].items() if name != layer), drawn
+    assert page.evaluate(INKED_PIXELS) < inked
+    assert page.locator(f'#legend li[data-layer="{layer}"]').count() == 0
+    layer_box(page, layer).check()
+    assert page.evaluate("window.viewer.stats.drawn")["layers"][layer] > 0
+    assert page.evaluate(INKED_PIXELS) == inked
+
+
+def test_the_legend_shows_the_symbol_each_layer_is_drawn_with(page):
+    drawn_shapes = page.evaluate("window.viewer.stats.drawn.shapes")
+    assert drawn_shapes == {
+        "breakpoints": "circle", "corners": "diamond", "outliers": "cross", "sensor": "arrow",
+    }  # fmt: skip
+    legend = {}
+    for entry in page.locator("#legend li").all():
+        shape = entry.locator("svg").get_attribute("data-shape")
+        legend.setdefault(entry.get_attribute("data-layer"), []).append(shape)
+    for layer, shape in drawn_shapes.items():
+        assert shape in legend[layer], (layer, legend)
+    # the legend's icons are those shapes: a cross of two strokes, a four-cornered diamond
+    assert page.locator('#legend li[data-layer="outliers"] svg path').count() == 1
+    corner = page.locator('#legend li[data-layer="corners"] svg polygon').get_attribute("points")
+    assert len(corner.split()) == 4
+    assert "sensor pose" in page.locator("#legend").inner_text()
+
+
+def test_the_fit_button_and_a_double_click_bring_back_the_initial_view(page):
+    initial = page.evaluate("window.viewer.state.transform")
+    canvas = page.locator("#view-0 canvas")
+    box = canvas.bounding_box()
+    page.mouse.move(box["x"] + 40, box["y"] + 60)
+    for _ in range(8):
+        page.mouse.wheel(0, 600)  # zoom far out, off centre
+    page.mouse.move(box["x"] + 200, box["y"] + 200)
+    page.mouse.down()
+    page.mouse.move(box["x"] + 500, box["y"] + 400, steps=5)  # and pan away
+    page.mouse.up()
+    moved = page.evaluate("window.viewer.state.transform")
+    assert moved["scale"] < initial["scale"] / 5
+    assert page.locator("#fit").is_visible()
+    assert "double-click" in page.locator("#view-tools").inner_text()
+    page.locator("#fit").click()
+    assert page.evaluate("window.viewer.state.transform") == pytest.approx(initial)
+    page.mouse.move(box["x"] + 40, box["y"] + 60)
+    page.mouse.wheel(0, 900)
+    assert page.evaluate("window.viewer.state.transform")["scale"] < initial["scale"]
+    canvas.dblclick(position={"x": 30, "y": 30})
+    assert page.evaluate("window.viewer.state.transform") == pytest.approx(initial)
+
+
+@pytest.fixture
+def small_page(browser, intel_server):
+    """The page in a 1280 x 800 window."""
+    context = browser.new_context(viewport={"width": 1280, "height": 800})
+    page = context.new_page()
+    page.goto(intel_server.url)
+    page.wait_for_function(FEATURES_DRAWN)
+    yield page
+    context.close()
+
+
+def within_window(box: dict, width: int = 1280, height: int = 800) -> bool:
+    return (
+        box["x"] >= 0 and box["y"] >= 0
+        and box["x"] + box["width"] <= width + 0.5 and box["y"] + box["height"] <= height + 0.5
+    )  # fmt: skip
+
+
+@pytest.mark.parametrize("layout", ["overlay", "side"])
+def test_configuration_b_fits_a_1280_by_800_window(small_page, layout):
+    page = small_page
+    before = frames(page)
+    page.locator("#compare").check()
+    redrawn(page, before)
+    before = frames(page)
+    page.locator("#compare-mode").select_option(layout)
+    if layout != "overlay":
+        redrawn(page, before)
+    config_b = page.locator("#config-1")
+    assert config_b.is_visible()
+    for element in ("#config-0", "#config-1", "#view-0", "#legend", "#panel"):
+        box = page.locator(element).bounding_box()
+        assert within_window(box), (element, box)
+    assert box["height"] > 150  # B's panel is not squeezed to nothing
+    assert page.locator("#config-1 .method").is_visible()
+    if layout == "side":
+        assert within_window(page.locator("#view-1").bounding_box())
+    # the page itself does not scroll: nothing is below or beside the window
+    size = page.evaluate(
+        "[document.documentElement.scrollWidth, document.documentElement.scrollHeight]"
+    )
+    assert size == [1280, 800]
+    ARTIFACTS.mkdir(exist_ok=True)
+    page.screenshot(path=ARTIFACTS / f"viewer-1280x800-compare-{layout}.png")
+
+
+def relative_luminance(colour: str) -> float:
+    channels = [int(colour[k : k + 2], 16) / 255 for k in (1, 3, 5)]
+    linear = [c / 12.92 if c <= 0.03928 else ((c + 0.055) / 1.055) ** 2.4 for c in channels]
+    return 0.2126 * linear[0] + 0.7152 * linear[1] + 0.0722 * linear[2]
+
+
+def test_axis_labels_are_readable(page):
+    font = page.evaluate("document.querySelector('#view-0 canvas').getContext('2d').font")
+    assert float(font.split("px")[0]) >= 12, font
+    colour = page.evaluate("window.viewer.stats.axis.colour")
+    if len(colour) == 4:  # #rgb
+        colour = "#" + "".join(c * 2 for c in colour[1:])
+    contrast = 1.05 / (relative_luminance(colour) + 0.05)  # against the white canvas
+    assert contrast >= 4.5, (colour, contrast)
+
+
+def test_the_speed_control_sets_the_playback_interval(page):
+    speeds = page.locator("#speed option").evaluate_all("options => options.map(o => o.value)")
+    assert speeds == ["1", "5", "10", "20", "50"]
+    page.locator("#speed").select_option("1")
+    page.locator("#play").click()
+    assert page.evaluate("window.viewer.state.playInterval") == 1000
+    page.wait_for_timeout(1500)
+    assert page.evaluate("window.viewer.state.index") <= 2  # at 1 scan/s: not 10 scans/s
+    page.locator("#speed").select_option("50")  # while playing: at once
+    assert page.evaluate("window.viewer.state.playInterval") == 20
+    page.wait_for_function("window.viewer.state.index >= 10", timeout=20_000)
+    page.locator("#play").click()
+    assert page.locator("#play").inner_text() == "Play"
+
+
+def test_world_view_says_which_poses_it_shows(page):
+    assert page.locator("#pose-note").is_hidden()
+    page.wait_for_function("window.viewer.state.log.finished")
+    before = frames(page)
+    page.locator("#world-radio").check()
+    redrawn(page, before)
+    note = page.locator("#pose-note")
+    assert note.is_visible()
+    # the Intel excerpt's FLASER poses: the reader cannot tell corrected from odometry
+    assert note.inner_text() == "poses as recorded in the log (may be raw odometry)"
+    page.locator('input[name=view][value="scan"]').check()
+    assert note.is_hidden()

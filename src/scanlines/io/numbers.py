@@ -69,10 +69,14 @@ def number_fields(line: str) -> NumberFields | None:
 
 def _kernels() -> ModuleType | None:
     """:mod:`scanlines.io._number_kernels` once numba is loaded and compiling, else ``None``."""
-    kernels = sys.modules.get("scanlines.io._number_kernels")
-    if kernels is None and "numba" in sys.modules:
-        from scanlines._jit import COMPILED
+    # The import statement, not sys.modules: another thread may be running the module's
+    # body still, and the statement waits for it where sys.modules would give it half done.
+    if "numba" not in sys.modules:
+        return None
+    from scanlines._jit import COMPILED
 
-        if COMPILED:
-            import scanlines.io._number_kernels as kernels
+    if not COMPILED:
+        return None
+    import scanlines.io._number_kernels as kernels
+
     return kernels

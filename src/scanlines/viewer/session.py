@@ -126,6 +126,7 @@ class ViewerSession:
             "path": str(store.path), "name": store.path.name, "format": store.format_name,
             "scans": store.count, "finished": store.finished, "error": store.error,
             "poses": store.with_pose, "reader": store.reader_info if store.finished else {},
+            "poses_note": poses_note(store.reader_info) if store.with_pose else None,
             "profile": self._profile_note, "config": self.config.to_dict(),
             "ready": self.ready.is_set(),
         }  # fmt: skip
@@ -267,3 +268,16 @@ def _mark_differences(a: dict[str, Any], b: dict[str, Any]) -> None:
             mine[f"differing_{events}"] = [
                 int(beam) for beam in np.asarray(mine[events]).tolist() if beam not in other
             ]
+
+
+def poses_note(reader_info: dict[str, Any]) -> str:
+    """Which poses the world view draws, as far as the reader says: raw odometry when the
+    log's records are known to hold it, else the poses as the log records them (a
+    CARMEN ``FLASER`` or a bag cannot tell corrected poses from odometry)."""
+    message = str(reader_info.get("message") or "")
+    keys = reader_info.get("keys") or []
+    if message.startswith("RAWLASER"):
+        return "poses: raw odometry (the log's ODOM records)"
+    if "odom_pose" in keys:
+        return "poses: raw odometry (the file's odom_pose)"
+    return "poses as recorded in the log (may be raw odometry)"

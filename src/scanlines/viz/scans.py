@@ -19,6 +19,19 @@ __all__ = ["SEGMENT_COLOURS", "plot_extraction", "plot_grid"]
 SEGMENT_COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd", "#8c564b", "#e377c2", "#17becf")
 """Colours of consecutive segments (matplotlib's tab10 without red, grey and olive)."""
 
+EVENT_MARKERS = {
+    "breakpoints": ("^", "#d62728"),
+    "corners": ("s", "#000000"),
+    "outliers": ("x", "#bcbd22"),
+}
+"""The marker and colour of each kind of point feature, in a panel and in the legend."""
+
+SENSOR_MARKER = (3, 0, -90)
+"""The sensor at the origin: a triangle pointing along x."""
+
+LEGEND_LABELS = ("returns", "segments", "breakpoints", "corners", "outliers", "sensor")
+"""The entries of a grid's legend, in order."""
+
 
 def plot_extraction(
     scan: Scan,
@@ -47,10 +60,13 @@ def plot_extraction(
             zorder=2,
             label="segments" if k == 0 else None,
         )
-    _events(ax, points, extraction.breakpoints, "^", "#d62728", "breakpoints")
-    _events(ax, points, extraction.corners, "s", "#000000", "corners")
-    _events(ax, points, extraction.outliers, "x", "#bcbd22", "outliers")
-    ax.plot([0], [0], marker=(3, 0, -90), ms=12, c="k", ls="none", label="sensor")
+    for name, beams in (
+        ("breakpoints", extraction.breakpoints),
+        ("corners", extraction.corners),
+        ("outliers", extraction.outliers),
+    ):
+        _events(ax, points, beams, *EVENT_MARKERS[name], name)
+    ax.plot([0], [0], marker=SENSOR_MARKER, ms=12, c="k", ls="none", label="sensor")
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
@@ -100,5 +116,30 @@ def plot_grid(
         plot_extraction(scan, extraction, ax, title=title, legend=False)
     for ax in list(axes.flat)[len(items) :]:
         ax.axis("off")
-    fig.tight_layout()
+    fig.legend(
+        handles=legend_handles(), loc="upper center", ncols=len(LEGEND_LABELS), fontsize=9,
+        frameon=False, bbox_to_anchor=(0.5, 1.0),
+    )  # fmt: skip
+    legend_height = 0.35 / (size * rows)  # inches of the legend row, as a figure fraction
+    fig.tight_layout(rect=(0, 0, 1, 1 - legend_height))
     return fig
+
+
+def legend_handles() -> list:
+    """One legend entry per kind drawn in a panel, styled as the panels draw it: a grid
+    has one legend for all its panels (a panel may have no corners, the legend still does)."""
+    from matplotlib.lines import Line2D
+
+    handles = [
+        Line2D([], [], marker="o", ms=4, c="0.6", ls="none", label="returns"),
+        Line2D([], [], lw=2.2, c=SEGMENT_COLOURS[0], label="segments"),
+    ]
+    for name in ("breakpoints", "corners", "outliers"):
+        marker, colour = EVENT_MARKERS[name]
+        handles.append(
+            Line2D(
+                [], [], marker=marker, ms=7, mfc="none", mec=colour, mew=1.6, ls="none", label=name
+            )
+        )
+    handles.append(Line2D([], [], marker=SENSOR_MARKER, ms=12, c="k", ls="none", label="sensor"))
+    return handles

@@ -4,13 +4,21 @@
 
 const $ = (selector) => document.querySelector(selector);
 const COLOURS = { returns: "#3c4043", breakpoint: "#f29900", corner: "#d93025",
-                  outlier: "#202124", difference: "rgba(233, 30, 160, 0.45)", path: "#1a73e8" };
+                  outlier: "#202124", difference: "rgba(233, 30, 160, 0.45)", path: "#1a73e8",
+                  axis: "#444" };
+// The marks of the point features: the canvas and the legend draw them from this table.
+const MARKS = [["breakpoints", COLOURS.breakpoint, "circle"], ["corners", COLOURS.corner, "diamond"],
+               ["outliers", COLOURS.outlier, "cross"]];
+const LAYERS = ["returns", "segments", "breakpoints", "corners", "outliers", "sensor"];
+const AXIS_FONT_PX = 12;
 
 const state = {
   log: null, methods: new Map(), panels: [], index: 0, frame: null, world: null,
   view: "scan", compare: false, layout: "overlay", selected: null,
   transform: null,       // {scale: pixels per metre, x, y: screen position of the origin}
   requested: 0, drawn: 0, inputTime: null, playing: null,
+  layers: new Set(LAYERS),  // the layers drawn (the checkboxes under "Layers")
+  speed: 10,                // playback, scans per second
 };
 // Read by the tests and the latency benchmark: input-to-redraw times, in milliseconds.
 const stats = { latencies: [], frames: 0, drawn: null };
@@ -286,10 +294,12 @@ function draw() {
     if (!state.transform) fit(width, height);
     drawGrid(context, width, height);
   }
+  stats.axis = { fontPx: AXIS_FONT_PX, colour: COLOURS.axis };
   if (state.view === "world") return drawWorld(list[0].getContext("2d"));
   const frame = state.frame;
   if (!frame) return;
-  stats.drawn = { index: frame.index, segments: frame.results.map(() => 0), differences: 0 };
+  stats.drawn = { index: frame.index, segments: frame.results.map(() => 0), differences: 0,
+                  layers: Object.fromEntries(LAYERS.map((layer) => [layer, 0])), shapes: {} };
   const results = frame.results;
   list.forEach((canvas, k) => {
     const context = canvas.getContext("2d");
@@ -326,12 +336,12 @@ function drawGrid(context, width, height) {
   const step = steps.find((s) => s * scale >= 50) || 1000;
   const [left, top] = [-state.transform.x / scale, state.transform.y / scale];
   const [right, bottom] = [left + width / scale, top - height / scale];
-  context.strokeStyle = "#eee"; context.fillStyle = "#aaa"; context.lineWidth = 1;
-  context.font = "10px sans-serif";
+  context.strokeStyle = "#e4e4e4"; context.fillStyle = COLOURS.axis; context.lineWidth = 1;
+  context.font = `${AXIS_FONT_PX}px sans-serif`;
   for (let x = Math.ceil(left / step) * step; x <= right; x += step) {
     const [sx] = toScreen(x, 0);
     context.beginPath(); context.moveTo(sx, 0); context.lineTo(sx, height); context.stroke();
-    context.fillText(`${+x.toFixed(1)} m`, sx + 2, height - 4);
+    context.fillText(`${+x.toFixed(1)} m`, sx + 2, height - 5);
   }
   for (let y = Math.ceil(bottom / step) * step; y <= top; y += step) {
     const [, sy] = toScreen(0, y);
@@ -341,11 +351,13 @@ function drawGrid(context, width, height) {
 }
 
 function drawReturns(context, xs, ys, colour = COLOURS.returns, size = 2) {
+  if (!state.layers.has("returns")) return;
   context.fillStyle = colour;
   for (let i = 0; i < xs.length; i++) {
     if (xs[i] === null || ys[i] === null) continue;
     const [sx, sy] = toScreen(xs[i], ys[i]);
     context.fillRect(sx - size / 2, sy - size / 2, size, size);
+    stats.drawn.layers.returns += 1;
   }
 }
 
@@ -353,7 +365,7 @@ const segmentColour = (k) => `hsl(${(k * 137.5) % 360}, 70%, 40%)`;
 
 function drawResult(context, frame, result, which, dashed) {
   const differing = new Set(result.differing_segments || []);
-  result.segments.forEach((segment, k) => {
+  if (state.layers.has("segments")) result.segments.forEach((segment, k) => {
     const [a, b] = [toScreen(...segment.start), toScreen(...segment.end)];
     if (differing.has(k)) {
       strokeLine(context, a, b, COLOURS.difference, 10, []);
@@ -362,11 +374,11 @@ function drawResult(context, frame, result, which, dashed) {
     stats.drawn.segments[which] += 1;
     const selected = state.selected && state.selected.which === which && state.selected.k === k;
     strokeLine(context, a, b, segmentColour(k), selected ? 5 : 2.5, dashed ? [6, 4] : []);
+    stats.drawn.layers.segments += 1;
   });
   const point = (beam) => [frame.x[beam], frame.y[beam]];
-  const marks = [["breakpoints", COLOURS.breakpoint, "circle"], ["corners", COLOURS.corner, "diamond"],
-                 ["outliers", COLOURS.outlier, "cross"]];
-  for (const [name, colour, shape] of marks) {
+  for (const [name, colour, shape] of MARKS) {
+    if (!state.layers.has(name)) continue;
     const differ = new Set(result[`differing_${name}`] || []);
     for (const beam of result[name]) {
       const [x, y] = point(beam);
@@ -374,6 +386,8 @@ function drawResult(context, frame, result, which, dashed) {
       const [sx, sy] = toScreen(x, y);
       if (differ.has(beam)) mark(context, sx, sy, COLOURS.difference, "ring");
       mark(context, sx, sy, colour, shape, dashed);
+      stats.drawn.layers[name] += 1;
+      stats.drawn.shapes[name] = shape;
     }
   }
 }
@@ -395,43 +409,65 @@ function mark(context, x, y, colour, shape, hollow = false) {
   if (hollow) context.stroke(); else context.fill();
 }
 
+// The sensor's pose as an arrow: a shaft from its position, the head where it looks.
 function drawSensor(context, pose = [0, 0, 0]) {
+  if (!state.layers.has("sensor")) return;
   const [x, y] = toScreen(pose[0], pose[1]);
-  const heading = pose[2];
-  context.fillStyle = COLOURS.path;
-  context.beginPath();
-  context.moveTo(x + 10 * Math.cos(heading), y - 10 * Math.sin(heading));
-  context.lineTo(x + 5 * Math.cos(heading + 2.4), y - 5 * Math.sin(heading + 2.4));
-  context.lineTo(x + 5 * Math.cos(heading - 2.4), y - 5 * Math.sin(heading - 2.4));
+  const [c, s] = [Math.cos(pose[2]), -Math.sin(pose[2])];
+  const at = (along, across) => [x + along * c - across * s, y + along * s + across * c];
+  context.strokeStyle = COLOURS.path; context.fillStyle = COLOURS.path; context.lineWidth = 2.5;
+  context.lineCap = "round";
+  context.beginPath(); context.moveTo(...at(0, 0)); context.lineTo(...at(12, 0)); context.stroke();
+  context.beginPath(); context.moveTo(...at(20, 0)); context.lineTo(...at(10, 6)); context.lineTo(...at(10, -6));
   context.closePath(); context.fill();
+  stats.drawn.layers.sensor += 1;
+  stats.drawn.shapes.sensor = "arrow";
 }
 
 function drawWorld(context) {
   const world = state.world;
   if (!world) return;
-  drawReturns(context, world.x, world.y, "#c7cacf", 1.5);
-  context.strokeStyle = COLOURS.path; context.lineWidth = 1;
-  context.beginPath();
-  world.path.forEach((pose, k) => { const [x, y] = toScreen(pose[0], pose[1]); k ? context.lineTo(x, y) : context.moveTo(x, y); });
-  context.stroke();
-  world.segments.forEach((s, k) => strokeLine(context, toScreen(s[0], s[1]), toScreen(s[2], s[3]), segmentColour(k), 2, []));
-  stats.drawn = { world: world.scans, segments: [world.segments.length], differences: 0 };
+  const segments = state.layers.has("segments") ? world.segments : [];
+  stats.drawn = { world: world.scans, segments: [segments.length], differences: 0,
+                  layers: Object.fromEntries(LAYERS.map((layer) => [layer, 0])), shapes: {} };
+  drawReturns(context, world.x, world.y, "#b0b4ba", 1.5);
+  if (state.layers.has("sensor")) {
+    context.strokeStyle = COLOURS.path; context.lineWidth = 1;
+    context.beginPath();
+    world.path.forEach((pose, k) => { const [x, y] = toScreen(pose[0], pose[1]); k ? context.lineTo(x, y) : context.moveTo(x, y); });
+    context.stroke();
+  }
+  segments.forEach((s, k) => strokeLine(context, toScreen(s[0], s[1]), toScreen(s[2], s[3]), segmentColour(k), 2, []));
+  stats.drawn.layers.segments = segments.length;
   drawSensor(context, world.path[world.path.length - 1]);
   drawLegend(1);
 }
 
+// The legend: one entry per layer drawn, each with the symbol the canvas draws for it.
 function drawLegend(results) {
-  const line = (colour, dash = "") => `<svg><line x1="1" y1="6" x2="21" y2="6" stroke="${colour}" stroke-width="3" stroke-dasharray="${dash}"/></svg>`;
-  const dot = (colour, r = 3) => `<svg><circle cx="11" cy="6" r="${r}" fill="${colour}"/></svg>`;
-  const items = [[dot(COLOURS.returns, 2), "returns"], [line(segmentColour(1)), state.view === "world" ? "segments" : "segments A"]];
-  if (results === 2 && state.layout === "overlay") items.push([line(segmentColour(1), "6 4"), "segments B (dashed)"]);
-  if (results === 2 && state.layout === "side") items.push([line(segmentColour(1)), "segments B (right)"]);
+  const svg = (shape, body) => `<svg data-shape="${shape}" viewBox="0 0 22 12">${body}</svg>`;
+  const line = (colour, dash = "") => svg("line", `<line x1="1" y1="6" x2="21" y2="6" stroke="${colour}" stroke-width="3" stroke-dasharray="${dash}"/>`);
+  const square = (colour, size) => svg("square", `<rect x="${11 - size / 2}" y="${6 - size / 2}" width="${size}" height="${size}" fill="${colour}"/>`);
+  const symbol = (shape, colour) => ({
+    circle: svg("circle", `<circle cx="11" cy="6" r="4" fill="${colour}"/>`),
+    diamond: svg("diamond", `<polygon points="11,1 16,6 11,11 6,6" fill="${colour}"/>`),
+    cross: svg("cross", `<path d="M8 3 L14 9 M14 3 L8 9" stroke="${colour}" stroke-width="1.5"/>`),
+  })[shape];
+  const arrow = svg("arrow", `<line x1="2" y1="6" x2="12" y2="6" stroke="${COLOURS.path}" stroke-width="2.5" stroke-linecap="round"/><polygon points="20,6 11,1.5 11,10.5" fill="${COLOURS.path}"/>`);
+  const on = (layer) => state.layers.has(layer);
+  const items = [];
+  if (on("returns")) items.push(["returns", state.view === "world" ? square("#b0b4ba", 3) : square(COLOURS.returns, 3), "returns"]);
+  if (on("segments")) {
+    items.push(["segments", line(segmentColour(1)), state.view === "world" ? "segments" : "segments A"]);
+    if (results === 2 && state.layout === "overlay") items.push(["segments", line(segmentColour(1), "6 4"), "segments B (dashed)"]);
+    if (results === 2 && state.layout === "side") items.push(["segments", line(segmentColour(1)), "segments B (right)"]);
+  }
   if (state.view === "scan") {
-    items.push([dot(COLOURS.breakpoint, 4), "breakpoints"], [dot(COLOURS.corner, 4), "corners"],
-               [dot(COLOURS.outlier, 2), "outliers"]);
-    if (results === 2) items.push([line(COLOURS.difference), "differs between A and B"]);
-  } else items.push([line(COLOURS.path), "sensor path"]);
-  $("#legend").innerHTML = items.map(([icon, text]) => `<li>${icon}${text}</li>`).join("");
+    for (const [name, colour, shape] of MARKS) if (on(name)) items.push([name, symbol(shape, colour), name]);
+    if (results === 2) items.push(["difference", line(COLOURS.difference), "differs between A and B"]);
+  } else if (on("sensor")) items.push(["sensor", line(COLOURS.path), "sensor path"]);
+  if (on("sensor")) items.push(["sensor", arrow, "sensor pose"]);
+  $("#legend").innerHTML = items.map(([layer, icon, text]) => `<li data-layer="${layer}">${icon}${text}</li>`).join("");
 }
 
 // -- facts and the selected segment ----------------------------------------------------------
@@ -524,8 +560,11 @@ function attachPointer(canvas) {
     if (drag.moved) draw();
   });
   canvas.addEventListener("pointerup", (event) => { if (drag && !drag.moved) pick(canvas, event); drag = null; });
-  canvas.addEventListener("dblclick", () => { state.transform = null; draw(); });
+  canvas.addEventListener("dblclick", fitView);
 }
+
+// Back to the initial view: the data fitted to the window (the "Fit view" button, or a double-click).
+function fitView() { state.transform = null; draw(); }
 
 function goTo(index, event) {
   const last = Math.max(0, state.log.scans - 1);
@@ -537,13 +576,22 @@ function goTo(index, event) {
   refresh(event);
 }
 
+// The time between two scans of the playback, in milliseconds (from the speed control).
+const playInterval = () => 1000 / state.speed;
+
 function togglePlay() {
   if (state.playing) { clearInterval(state.playing); state.playing = null; $("#play").textContent = "Play"; return; }
   $("#play").textContent = "Pause";
+  state.playInterval = playInterval();
   state.playing = setInterval(() => {
     if (state.index >= state.log.scans - 1) return togglePlay();
     if (state.drawn === state.requested) goTo(state.index + 1);
-  }, 100);
+  }, state.playInterval);
+}
+
+function setSpeed(speed) {
+  state.speed = speed;
+  if (state.playing) { togglePlay(); togglePlay(); }   // restart at the new interval
 }
 
 async function watchLog() {
@@ -554,6 +602,7 @@ async function watchLog() {
   $("#scan-slider").max = Math.max(0, state.log.scans - 1);
   $("#scan-index").max = Math.max(0, state.log.scans - 1);
   $("#world-radio").disabled = !state.log.poses;
+  showPoseNote();
   const notes = [`${state.log.format} log`, reading ? "reading…" : `${state.log.scans.toLocaleString()} scans`];
   if (!state.log.ready) notes.push("preparing the extractor (the first time after an install, compiling its kernels takes a minute or two)");
   else if (state.log.profile) notes.push(`sensor profile ${state.log.profile}`);
@@ -561,6 +610,14 @@ async function watchLog() {
   $("#log-state").textContent = notes.join(", ");
   if (state.log.error) showError(`reading stopped: ${state.log.error}`);
   if (reading || !state.log.ready) setTimeout(watchLog, 300);
+}
+
+// Which poses the world view stands on (corrected, or raw odometry), as the server says.
+function showPoseNote() {
+  const note = $("#pose-note");
+  note.hidden = state.view !== "world" || !state.log || !state.log.poses_note;
+  note.textContent = state.log && state.log.poses_note ? state.log.poses_note : "";
+  $("#world-radio").parentElement.title = note.textContent;
 }
 
 async function start() {
@@ -581,10 +638,23 @@ async function start() {
     $("#compare-mode").disabled = !state.compare;
     refresh(event);
   });
-  $("#compare-mode").addEventListener("change", (event) => { state.layout = event.target.value; refresh(event); });
+  $("#compare-mode").addEventListener("change", (event) => {
+    state.layout = event.target.value; state.transform = null; refresh(event);
+  });
   for (const radio of document.querySelectorAll("input[name=view]")) {
-    radio.addEventListener("change", (event) => { state.view = event.target.value; state.transform = null; refresh(event); });
+    radio.addEventListener("change", (event) => {
+      state.view = event.target.value; state.transform = null; showPoseNote(); refresh(event);
+    });
   }
+  for (const box of document.querySelectorAll("#layers input")) {
+    box.addEventListener("change", (event) => {
+      if (event.target.checked) state.layers.add(event.target.dataset.layer);
+      else state.layers.delete(event.target.dataset.layer);
+      draw();
+    });
+  }
+  $("#fit").addEventListener("click", fitView);
+  $("#speed").addEventListener("change", (event) => setSpeed(Number(event.target.value)));
   $("#world-span").addEventListener("change", (event) => refresh(event));
   document.addEventListener("keydown", (event) => {
     if (event.target.tagName === "INPUT" || event.target.tagName === "SELECT") return;
