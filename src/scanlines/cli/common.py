@@ -72,6 +72,32 @@ ProfileOption = Annotated[
 ]
 
 
+def guarded(command: F, *, show_compilation: bool = True) -> F:
+    """Turn an input error raised by ``command`` into one line on stderr and exit code 2,
+    and Ctrl-C or SIGTERM into a one-line note and exit code 130 or 143 (the interrupt's
+    notes, if any, in brackets; outputs being written are deleted on the way out); show
+    kernel compilation on stderr while it runs (:class:`CompileProgress`)."""
+
+    @functools.wraps(command)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        try:
+            with compile_progress() if show_compilation else contextlib.nullcontext():
+                return command(*args, **kwargs)
+        except (ScanlinesError, OSError, EOFError) as error:
+            print(f"scanlines: error: {error}", file=sys.stderr)
+            raise typer.Exit(INPUT_ERROR) from None
+        except (KeyboardInterrupt, Terminated, SystemError) as stop:
+            if not is_interrupt(stop):
+                raise
+            terminated = any_terminated(stop)
+            notes = "; ".join(getattr(stop, "__notes__", ()))
+            word = "terminated" if terminated else "interrupted"
+            print(f"scanlines: {word}" + (f" ({notes})" if notes else ""), file=sys.stderr)
+            raise typer.Exit(TERMINATED if terminated else INTERRUPTED) from None
+
+    return wrapper  # type: ignore[return-value]
+
+
 class CompileProgress:
     """What the user sees on stderr while kernels compile (first use after an install).
 
