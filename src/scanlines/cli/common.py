@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import functools
 import math
 import sys
 import threading
@@ -14,7 +15,8 @@ from typing import Annotated, Any, Literal, TypeVar
 import typer
 
 from scanlines.builtin_methods import BUILTIN_METHODS
-from scanlines.errors import ParameterError
+from scanlines.errors import ParameterError, ScanlinesError
+from scanlines.interrupts import Terminated, any_terminated, is_interrupt
 
 F = TypeVar("F", bound=Callable[..., Any])
 
