@@ -13,7 +13,11 @@ Lines that come to agree with each other (a wall first seen in two pieces) are m
 
 The covariance of a segment moved into the world includes the pose's own uncertainty
 (``pose_sigma_xy``, ``pose_sigma_theta``): without it, millimetre range noise makes every
-pose error of a corrected log look like a different wall.
+pose error of a corrected log look like a different wall. And since the pose errors of
+neighbouring scans are alike rather than independent, a line fused from many views is not
+known better than the poses that placed it: ``model_sigma_rho``, ``model_sigma_alpha``
+(by default the pose's own sigmas) are added to every gate's covariance, so two pieces of
+one wall, each fused from many scans, still agree.
 """
 
 from __future__ import annotations
@@ -41,8 +45,8 @@ class FusionSettings:
     min_points: int = 5
     pose_sigma_xy: float = 0.02
     pose_sigma_theta: float = math.radians(0.5)
-    model_sigma_rho: float = 0.0
-    model_sigma_alpha: float = 0.0
+    model_sigma_rho: float = 0.02
+    model_sigma_alpha: float = math.radians(0.5)
     retire_after: int = 300
     merge_every: int = 50
 
@@ -142,6 +146,7 @@ class LineMap:
         self._first = grown(get("_first"), (), np.int64)
         self._last = grown(get("_last"), (), np.int64)
         self._fused = grown(get("_fused"), (), np.int64)
+        self._box = grown(get("_box"), (4,), np.float64)  # x_min, y_min, x_max, y_max
 
     def __len__(self) -> int:
         return self._n
@@ -191,33 +196,43 @@ class LineMap:
         targets = np.full(len(lines), -1, dtype=np.int64)
         if n == 0:
             return targets
-        score = self._agreement(
-            lines[:, RHO], lines[:, ALPHA], covariances, _ends_of(lines),
-            self._rho[:n], self._alpha[:n], self._cov[:n], self._t[:n],
+        ends = _ends_of(lines)
+        seg, line = _box_pairs(_boxes(ends, self.settings.max_gap), self._box[:n])
+        if not len(seg):
+            return targets
+        d2 = self._agreement(
+            lines[seg, RHO], lines[seg, ALPHA], covariances[seg], ends[seg],
+            self._rho[line], self._alpha[line], self._cov[line], self._t[line],
         )  # fmt: skip
-        best = np.argmin(score, axis=1)
-        found = np.isfinite(score[np.arange(len(lines)), best])
-        targets[found] = best[found]
+        passed = np.isfinite(d2)
+        seg, line, d2 = seg[passed], line[passed], d2[passed]
+        order = np.lexsort((d2, seg))  # by segment, nearest first
+        seg, line = seg[order], line[order]
+        first = np.ones(len(seg), dtype=bool)
+        first[1:] = seg[1:] != seg[:-1]
+        targets[seg[first]] = line[first]
         return targets
 
     def _agreement(self, rho, alpha, cov, ends, m_rho, m_alpha, m_cov, m_t) -> np.ndarray:
-        """``S x L`` Mahalanobis distances of segments to lines, ``inf`` where a gate fails."""
-        d_alpha = _wrap(alpha[:, None] - m_alpha[None, :])
+        """Mahalanobis distances of segments to lines, pair by pair (``inf`` where a gate
+        fails): ``rho, alpha`` (P), ``cov`` (P x 2 x 2), ``ends`` (P x 2 x 2) of the segments
+        against ``m_rho, m_alpha, m_cov, m_t`` (extent along the tangent, P x 2) of the lines."""
+        d_alpha = _wrap(alpha - m_alpha)
         flip = np.abs(d_alpha) > math.pi / 2
         sign = np.where(flip, -1.0, 1.0)
-        d_rho = sign * rho[:, None] - m_rho[None, :]
+        d_rho = sign * rho - m_rho
         d_alpha = _wrap(d_alpha - np.where(flip, math.pi, 0.0))
-        s_rr = cov[:, None, 0, 0] + m_cov[None, :, 0, 0] + self.settings.model_sigma_rho**2
-        s_aa = cov[:, None, 1, 1] + m_cov[None, :, 1, 1] + self.settings.model_sigma_alpha**2
-        s_ra = sign * cov[:, None, 0, 1] + m_cov[None, :, 0, 1]
+        s_rr = cov[:, 0, 0] + m_cov[:, 0, 0] + self.settings.model_sigma_rho**2
+        s_aa = cov[:, 1, 1] + m_cov[:, 1, 1] + self.settings.model_sigma_alpha**2
+        s_ra = sign * cov[:, 0, 1] + m_cov[:, 0, 1]
         det = s_rr * s_aa - s_ra**2
         with np.errstate(divide="ignore", invalid="ignore"):
             d2 = (s_aa * d_rho**2 - 2 * s_ra * d_rho * d_alpha + s_rr * d_alpha**2) / det
         d2 = np.where(det > 0, d2, np.inf)
-        tangent = np.stack((-np.sin(m_alpha), np.cos(m_alpha)), axis=-1)  # L x 2
-        along = np.einsum("sek,lk->sle", ends, tangent)  # S x L x 2
-        lo, hi = along.min(axis=2), along.max(axis=2)
-        gap = np.maximum(lo - m_t[None, :, 1], m_t[None, :, 0] - hi)
+        tangent = np.stack((-np.sin(m_alpha), np.cos(m_alpha)), axis=-1)  # P x 2
+        along = np.einsum("pek,pk->pe", ends, tangent)  # P x 2
+        lo, hi = along.min(axis=1), along.max(axis=1)
+        gap = np.maximum(lo - m_t[:, 1], m_t[:, 0] - hi)
         ok = (d2 <= self.settings.chi2) & (gap <= self.settings.max_gap)
         return np.where(ok, d2, np.inf)
 
@@ -228,6 +243,7 @@ class LineMap:
         self._n += 1
         self._rho[k], self._alpha[k], self._cov[k] = line[RHO], line[ALPHA], cov
         self._t[k] = _extent(line[RHO], line[ALPHA], _ends_of(line[None])[0])
+        self._box[k] = _boxes(self._ends(k)[None], 0.0)[0]
         self._scans[k], self._returns[k], self._fused[k] = 1, n_points, 1
         self._first[k] = self._last[k] = scan_index
 
@@ -239,6 +255,7 @@ class LineMap:
         ends = np.vstack((self._ends(k), _ends_of(line[None])[0]))
         self._combine(k, rho, alpha, cov)
         self._t[k] = _extent(self._rho[k], self._alpha[k], ends)
+        self._box[k] = _boxes(self._ends(k)[None], 0.0)[0]
         if self._last[k] != scan_index:
             self._scans[k] += 1
         self._returns[k] += n_points
@@ -249,9 +266,9 @@ class LineMap:
 
     def _combine(self, k: int, rho: float, alpha: float, cov: np.ndarray) -> None:
         """Information-weighted mean of line ``k`` and ``(rho, alpha, cov)``."""
-        info_m = np.linalg.inv(self._cov[k])
-        info_s = np.linalg.inv(cov)
-        fused_cov = np.linalg.inv(info_m + info_s)
+        info_m = _inverse(self._cov[k])
+        info_s = _inverse(cov)
+        fused_cov = _inverse(info_m + info_s)
         mean_m = np.array([self._rho[k], self._alpha[k]])
         mean_s = np.array([rho, self._alpha[k] + _wrap(alpha - self._alpha[k])])
         mean = fused_cov @ (info_m @ mean_m + info_s @ mean_s)
@@ -264,6 +281,14 @@ class LineMap:
     def _ends(self, k: int) -> np.ndarray:
         return _points_at(self._rho[k], self._alpha[k], self._t[k])
 
+    def _all_ends(self) -> np.ndarray:
+        """``L x 2 x 2`` endpoints of every line's extent."""
+        n = self._n
+        alpha, t = self._alpha[:n], self._t[:n]
+        normal = np.stack((np.cos(alpha), np.sin(alpha)), axis=-1)
+        tangent = np.stack((-np.sin(alpha), np.cos(alpha)), axis=-1)
+        return (self._rho[:n, None] * normal)[:, None, :] + t[:, :, None] * tangent[:, None, :]
+
     # -- the map as a whole ----------------------------------------------------------------
 
     def merge_agreeing(self) -> int:
@@ -273,24 +298,28 @@ class LineMap:
             n = self._n
             if n < 2:
                 break
-            ends = np.stack([self._ends(k) for k in range(n)])
-            score = self._agreement(
-                self._rho[:n], self._alpha[:n], self._cov[:n], ends,
-                self._rho[:n], self._alpha[:n], self._cov[:n], self._t[:n],
+            ends = self._all_ends()
+            margin = np.array([-1.0, -1.0, 1.0, 1.0]) * self.settings.max_gap
+            i, j = _box_pairs(self._box[:n] + margin, self._box[:n])
+            upper = i < j
+            i, j = i[upper], j[upper]
+            d2 = self._agreement(
+                self._rho[i], self._alpha[i], self._cov[i], ends[i],
+                self._rho[j], self._alpha[j], self._cov[j], self._t[j],
             )  # fmt: skip
-            score[np.tril_indices(n)] = np.inf
-            pairs = np.argwhere(np.isfinite(score))
-            if not len(pairs):
+            passed = np.isfinite(d2)
+            if not passed.any():
                 break
-            order = np.argsort(score[pairs[:, 0], pairs[:, 1]])
+            i, j, d2 = i[passed], j[passed], d2[passed]
+            order = np.argsort(d2, kind="stable")
             used = np.zeros(n, dtype=bool)
             gone = []
-            for i, j in pairs[order]:
-                if used[i] or used[j]:
+            for a, b in zip(i[order].tolist(), j[order].tolist(), strict=True):
+                if used[a] or used[b]:
                     continue
-                used[i] = used[j] = True
-                self._absorb(int(i), int(j))
-                gone.append(int(j))
+                used[a] = used[b] = True
+                self._absorb(a, b)
+                gone.append(b)
             self._remove(np.array(gone, dtype=np.int64))
             merged += len(gone)
         return merged
@@ -304,6 +333,7 @@ class LineMap:
             cov = cov * np.array([[1.0, -1.0], [-1.0, 1.0]])
         self._combine(i, rho, alpha, cov)
         self._t[i] = _extent(self._rho[i], self._alpha[i], ends)
+        self._box[i] = _boxes(self._ends(i)[None], 0.0)[0]
         self._scans[i] += self._scans[j]  # an upper bound: both may have seen one scan
         self._returns[i] += self._returns[j]
         self._fused[i] += self._fused[j]
@@ -317,7 +347,7 @@ class LineMap:
         keep[rows] = False
         n = int(keep.sum())
         for name in ("_rho", "_alpha", "_cov", "_t", "_scans", "_returns", "_first", "_last",
-                     "_fused"):  # fmt: skip
+                     "_fused", "_box"):  # fmt: skip
             array = getattr(self, name)
             array[:n] = array[: self._n][keep]
         self._n = n
@@ -337,7 +367,7 @@ class LineMap:
         n = self._n
         floor = self.settings.min_scans if min_scans is None else min_scans
         keep = np.flatnonzero(self._scans[:n] >= floor)
-        ends = np.stack([self._ends(k) for k in keep]) if len(keep) else np.zeros((0, 2, 2))
+        ends = self._all_ends()[keep]
         return MapLines(
             rho=self._rho[keep].copy(),
             alpha=self._alpha[keep].copy(),
@@ -357,6 +387,71 @@ def _ends_of(lines: np.ndarray) -> np.ndarray:
     return np.stack((lines[:, [START_X, START_Y]], lines[:, [END_X, END_Y]]), axis=1).astype(
         np.float64
     )
+
+
+def _inverse(m: np.ndarray) -> np.ndarray:
+    """The inverse of a 2 x 2 covariance (closed form)."""
+    a, b, c, d = float(m[0, 0]), float(m[0, 1]), float(m[1, 0]), float(m[1, 1])
+    det = a * d - b * c
+    return np.array([[d, -b], [-c, a]]) / det
+
+
+def _boxes(ends: np.ndarray, margin: float) -> np.ndarray:
+    """``N x 4`` bounding boxes ``(x_min, y_min, x_max, y_max)`` of ``N x 2 x 2`` endpoints,
+    grown by ``margin`` on every side."""
+    return np.hstack((ends.min(axis=1) - margin, ends.max(axis=1) + margin))
+
+
+#: The side of a cell of the spatial index (metres).
+CELL = 2.0
+
+
+def _cells(boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(keys, rows)``: the grid cells each box of ``boxes`` (``N x 4``) covers, one pair per
+    cell, keys as integers."""
+    lo = np.floor(boxes[:, :2] / CELL).astype(np.int64)
+    hi = np.floor(boxes[:, 2:] / CELL).astype(np.int64)
+    size = hi - lo + 1
+    count = size[:, 0] * size[:, 1]
+    rows = np.repeat(np.arange(len(boxes)), count)
+    local = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
+    cx = lo[rows, 0] + local % size[rows, 0]
+    cy = lo[rows, 1] + local // size[rows, 0]
+    return ((cx + (1 << 30)) << 31) | (cy + (1 << 30)), rows
+
+
+def _box_pairs(queries: np.ndarray, boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Index pairs ``(q, b)`` of the ``queries`` and ``boxes`` (``N x 4``) that overlap.
+
+    The spatial index of association: a uniform grid of :data:`CELL` metres, each box
+    listed under the cells it covers (sorted keys, binary search); the pairs sharing a cell
+    are then cut to those whose boxes meet. Cost: the lines near each query, not the map.
+    """
+    empty = np.zeros(0, dtype=np.int64)
+    if not len(queries) or not len(boxes):
+        return empty, empty
+    box_keys, box_rows = _cells(boxes)
+    order = np.argsort(box_keys, kind="stable")
+    box_keys, box_rows = box_keys[order], box_rows[order]
+    query_keys, query_rows = _cells(queries)
+    starts = np.searchsorted(box_keys, query_keys, side="left")
+    stops = np.searchsorted(box_keys, query_keys, side="right")
+    count = stops - starts
+    q = np.repeat(query_rows, count)
+    key = np.repeat(query_keys, count)
+    local = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
+    b = box_rows[np.repeat(starts, count) + local]
+    box, query = boxes[b], queries[q]
+    hit = (
+        (box[:, 0] <= query[:, 2])
+        & (box[:, 2] >= query[:, 0])
+        & (box[:, 1] <= query[:, 3])
+        & (box[:, 3] >= query[:, 1])
+    )
+    # A pair meets in several cells: keep it once, in the cell of its overlap's low corner.
+    corner = np.maximum(box[:, :2], query[:, :2])
+    hit &= _cells(np.hstack((corner, corner)))[0] == key
+    return q[hit].astype(np.int64), b[hit].astype(np.int64)
 
 
 def _extent(rho: float, alpha: float, points: np.ndarray) -> np.ndarray:
