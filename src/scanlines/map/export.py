@@ -13,9 +13,33 @@ from scanlines.errors import ParameterError
 from scanlines.io.outputs import check_output, commit, discard, temp_path, write_text_atomically
 from scanlines.map.fusion import MapLines
 
-__all__ = ["MAP_FORMATS", "map_records", "write_map"]
+__all__ = ["MAP_FORMATS", "check_map_format", "map_records", "write_map"]
 
 MAP_FORMATS = (".geojson", ".json", ".svg", ".dxf")
+
+
+def check_map_format(path: str | Path) -> str:
+    """The writer's suffix of ``path`` (:data:`MAP_FORMATS`), or a :class:`ParameterError`
+    naming the file; DXF also needs ezdxf installed."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in MAP_FORMATS:
+        raise ParameterError(
+            f"{path}: a map is written as {', '.join(MAP_FORMATS)}; got suffix {suffix!r}"
+        )
+    if suffix == ".dxf":
+        _ezdxf()
+    return suffix
+
+
+def _ezdxf():
+    try:
+        import ezdxf
+    except ImportError:
+        raise ParameterError(
+            'a DXF map needs ezdxf: pip install "scanlines[map]" (or ".[map]" in a checkout)'
+        ) from None
+    return ezdxf
 
 
 def map_records(lines: MapLines) -> list[dict[str, Any]]:
@@ -45,11 +69,7 @@ def write_map(
 ) -> Path:
     """Write ``lines`` to ``path`` in the format its suffix names (:data:`MAP_FORMATS`)."""
     path = Path(path)
-    suffix = path.suffix.lower()
-    if suffix not in MAP_FORMATS:
-        raise ParameterError(
-            f"{path}: a map is written as {', '.join(MAP_FORMATS)}; got suffix {suffix!r}"
-        )
+    suffix = check_map_format(path)
     meta = meta or {}
     if suffix == ".dxf":
         return _write_dxf(lines, path, meta, overwrite)
@@ -118,10 +138,7 @@ def _escape(text: str) -> str:
 
 
 def _write_dxf(lines: MapLines, path: Path, meta: dict[str, Any], overwrite: bool) -> Path:
-    try:
-        import ezdxf
-    except ImportError:
-        raise ParameterError('a DXF map needs ezdxf: pip install "scanlines[map]"') from None
+    ezdxf = _ezdxf()
     target = check_output(path, overwrite=overwrite)
     document = ezdxf.new("R2010", units=6)  # 6: metres
     document.layers.add("MAP_LINES")

@@ -123,17 +123,24 @@ def evaluate_map(
     poses=None,
     settings: FusionSettings | None = None,
     every: int = 10,
+    limit: int | None = None,
 ) -> tuple[MapScore, MapBuild]:
     """Build the map from all scans but every ``every``-th, then score it on those.
 
     ``open_indexed()`` opens the log afresh (a context manager giving a reader with
-    ``enumerate()``); the log is read twice, one scan in memory at a time.
+    ``enumerate()``); the log is read twice, one scan in memory at a time; ``limit``: only
+    its first scans.
     """
+    from itertools import islice
+
+    def indexed(reader):
+        return reader.enumerate() if limit is None else islice(reader.enumerate(), limit)
+
     with open_indexed() as reader:
         build = build_map(
-            reader.enumerate(), extractor, poses=poses, settings=settings,
+            indexed(reader), extractor, poses=poses, settings=settings,
             hold_out=lambda index: index % every == 0,
         )  # fmt: skip
     with open_indexed() as reader:
-        score = score_held_out(reader.enumerate(), build, sigma_at)
+        score = score_held_out(indexed(reader), build, sigma_at)
     return score, build

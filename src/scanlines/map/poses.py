@@ -16,6 +16,7 @@ __all__ = [
     "PoseError",
     "RegistrationOdometry",
     "TrajectoryPoses",
+    "choose_poses",
     "read_tum",
 ]
 
@@ -139,3 +140,17 @@ class RegistrationOdometry:
         step = fit.pose if fit.inlier_fraction >= 0.3 else guess
         self._pose = compose(self._pose, step)
         return self._pose
+
+
+def choose_poses(first_scans, trajectory: str | Path | None = None):
+    """The pose source of a map: the ``trajectory`` file (TUM) where one is given, else the
+    log's own poses where its first scans (an iterable of :class:`Scan`, looked at up to
+    the first 10) carry them, else scan registration as odometry."""
+    if trajectory is not None:
+        return read_tum(trajectory)
+    for k, scan in enumerate(first_scans):
+        if scan.pose is not None:
+            return LogPoses()
+        if k >= 9:
+            break
+    return RegistrationOdometry()
