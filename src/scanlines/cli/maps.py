@@ -58,6 +58,9 @@ def map_command(
     param: ParamOption = None,
     config: ConfigOption = None,
     sensor_profile: ProfileOption = None,
+    plot: Annotated[
+        Path | None, typer.Option(help="Also draw the map (PNG, PDF, SVG figure).")
+    ] = None,
     overwrite: OverwriteOption = False,
     on_error: OnErrorOption = "fail",
     max_beams: MaxBeamsOption = None,
@@ -68,6 +71,7 @@ def map_command(
 
     check_map_format(out)  # an unknown suffix (or DXF without ezdxf) before the log is read
     writable(out, overwrite)
+    writable(plot, overwrite)
     options = reader_options(topic=topic, on_error=on_error, max_beams=max_beams)
     prepared = prepare(log, options, poses, min_scans, method, preset, param, config,
                        sensor_profile, scans)  # fmt: skip
@@ -75,6 +79,12 @@ def map_command(
     lines = build.line_map.lines()
     meta = map_meta(log, build, prepared)
     write_map(lines, out, meta=meta, overwrite=overwrite)
+    if plot is not None:
+        from scanlines.viz.figures import save
+        from scanlines.viz.maps import plot_map
+
+        save(plot_map(lines, title=f"line map of {log.name}"), plot)
+        typer.echo(f"figure: {plot}")
     typer.echo(
         f"{len(lines)} map lines from {build.segments} segments of {build.scans} scans "
         f"({build.poses}); wrote {out}"
