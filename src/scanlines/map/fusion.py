@@ -437,6 +437,33 @@ def _box_pairs(queries: np.ndarray, boxes: np.ndarray) -> tuple[np.ndarray, np.n
     starts = np.searchsorted(box_keys, query_keys, side="left")
     stops = np.searchsorted(box_keys, query_keys, side="right")
     count = stops - starts
+    # The candidate pairs are looked at in blocks of about BLOCK: the peak memory of a merge
+    # stays bounded however many lines the map holds.
+    total = np.cumsum(count)
+    edges = np.searchsorted(total, np.arange(BLOCK, int(total[-1]) if len(total) else 0, BLOCK))
+    found_q, found_b = [], []
+    for lo, hi in zip(
+        np.concatenate(([0], edges)), np.concatenate((edges, [len(count)])), strict=True
+    ):
+        if hi <= lo:
+            continue
+        q, b = _cell_pairs(
+            boxes, queries, box_rows, query_keys[lo:hi], query_rows[lo:hi], starts[lo:hi],
+            count[lo:hi],
+        )  # fmt: skip
+        found_q.append(q)
+        found_b.append(b)
+    if not found_q:
+        return empty, empty
+    return np.concatenate(found_q), np.concatenate(found_b)
+
+
+#: Candidate pairs of the spatial index looked at together.
+BLOCK = 1 << 16
+
+
+def _cell_pairs(boxes, queries, box_rows, query_keys, query_rows, starts, count):
+    """The overlapping pairs among the candidates of some query cells, each pair once."""
     q = np.repeat(query_rows, count)
     key = np.repeat(query_keys, count)
     local = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
