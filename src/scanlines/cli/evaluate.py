@@ -165,6 +165,19 @@ def eval_command(
             "--real and --labels, measured from the log; on simulated scenes, each scan's own.",
         ),
     ] = None,
+    map_log: Annotated[
+        Path | None,
+        typer.Option(
+            "--map",
+            help="Score a line map instead: built from every scan of LOG but each 10th "
+            "(`scanlines map`), scored on those: coverage of their returns, median distance, "
+            "map lines per 100 m and per segment, the loop test. Writes map_eval.json into --out.",
+        ),
+    ] = None,
+    poses: Annotated[
+        Path | None,
+        typer.Option("--poses", help="With --map: a TUM trajectory file of the log's poses."),
+    ] = None,
 ) -> None:
     from scanlines.errors import ParameterError
     from scanlines.evaluation.specs import TRUTH, parse_specs
@@ -172,6 +185,18 @@ def eval_command(
 
     configured = _config_specs(config or [])
     specs = parse_specs([*configured, *(method or ([] if configured else ["adaptive"]))])
+    if map_log is not None:
+        if real or labels or family or scenes is not None or (method and len(method) > 1):
+            raise ParameterError(
+                "--map scores one method on one log; it excludes --real, "
+                "--labels, --family, --scenes and a second --method"
+            )
+        from scanlines.cli.maps import evaluate_map_command
+
+        evaluate_map_command(map_log, specs[0], scans, sensor_profile, poses, out)
+        return
+    if poses is not None:
+        raise ParameterError("--poses gives the poses of a --map LOG")
     profile = None if sensor_profile is None else read_profile(sensor_profile)
     if labels:
         _check_real_options(sensor, scenes_per_sensor, seed, scenes, save_scenes, noise, specs)

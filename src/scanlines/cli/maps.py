@@ -1,0 +1,221 @@
+"""``scanlines map LOG --out FILE``: the segments of every scan fused into a line map."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from scanlines.cli.common import ConfigMethodOption, ConfigOption, OverwriteOption, guarded
+from scanlines.cli.logs import (
+    LogArgument,
+    MaxBeamsOption,
+    OnErrorOption,
+    ParamOption,
+    PresetOption,
+    ProfileOption,
+    TopicOption,
+    reader_options,
+)
+
+OUT_HELP = "The map: .geojson, .svg, .dxf (needs ezdxf) or .json (with covariances)."
+PosesOption = Annotated[
+    Path | None,
+    typer.Option(
+        "--poses",
+        help="A trajectory file (TUM: timestamp tx ty tz qx qy qz qw) giving each scan's pose; "
+        "default: the log's poses, else scan registration as odometry.",
+    ),
+]
+MinScansOption = Annotated[
+    int | None,
+    typer.Option(
+        "--min-scans", min=1, help="Lines seen by fewer scans are dropped as clutter (default 3)."
+    ),
+]
+FirstScansOption = Annotated[
+    int | None, typer.Option("--scans", min=1, help="Only the first N scans of the log.")
+]
+
+
+def register(app: typer.Typer) -> None:
+    app.command(
+        "map",
+        help="Build a line map from a log: every scan's segments moved into the world by the "
+        "log's poses (or --poses, or scan registration) and fused into map lines.",
+    )(guarded(map_command))
+
+
+def map_command(
+    log: LogArgument,
+    out: Annotated[Path, typer.Option(help=OUT_HELP)],
+    poses: PosesOption = None,
+    min_scans: MinScansOption = None,
+    scans: FirstScansOption = None,
+    method: ConfigMethodOption = None,
+    preset: PresetOption = None,
+    param: ParamOption = None,
+    config: ConfigOption = None,
+    sensor_profile: ProfileOption = None,
+    plot: Annotated[
+        Path | None, typer.Option(help="Also draw the map (PNG, PDF, SVG figure).")
+    ] = None,
+    overwrite: OverwriteOption = False,
+    on_error: OnErrorOption = "fail",
+    max_beams: MaxBeamsOption = None,
+    topic: TopicOption = None,
+) -> None:
+    from scanlines.cli.common import writable
+    from scanlines.map.export import check_map_format, write_map
+
+    check_map_format(out)  # an unknown suffix (or DXF without ezdxf) before the log is read
+    writable(out, overwrite)
+    writable(plot, overwrite)
+    options = reader_options(topic=topic, on_error=on_error, max_beams=max_beams)
+    prepared = prepare(log, options, poses, min_scans, method, preset, param, config,
+                       sensor_profile, scans)  # fmt: skip
+    build = run_build(log, options, prepared, scans)
+    lines = build.line_map.lines()
+    meta = map_meta(log, build, prepared)
+    write_map(lines, out, meta=meta, overwrite=overwrite)
+    if plot is not None:
+        from scanlines.viz.figures import save
+        from scanlines.viz.maps import plot_map
+
+        save(plot_map(lines, title=f"line map of {log.name}"), plot)
+        typer.echo(f"figure: {plot}")
+    typer.echo(
+        f"{len(lines)} map lines from {build.segments} segments of {build.scans} scans "
+        f"({build.poses}); wrote {out}"
+    )
+    if build.without_pose:
+        typer.echo(f"{build.without_pose} scans had no pose and were not mapped", err=True)
+
+
+def prepare(
+    log: Path,
+    options: dict[str, Any],
+    poses: Path | None,
+    min_scans: int | None,
+    method: str | None,
+    preset: str | None,
+    param: list[str] | None,
+    config: Path | None,
+    sensor_profile: Path | None,
+    scans: int | None,
+) -> dict[str, Any]:
+    """The extractor, pose source and fusion settings of a map command, every option
+    checked before the log is read for the map."""
+    from itertools import islice
+
+    from scanlines.cli.common import method_options
+    from scanlines.cli.logs import _profile_for_run, compiled_for
+    from scanlines.extractor import Extractor
+    from scanlines.io import open_log
+    from scanlines.map.fusion import FusionSettings
+    from scanlines.map.poses import RegistrationOdometry, choose_poses
+
+    method, preset, params = method_options(method, preset, param, config)
+    Extractor(method, preset, **params)  # bad parameters fail before the log is read
+    settings = FusionSettings() if min_scans is None else FusionSettings(min_scans=min_scans)
+    with open_log(log, **options) as reader:
+        source = choose_poses(islice(iter(reader), 10), poses)
+    if isinstance(source, RegistrationOdometry):
+        typer.echo(f"poses: {log.name} carries none; {source.name}", err=True)
+    selection = slice(None) if scans is None else slice(0, scans)
+    with compiled_for(method):
+        profile = _profile_for_run(log, options, selection, sensor_profile)
+        extractor = Extractor(method, preset, sensor_profile=profile, **params)
+        extractor.warm_up()
+    return {"extractor": extractor, "poses": source, "settings": settings, "profile": profile}
+
+
+def run_build(log: Path, options: dict[str, Any], prepared: dict[str, Any], scans: int | None):
+    from itertools import islice
+
+    from scanlines.io import open_log
+    from scanlines.map import build_map
+
+    with open_log(log, **options) as reader:
+        indexed = reader.enumerate() if scans is None else islice(reader.enumerate(), scans)
+        return build_map(
+            indexed, prepared["extractor"], poses=prepared["poses"], settings=prepared["settings"]
+        )
+
+
+def map_meta(log: Path, build, prepared: dict[str, Any]) -> dict[str, Any]:
+    extractor = prepared["extractor"]
+    return {
+        "log": log.name,
+        "poses": build.poses,
+        "scans": build.scans,
+        "segments": build.segments,
+        "method": extractor.method,
+        "fusion": prepared["settings"].to_dict(),
+    }
+
+
+def evaluate_map_command(
+    log: Path, spec, scans: int | None, sensor_profile: Path | None, poses: Path | None, out: Path
+) -> None:
+    """``scanlines eval --map LOG``: the map of every scan but each 10th, scored on those."""
+    import json
+    import time
+
+    from rich.console import Console
+    from rich.table import Table
+
+    from scanlines.errors import ParameterError
+    from scanlines.io import open_log
+    from scanlines.map.holdout import evaluate_map
+
+    if spec.is_truth:
+        raise ParameterError("--map scores a method; 'truth' has no scans to map")
+    params = [f"{name}={value}" for name, value in spec.params]
+    prepared = prepare(log, {}, poses, None, spec.method, spec.preset, params, None,
+                       sensor_profile, scans)  # fmt: skip
+    profile = prepared["profile"]
+    if profile is None:
+        raise ParameterError(f"{log}: no sensor profile could be measured; give --sensor-profile")
+    started = time.perf_counter()
+    score, build = evaluate_map(
+        lambda: open_log(log), prepared["extractor"], profile.sigma_at,
+        poses=prepared["poses"], settings=prepared["settings"], limit=scans,
+    )  # fmt: skip
+    seconds = time.perf_counter() - started
+    table = Table(title=f"line map of {log.name}: {score.poses}", show_header=False)
+    table.add_column("what", style="bold")
+    table.add_column("value", justify="right")
+    rows = [
+        ("scans mapped / held out", f"{score.mapped_scans} / {score.held_out_scans}"),
+        ("held-out returns", f"{score.returns}"),
+        ("coverage (within max(3 sigma, 5 cm))", f"{score.coverage:.3f}"),
+        ("median distance, mm", f"{1000 * score.median_distance:.1f}"),
+        (
+            f"2 sigma at the median range ({score.median_range:.2f} m), mm",
+            f"{2000 * score.sigma_at_median_range:.1f}",
+        ),
+        ("map lines", f"{score.lines}"),
+        ("segments mapped", f"{build.segments}"),
+        ("segments per map line", f"{build.segments / max(score.lines, 1):.1f}"),
+        ("map length, m", f"{score.map_length:.1f}"),
+        ("map lines per 100 m", f"{score.lines_per_100m:.1f}"),
+        ("loop: lines seen in the first and last 10 %", f"{score.loop_lines}"),
+        ("build and score, s", f"{seconds:.1f}"),
+    ]
+    for row in rows:
+        table.add_row(*row)
+    Console().print(table)
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / "map_eval.json"
+    payload = {
+        "log": log.name,
+        "method": spec.text,
+        **score.to_dict(),
+        "segments_mapped": build.segments,
+        "segments_per_line": build.segments / max(score.lines, 1),
+        "seconds": seconds,
+    }
+    path.write_text(json.dumps(payload, indent=1) + "\n", encoding="utf-8")
+    typer.echo(f"wrote {path}")

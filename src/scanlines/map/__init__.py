@@ -1,0 +1,20 @@
+"""Line maps: segments of every scan of a log fused into world-frame lines.
+
+::
+
+    from scanlines.io import open_log
+    from scanlines.map import build_map
+
+    with open_log("intel-corrected.log.gz") as reader:
+        build = build_map(reader.enumerate())      # the log's poses, the default extractor
+    lines = build.line_map.lines()                 # MapLines: rho, alpha, covariances, extent
+
+Modules: ``fusion`` (association and fusion, :class:`LineMap`), ``poses`` (where each scan
+stood), ``build`` (a log to a map), ``export`` (GeoJSON, SVG, DXF, JSON), ``holdout``
+(the map scored on scans it did not see: ``scanlines eval --map``).
+"""
+
+from scanlines.map.build import MapBuild, build_map
+from scanlines.map.fusion import FusionSettings, LineMap, MapLines
+
+__all__ = ["FusionSettings", "LineMap", "MapBuild", "MapLines", "build_map"]

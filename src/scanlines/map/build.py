@@ -1,0 +1,80 @@
+"""Building a line map from a log: extract every scan, move it by its pose, fuse."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+
+from scanlines.extractor import Extractor
+from scanlines.io.transform import to_world
+from scanlines.map.fusion import FusionSettings, LineMap
+from scanlines.poses import Pose
+from scanlines.scan import Scan
+
+__all__ = ["MapBuild", "build_map"]
+
+PoseSource = Callable[[int, Scan], Pose | None]
+
+
+@dataclass
+class MapBuild:
+    """A built map and how it was made."""
+
+    line_map: LineMap
+    poses: str
+    scans: int = 0
+    without_pose: int = 0
+    held_out: dict[int, Pose] = field(default_factory=dict)
+    last_index: int = -1
+
+    @property
+    def segments(self) -> int:
+        return self.line_map.segments_seen
+
+
+def build_map(
+    indexed: Iterable[tuple[int, Scan]],
+    extractor: Extractor | None = None,
+    *,
+    poses: PoseSource | None = None,
+    settings: FusionSettings | None = None,
+    hold_out: Callable[[int], bool] | None = None,
+    on_scan: Callable[[int], None] | None = None,
+) -> MapBuild:
+    """The line map of ``(index, scan)`` pairs, streamed (one scan in memory at a time).
+
+    Parameters
+    ----------
+    indexed:
+        ``reader.enumerate()`` of a log, or any ``(index, scan)`` pairs in log order.
+    extractor:
+        The extractor (default: ``Extractor()``, the default method).
+    poses:
+        Each scan's sensor pose in the world: :class:`~scanlines.map.poses.LogPoses`
+        (the default), :class:`~scanlines.map.poses.TrajectoryPoses` or
+        :class:`~scanlines.map.poses.RegistrationOdometry`. Scans it gives no pose are
+        counted in ``without_pose`` and not mapped.
+    hold_out:
+        Scans for which it is true are not mapped; their poses are kept in ``held_out``
+        (for :func:`scanlines.map.holdout.score_held_out`).
+    """
+    from scanlines.map.poses import LogPoses
+
+    extractor = extractor or Extractor()
+    poses = poses or LogPoses()
+    line_map = LineMap(settings)
+    build = MapBuild(line_map, poses=getattr(poses, "name", type(poses).__name__))
+    for index, scan in indexed:
+        pose = poses(index, scan)
+        build.last_index = index
+        if on_scan is not None:
+            on_scan(index)
+        if pose is None:
+            build.without_pose += 1
+            continue
+        if hold_out is not None and hold_out(index):
+            build.held_out[index] = pose
+            continue
+        line_map.add(to_world(extractor(scan), pose), index, pose)
+        build.scans += 1
+    return build

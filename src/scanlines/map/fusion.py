@@ -1,0 +1,494 @@
+"""Association and fusion of world-frame segments into map lines (streaming, bounded memory).
+
+A segment ``(rho, alpha)`` with covariance ``P_s`` joins the map line ``(rho_m, alpha_m, P_m)``
+it agrees with: the Mahalanobis distance of the difference under ``P_s + P_m`` is within the
+chi-square gate, and along the line the segment overlaps the line's extent or leaves a gap of
+at most ``max_gap``. Of the lines that pass, the nearest (Mahalanobis) wins. The line's
+estimate becomes the information-weighted mean of the two, its extent the union of both.
+A segment that joins none starts a line. Lines seen by fewer than ``min_scans`` scans are
+clutter: dropped at the end, and retired on the way once ``retire_after`` scans have passed
+without seeing them again, so memory follows the size of the place, not the log's length.
+Lines that come to agree with each other (a wall first seen in two pieces) are merged every
+``merge_every`` scans.
+
+The covariance of a segment moved into the world includes the pose's own uncertainty
+(``pose_sigma_xy``, ``pose_sigma_theta``): without it, millimetre range noise makes every
+pose error of a corrected log look like a different wall. And since the pose errors of
+neighbouring scans are alike rather than independent, a line fused from many views is not
+known better than the poses that placed it: ``model_sigma_rho``, ``model_sigma_alpha``
+(by default the pose's own sigmas) are added to every gate's covariance, so two pieces of
+one wall, each fused from many scans, still agree.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+
+from scanlines.extraction import ALPHA, END_X, END_Y, RHO, START_X, START_Y, Extraction
+
+__all__ = ["FusionSettings", "LineMap", "MapLines"]
+
+_CHI2_2DOF = {0.95: 5.991, 0.99: 9.210, 0.999: 13.816}
+
+
+@dataclass(frozen=True)
+class FusionSettings:
+    """The constants of association and fusion (metres, radians, scans)."""
+
+    gate: float = 0.99
+    max_gap: float = 0.5
+    min_scans: int = 3
+    min_points: int = 5
+    pose_sigma_xy: float = 0.02
+    pose_sigma_theta: float = math.radians(0.5)
+    model_sigma_rho: float = 0.02
+    model_sigma_alpha: float = math.radians(0.5)
+    retire_after: int = 300
+    merge_every: int = 50
+
+    def __post_init__(self) -> None:
+        from scanlines.errors import ParameterError
+
+        if self.gate not in _CHI2_2DOF:
+            raise ParameterError(f"gate must be one of {sorted(_CHI2_2DOF)}, got {self.gate}")
+        checks = {
+            "max_gap": self.max_gap >= 0,
+            "min_scans": self.min_scans >= 1,
+            "min_points": self.min_points >= 2,
+            "pose_sigma_xy": self.pose_sigma_xy >= 0,
+            "pose_sigma_theta": self.pose_sigma_theta >= 0,
+            "model_sigma_rho": self.model_sigma_rho >= 0,
+            "model_sigma_alpha": self.model_sigma_alpha >= 0,
+            "retire_after": self.retire_after >= 1,
+            "merge_every": self.merge_every >= 1,
+        }
+        for name, ok in checks.items():
+            value = getattr(self, name)
+            if not ok or not math.isfinite(value):
+                raise ParameterError(f"fusion setting {name} out of range: {value!r}")
+
+    @property
+    def chi2(self) -> float:
+        return _CHI2_2DOF[self.gate]
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class MapLines:
+    """The lines of a map, as arrays (one row per line).
+
+    ``rho, alpha``: Hesse normal form in the world frame (``rho >= 0``); ``covariances``:
+    ``L x 2 x 2`` of ``(rho, alpha)``; ``start, end``: ``L x 2`` endpoints of the extent;
+    ``scans``, ``returns``: support; ``first_scan``, ``last_scan``: log indices of the first
+    and last scan that saw the line; ``segments``: segments fused into it.
+    """
+
+    rho: np.ndarray
+    alpha: np.ndarray
+    covariances: np.ndarray
+    start: np.ndarray
+    end: np.ndarray
+    scans: np.ndarray
+    returns: np.ndarray
+    first_scan: np.ndarray
+    last_scan: np.ndarray
+    segments: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.rho)
+
+    @property
+    def lengths(self) -> np.ndarray:
+        return np.hypot(*(self.end - self.start).T) if len(self) else np.zeros(0)
+
+
+def _wrap(angle):
+    return np.mod(np.asarray(angle) + math.pi, 2.0 * math.pi) - math.pi
+
+
+class LineMap:
+    """A map of lines built one scan at a time: :meth:`add` a scan's world-frame features,
+    :meth:`lines` for the map (clutter dropped)."""
+
+    def __init__(self, settings: FusionSettings | None = None) -> None:
+        self.settings = settings or FusionSettings()
+        self._n = 0
+        self._grow(64)
+        self.segments_seen = 0
+        self.segments_fused = 0
+        self.retired = 0
+        self.scans_added = 0
+        self._since_merge = 0
+
+    # -- storage ---------------------------------------------------------------------------
+
+    def _grow(self, capacity: int) -> None:
+        def grown(old: np.ndarray | None, shape: tuple[int, ...], dtype) -> np.ndarray:
+            new = np.zeros((capacity, *shape), dtype=dtype)
+            if old is not None:
+                new[: self._n] = old[: self._n]
+            return new
+
+        had = getattr(self, "_rho", None) is not None
+        get = (lambda name: getattr(self, name)) if had else (lambda name: None)
+        self._rho = grown(get("_rho"), (), np.float64)
+        self._alpha = grown(get("_alpha"), (), np.float64)
+        self._cov = grown(get("_cov"), (2, 2), np.float64)
+        self._t = grown(get("_t"), (2,), np.float64)  # extent along the line's tangent
+        self._scans = grown(get("_scans"), (), np.int64)
+        self._returns = grown(get("_returns"), (), np.int64)
+        self._first = grown(get("_first"), (), np.int64)
+        self._last = grown(get("_last"), (), np.int64)
+        self._fused = grown(get("_fused"), (), np.int64)
+        self._box = grown(get("_box"), (4,), np.float64)  # x_min, y_min, x_max, y_max
+
+    def __len__(self) -> int:
+        return self._n
+
+    # -- one scan --------------------------------------------------------------------------
+
+    def add(self, world: Extraction, scan_index: int, pose: tuple[float, float, float]) -> None:
+        """Fuse the segments of one scan, already in the world frame (``to_world``), whose
+        sensor stood at ``pose``; ``scan_index`` is the scan's index in the log."""
+        self.scans_added += 1
+        keep = np.asarray(world.n_points) >= self.settings.min_points
+        lines = np.asarray(world.lines)[keep]
+        covariances = np.asarray(world.covariances)[keep] + self._pose_noise(lines, pose)
+        n_points = np.asarray(world.n_points)[keep]
+        self.segments_seen += len(lines)
+        if len(lines):
+            targets = self._associate(lines, covariances)
+            for k, target in enumerate(targets):
+                if target < 0:
+                    self._append(lines[k], covariances[k], int(n_points[k]), scan_index)
+                else:
+                    self._fuse(int(target), lines[k], covariances[k], int(n_points[k]), scan_index)
+        self._since_merge += 1
+        if self._since_merge >= self.settings.merge_every:
+            self._since_merge = 0
+            self.merge_agreeing()
+            self._retire(scan_index)
+
+    def _pose_noise(self, lines: np.ndarray, pose: tuple[float, float, float]) -> np.ndarray:
+        """``(rho, alpha)`` covariance that the pose's uncertainty adds to each line."""
+        x, y, _ = pose
+        a = lines[:, ALPHA]
+        # A turn of the pose turns the line about the sensor at (x, y): rho moves by the
+        # sensor's offset along the line, -x sin(a) + y cos(a).
+        jac = np.zeros((len(lines), 2, 3))
+        jac[:, 0, 0] = np.cos(a)
+        jac[:, 0, 1] = np.sin(a)
+        jac[:, 0, 2] = -x * np.sin(a) + y * np.cos(a)
+        jac[:, 1, 2] = 1.0
+        xy, theta = self.settings.pose_sigma_xy, self.settings.pose_sigma_theta
+        sigma = np.diag([xy**2, xy**2, theta**2])
+        return jac @ sigma @ jac.transpose(0, 2, 1)
+
+    def _associate(self, lines: np.ndarray, covariances: np.ndarray) -> np.ndarray:
+        """Index of the map line each segment joins, ``-1`` for none."""
+        n = self._n
+        targets = np.full(len(lines), -1, dtype=np.int64)
+        if n == 0:
+            return targets
+        ends = _ends_of(lines)
+        seg, line = _box_pairs(_boxes(ends, self.settings.max_gap), self._box[:n])
+        if not len(seg):
+            return targets
+        d2 = self._agreement(
+            lines[seg, RHO], lines[seg, ALPHA], covariances[seg], ends[seg],
+            self._rho[line], self._alpha[line], self._cov[line], self._t[line],
+        )  # fmt: skip
+        passed = np.isfinite(d2)
+        seg, line, d2 = seg[passed], line[passed], d2[passed]
+        order = np.lexsort((d2, seg))  # by segment, nearest first
+        seg, line = seg[order], line[order]
+        first = np.ones(len(seg), dtype=bool)
+        first[1:] = seg[1:] != seg[:-1]
+        targets[seg[first]] = line[first]
+        return targets
+
+    def _agreement(self, rho, alpha, cov, ends, m_rho, m_alpha, m_cov, m_t) -> np.ndarray:
+        """Mahalanobis distances of segments to lines, pair by pair (``inf`` where a gate
+        fails): ``rho, alpha`` (P), ``cov`` (P x 2 x 2), ``ends`` (P x 2 x 2) of the segments
+        against ``m_rho, m_alpha, m_cov, m_t`` (extent along the tangent, P x 2) of the lines."""
+        d_alpha = _wrap(alpha - m_alpha)
+        flip = np.abs(d_alpha) > math.pi / 2
+        sign = np.where(flip, -1.0, 1.0)
+        d_rho = sign * rho - m_rho
+        d_alpha = _wrap(d_alpha - np.where(flip, math.pi, 0.0))
+        s_rr = cov[:, 0, 0] + m_cov[:, 0, 0] + self.settings.model_sigma_rho**2
+        s_aa = cov[:, 1, 1] + m_cov[:, 1, 1] + self.settings.model_sigma_alpha**2
+        s_ra = sign * cov[:, 0, 1] + m_cov[:, 0, 1]
+        det = s_rr * s_aa - s_ra**2
+        with np.errstate(divide="ignore", invalid="ignore"):
+            d2 = (s_aa * d_rho**2 - 2 * s_ra * d_rho * d_alpha + s_rr * d_alpha**2) / det
+        d2 = np.where(det > 0, d2, np.inf)
+        tangent = np.stack((-np.sin(m_alpha), np.cos(m_alpha)), axis=-1)  # P x 2
+        along = np.einsum("pek,pk->pe", ends, tangent)  # P x 2
+        lo, hi = along.min(axis=1), along.max(axis=1)
+        gap = np.maximum(lo - m_t[:, 1], m_t[:, 0] - hi)
+        ok = (d2 <= self.settings.chi2) & (gap <= self.settings.max_gap)
+        return np.where(ok, d2, np.inf)
+
+    def _append(self, line, cov, n_points: int, scan_index: int) -> None:
+        if self._n == len(self._rho):
+            self._grow(2 * len(self._rho))
+        k = self._n
+        self._n += 1
+        self._rho[k], self._alpha[k], self._cov[k] = line[RHO], line[ALPHA], cov
+        self._t[k] = _extent(line[RHO], line[ALPHA], _ends_of(line[None])[0])
+        self._box[k] = _boxes(self._ends(k)[None], 0.0)[0]
+        self._scans[k], self._returns[k], self._fused[k] = 1, n_points, 1
+        self._first[k] = self._last[k] = scan_index
+
+    def _fuse(self, k: int, line, cov, n_points: int, scan_index: int) -> None:
+        rho, alpha = float(line[RHO]), float(line[ALPHA])
+        if abs(_wrap(alpha - self._alpha[k])) > math.pi / 2:  # the same line, other normal
+            rho, alpha = -rho, float(_wrap(alpha + math.pi))
+            cov = cov * np.array([[1.0, -1.0], [-1.0, 1.0]])
+        ends = np.vstack((self._ends(k), _ends_of(line[None])[0]))
+        self._combine(k, rho, alpha, cov)
+        self._t[k] = _extent(self._rho[k], self._alpha[k], ends)
+        self._box[k] = _boxes(self._ends(k)[None], 0.0)[0]
+        if self._last[k] != scan_index:
+            self._scans[k] += 1
+        self._returns[k] += n_points
+        self._fused[k] += 1
+        self._first[k] = min(self._first[k], scan_index)
+        self._last[k] = max(self._last[k], scan_index)
+        self.segments_fused += 1
+
+    def _combine(self, k: int, rho: float, alpha: float, cov: np.ndarray) -> None:
+        """Information-weighted mean of line ``k`` and ``(rho, alpha, cov)``."""
+        info_m = _inverse(self._cov[k])
+        info_s = _inverse(cov)
+        fused_cov = _inverse(info_m + info_s)
+        mean_m = np.array([self._rho[k], self._alpha[k]])
+        mean_s = np.array([rho, self._alpha[k] + _wrap(alpha - self._alpha[k])])
+        mean = fused_cov @ (info_m @ mean_m + info_s @ mean_s)
+        if mean[0] < 0:
+            mean = np.array([-mean[0], mean[1] + math.pi])
+            fused_cov = fused_cov * np.array([[1.0, -1.0], [-1.0, 1.0]])
+        self._rho[k], self._alpha[k] = mean[0], float(_wrap(mean[1]))
+        self._cov[k] = (fused_cov + fused_cov.T) / 2
+
+    def _ends(self, k: int) -> np.ndarray:
+        return _points_at(self._rho[k], self._alpha[k], self._t[k])
+
+    def _all_ends(self) -> np.ndarray:
+        """``L x 2 x 2`` endpoints of every line's extent."""
+        n = self._n
+        alpha, t = self._alpha[:n], self._t[:n]
+        normal = np.stack((np.cos(alpha), np.sin(alpha)), axis=-1)
+        tangent = np.stack((-np.sin(alpha), np.cos(alpha)), axis=-1)
+        return (self._rho[:n, None] * normal)[:, None, :] + t[:, :, None] * tangent[:, None, :]
+
+    # -- the map as a whole ----------------------------------------------------------------
+
+    def merge_agreeing(self) -> int:
+        """Merge every pair of lines that agree (the gates of association); how many went."""
+        merged = 0
+        for _ in range(4):  # each pass merges disjoint pairs; a few passes settle chains
+            n = self._n
+            if n < 2:
+                break
+            ends = self._all_ends()
+            margin = np.array([-1.0, -1.0, 1.0, 1.0]) * self.settings.max_gap
+            i, j = _box_pairs(self._box[:n] + margin, self._box[:n])
+            upper = i < j
+            i, j = i[upper], j[upper]
+            d2 = self._agreement(
+                self._rho[i], self._alpha[i], self._cov[i], ends[i],
+                self._rho[j], self._alpha[j], self._cov[j], self._t[j],
+            )  # fmt: skip
+            passed = np.isfinite(d2)
+            if not passed.any():
+                break
+            i, j, d2 = i[passed], j[passed], d2[passed]
+            order = np.argsort(d2, kind="stable")
+            used = np.zeros(n, dtype=bool)
+            gone = []
+            for a, b in zip(i[order].tolist(), j[order].tolist(), strict=True):
+                if used[a] or used[b]:
+                    continue
+                used[a] = used[b] = True
+                self._absorb(a, b)
+                gone.append(b)
+            self._remove(np.array(gone, dtype=np.int64))
+            merged += len(gone)
+        return merged
+
+    def _absorb(self, i: int, j: int) -> None:
+        """Line ``j`` fused into line ``i`` (``j`` is removed by the caller)."""
+        ends = np.vstack((self._ends(i), self._ends(j)))
+        rho, alpha, cov = self._rho[j], self._alpha[j], self._cov[j]
+        if abs(_wrap(alpha - self._alpha[i])) > math.pi / 2:
+            rho, alpha = -rho, float(_wrap(alpha + math.pi))
+            cov = cov * np.array([[1.0, -1.0], [-1.0, 1.0]])
+        self._combine(i, rho, alpha, cov)
+        self._t[i] = _extent(self._rho[i], self._alpha[i], ends)
+        self._box[i] = _boxes(self._ends(i)[None], 0.0)[0]
+        self._scans[i] += self._scans[j]  # an upper bound: both may have seen one scan
+        self._returns[i] += self._returns[j]
+        self._fused[i] += self._fused[j]
+        self._first[i] = min(self._first[i], self._first[j])
+        self._last[i] = max(self._last[i], self._last[j])
+
+    def _remove(self, rows: np.ndarray) -> None:
+        if not len(rows):
+            return
+        keep = np.ones(self._n, dtype=bool)
+        keep[rows] = False
+        n = int(keep.sum())
+        for name in ("_rho", "_alpha", "_cov", "_t", "_scans", "_returns", "_first", "_last",
+                     "_fused", "_box"):  # fmt: skip
+            array = getattr(self, name)
+            array[:n] = array[: self._n][keep]
+        self._n = n
+
+    def _retire(self, scan_index: int) -> None:
+        """Drop lines too weakly supported to be kept that have not been seen for long."""
+        n = self._n
+        stale = (self._scans[:n] < self.settings.min_scans) & (
+            scan_index - self._last[:n] > self.settings.retire_after
+        )
+        self.retired += int(stale.sum())
+        self._remove(np.flatnonzero(stale))
+
+    def lines(self, min_scans: int | None = None) -> MapLines:
+        """The map: lines seen by at least ``min_scans`` scans (default: the settings')."""
+        self.merge_agreeing()
+        n = self._n
+        floor = self.settings.min_scans if min_scans is None else min_scans
+        keep = np.flatnonzero(self._scans[:n] >= floor)
+        ends = self._all_ends()[keep]
+        return MapLines(
+            rho=self._rho[keep].copy(),
+            alpha=self._alpha[keep].copy(),
+            covariances=self._cov[keep].copy(),
+            start=ends[:, 0].copy(),
+            end=ends[:, 1].copy(),
+            scans=self._scans[keep].copy(),
+            returns=self._returns[keep].copy(),
+            first_scan=self._first[keep].copy(),
+            last_scan=self._last[keep].copy(),
+            segments=self._fused[keep].copy(),
+        )
+
+
+def _ends_of(lines: np.ndarray) -> np.ndarray:
+    """``S x 2 x 2`` endpoints (start, end) of world-frame segment rows."""
+    return np.stack((lines[:, [START_X, START_Y]], lines[:, [END_X, END_Y]]), axis=1).astype(
+        np.float64
+    )
+
+
+def _inverse(m: np.ndarray) -> np.ndarray:
+    """The inverse of a 2 x 2 covariance (closed form)."""
+    a, b, c, d = float(m[0, 0]), float(m[0, 1]), float(m[1, 0]), float(m[1, 1])
+    det = a * d - b * c
+    return np.array([[d, -b], [-c, a]]) / det
+
+
+def _boxes(ends: np.ndarray, margin: float) -> np.ndarray:
+    """``N x 4`` bounding boxes ``(x_min, y_min, x_max, y_max)`` of ``N x 2 x 2`` endpoints,
+    grown by ``margin`` on every side."""
+    return np.hstack((ends.min(axis=1) - margin, ends.max(axis=1) + margin))
+
+
+#: The side of a cell of the spatial index (metres).
+CELL = 2.0
+
+
+def _cells(boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(keys, rows)``: the grid cells each box of ``boxes`` (``N x 4``) covers, one pair per
+    cell, keys as integers."""
+    lo = np.floor(boxes[:, :2] / CELL).astype(np.int64)
+    hi = np.floor(boxes[:, 2:] / CELL).astype(np.int64)
+    size = hi - lo + 1
+    count = size[:, 0] * size[:, 1]
+    rows = np.repeat(np.arange(len(boxes)), count)
+    local = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
+    cx = lo[rows, 0] + local % size[rows, 0]
+    cy = lo[rows, 1] + local // size[rows, 0]
+    return ((cx + (1 << 30)) << 31) | (cy + (1 << 30)), rows
+
+
+def _box_pairs(queries: np.ndarray, boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Index pairs ``(q, b)`` of the ``queries`` and ``boxes`` (``N x 4``) that overlap.
+
+    The spatial index of association: a uniform grid of :data:`CELL` metres, each box
+    listed under the cells it covers (sorted keys, binary search); the pairs sharing a cell
+    are then cut to those whose boxes meet. Cost: the lines near each query, not the map.
+    """
+    empty = np.zeros(0, dtype=np.int64)
+    if not len(queries) or not len(boxes):
+        return empty, empty
+    box_keys, box_rows = _cells(boxes)
+    order = np.argsort(box_keys, kind="stable")
+    box_keys, box_rows = box_keys[order], box_rows[order]
+    query_keys, query_rows = _cells(queries)
+    starts = np.searchsorted(box_keys, query_keys, side="left")
+    stops = np.searchsorted(box_keys, query_keys, side="right")
+    count = stops - starts
+    # The candidate pairs are looked at in blocks of about BLOCK: the peak memory of a merge
+    # stays bounded however many lines the map holds.
+    total = np.cumsum(count)
+    edges = np.searchsorted(total, np.arange(BLOCK, int(total[-1]) if len(total) else 0, BLOCK))
+    found_q, found_b = [], []
+    for lo, hi in zip(
+        np.concatenate(([0], edges)), np.concatenate((edges, [len(count)])), strict=True
+    ):
+        if hi <= lo:
+            continue
+        q, b = _cell_pairs(
+            boxes, queries, box_rows, query_keys[lo:hi], query_rows[lo:hi], starts[lo:hi],
+            count[lo:hi],
+        )  # fmt: skip
+        found_q.append(q)
+        found_b.append(b)
+    if not found_q:
+        return empty, empty
+    return np.concatenate(found_q), np.concatenate(found_b)
+
+
+#: Candidate pairs of the spatial index looked at together.
+BLOCK = 1 << 16
+
+
+def _cell_pairs(boxes, queries, box_rows, query_keys, query_rows, starts, count):
+    """The overlapping pairs among the candidates of some query cells, each pair once."""
+    q = np.repeat(query_rows, count)
+    key = np.repeat(query_keys, count)
+    local = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
+    b = box_rows[np.repeat(starts, count) + local]
+    box, query = boxes[b], queries[q]
+    hit = (
+        (box[:, 0] <= query[:, 2])
+        & (box[:, 2] >= query[:, 0])
+        & (box[:, 1] <= query[:, 3])
+        & (box[:, 3] >= query[:, 1])
+    )
+    # A pair meets in several cells: keep it once, in the cell of its overlap's low corner.
+    corner = np.maximum(box[:, :2], query[:, :2])
+    hit &= _cells(np.hstack((corner, corner)))[0] == key
+    return q[hit].astype(np.int64), b[hit].astype(np.int64)
+
+
+def _extent(rho: float, alpha: float, points: np.ndarray) -> np.ndarray:
+    """``[t_min, t_max]`` of ``points`` along the line's tangent."""
+    along = points @ np.array([-math.sin(alpha), math.cos(alpha)])
+    return np.array([along.min(), along.max()])
+
+
+def _points_at(rho: float, alpha: float, t: np.ndarray) -> np.ndarray:
+    """Points of the line at tangent coordinates ``t`` (``2 x 2``)."""
+    normal = np.array([math.cos(alpha), math.sin(alpha)])
+    tangent = np.array([-math.sin(alpha), math.cos(alpha)])
+    return rho * normal[None, :] + np.asarray(t)[:, None] * tangent[None, :]

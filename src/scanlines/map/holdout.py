@@ -1,0 +1,146 @@
+"""A map scored on the scans it did not see (``scanlines eval --map``)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterable
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+
+from scanlines.io.transform import points_to_world
+from scanlines.map.build import MapBuild, build_map
+from scanlines.map.fusion import FusionSettings, MapLines
+from scanlines.scan import Scan
+
+__all__ = ["MapScore", "distances_to_lines", "evaluate_map", "loop_lines", "score_held_out"]
+
+#: The smallest distance a return may be from a line and still count as covered.
+MIN_TOLERANCE = 0.05
+
+
+@dataclass(frozen=True)
+class MapScore:
+    """What ``scanlines eval --map`` reports (metres; shares in [0, 1])."""
+
+    held_out_scans: int
+    mapped_scans: int
+    returns: int
+    coverage: float
+    median_distance: float
+    median_range: float
+    sigma_at_median_range: float
+    lines: int
+    segments_fused: int
+    segments_per_line: float
+    map_length: float
+    lines_per_100m: float
+    loop_lines: int
+    poses: str
+
+    @property
+    def median_in_sigmas(self) -> float:
+        return self.median_distance / self.sigma_at_median_range
+
+    def to_dict(self) -> dict[str, Any]:
+        return {**asdict(self), "median_in_sigmas": self.median_in_sigmas}
+
+
+def distances_to_lines(points: np.ndarray, lines: MapLines) -> np.ndarray:
+    """Distance of each ``K x 2`` world point to the nearest map line segment (inf if none)."""
+    if not len(lines) or not len(points):
+        return np.full(len(points), np.inf)
+    a, b = lines.start, lines.end
+    ab = b - a
+    length2 = np.maximum(np.sum(ab**2, axis=1), 1e-18)
+    best = np.full(len(points), np.inf)
+    for lo in range(0, len(points), 256):  # bounded K x L blocks
+        p = points[lo : lo + 256]
+        ap = p[:, None, :] - a[None, :, :]
+        t = np.clip(np.einsum("klj,lj->kl", ap, ab) / length2[None, :], 0.0, 1.0)
+        nearest = a[None, :, :] + t[:, :, None] * ab[None, :, :]
+        best[lo : lo + 256] = np.sqrt(np.min(np.sum((p[:, None, :] - nearest) ** 2, axis=2), 1))
+    return best
+
+
+def loop_lines(lines: MapLines, first: int, last: int, share: float = 0.1) -> int:
+    """Map lines seen both in the first and in the last ``share`` of the scans
+    ``first..last``: walls a loop came back to and fused into one line."""
+    span = max(last - first, 1)
+    early = lines.first_scan <= first + share * span
+    late = lines.last_scan >= last - share * span
+    return int(np.count_nonzero(early & late))
+
+
+def score_held_out(
+    indexed: Iterable[tuple[int, Scan]],
+    build: MapBuild,
+    sigma_at: Callable[[np.ndarray], np.ndarray],
+) -> MapScore:
+    """Score ``build``'s map on its held-out scans, read again from ``indexed``."""
+    lines = build.line_map.lines()
+    distances, tolerances, ranges = [], [], []
+    for index, scan in indexed:
+        pose = build.held_out.get(index)
+        if pose is None:
+            continue
+        valid = scan.valid
+        r = scan.ranges[valid].astype(np.float64)
+        world = points_to_world(scan.points[valid], pose)
+        distances.append(distances_to_lines(world, lines))
+        tolerances.append(np.maximum(3.0 * sigma_at(r), MIN_TOLERANCE))
+        ranges.append(r)
+    d = np.concatenate(distances) if distances else np.zeros(0)
+    tol = np.concatenate(tolerances) if tolerances else np.zeros(0)
+    r = np.concatenate(ranges) if ranges else np.zeros(0)
+    median_range = float(np.median(r)) if len(r) else math.nan
+    length = float(lines.lengths.sum())
+    fused = int(lines.segments.sum())
+    return MapScore(
+        held_out_scans=len(build.held_out),
+        mapped_scans=build.scans,
+        returns=len(d),
+        coverage=float(np.mean(d <= tol)) if len(d) else math.nan,
+        median_distance=float(np.median(d)) if len(d) else math.nan,
+        median_range=median_range,
+        sigma_at_median_range=float(sigma_at(np.array([median_range]))[0]),
+        lines=len(lines),
+        segments_fused=fused,
+        segments_per_line=fused / len(lines) if len(lines) else math.nan,
+        map_length=length,
+        lines_per_100m=100.0 * len(lines) / length if length > 0 else math.nan,
+        loop_lines=loop_lines(lines, 0, build.last_index),
+        poses=build.poses,
+    )
+
+
+def evaluate_map(
+    open_indexed: Callable[[], Any],
+    extractor,
+    sigma_at: Callable[[np.ndarray], np.ndarray],
+    *,
+    poses=None,
+    settings: FusionSettings | None = None,
+    every: int = 10,
+    limit: int | None = None,
+) -> tuple[MapScore, MapBuild]:
+    """Build the map from all scans but every ``every``-th, then score it on those.
+
+    ``open_indexed()`` opens the log afresh (a context manager giving a reader with
+    ``enumerate()``); the log is read twice, one scan in memory at a time; ``limit``: only
+    its first scans.
+    """
+    from itertools import islice
+
+    def indexed(reader):
+        return reader.enumerate() if limit is None else islice(reader.enumerate(), limit)
+
+    with open_indexed() as reader:
+        build = build_map(
+            indexed(reader), extractor, poses=poses, settings=settings,
+            hold_out=lambda index: index % every == 0,
+        )  # fmt: skip
+    with open_indexed() as reader:
+        score = score_held_out(indexed(reader), build, sigma_at)
+    return score, build
