@@ -7,15 +7,18 @@ from typing import Annotated, Any
 
 import typer
 
-from scanlines.cli.common import ConfigMethodOption, ConfigOption, OverwriteOption, guarded
-from scanlines.cli.logs import (
+from scanlines.cli.common import (
+    ConfigMethodOption,
+    ConfigOption,
     LogArgument,
     MaxBeamsOption,
     OnErrorOption,
+    OverwriteOption,
     ParamOption,
     PresetOption,
     ProfileOption,
     TopicOption,
+    guarded,
     reader_options,
 )
 
@@ -109,8 +112,7 @@ def prepare(
     checked before the log is read for the map."""
     from itertools import islice
 
-    from scanlines.cli.common import method_options
-    from scanlines.cli.logs import _profile_for_run, compiled_for
+    from scanlines.cli.common import compiled_for, method_options, profile_for_run
     from scanlines.extractor import Extractor
     from scanlines.io import open_log
     from scanlines.map.fusion import FusionSettings
@@ -125,7 +127,7 @@ def prepare(
         typer.echo(f"poses: {log.name} carries none; {source.name}", err=True)
     selection = slice(None) if scans is None else slice(0, scans)
     with compiled_for(method):
-        profile = _profile_for_run(log, options, selection, sensor_profile)
+        profile = profile_for_run(log, options, selection, sensor_profile)
         extractor = Extractor(method, preset, sensor_profile=profile, **params)
         extractor.warm_up()
     return {"extractor": extractor, "poses": source, "settings": settings, "profile": profile}

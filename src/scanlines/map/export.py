@@ -10,8 +10,8 @@ from typing import Any
 import numpy as np
 
 from scanlines.errors import ParameterError
-from scanlines.io.outputs import check_output, commit, discard, temp_path, write_text_atomically
 from scanlines.map.fusion import MapLines
+from scanlines.outputs import check_output, commit, discard, temp_path, write_text_atomically
 
 __all__ = ["MAP_FORMATS", "check_map_format", "map_records", "write_map"]
 
@@ -37,7 +37,7 @@ def _ezdxf():
         import ezdxf
     except ImportError:
         raise ParameterError(
-            'a DXF map needs ezdxf: pip install "scanlines[map]" (or ".[map]" in a checkout)'
+            'a DXF map needs ezdxf: pip install ".[map]" (or ".[map]" in a checkout)'
         ) from None
     return ezdxf
 
