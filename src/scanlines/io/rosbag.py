@@ -305,21 +305,8 @@ class RosbagReader(LogReader):
             times: Counter[int] = Counter()
             for index, (connection, bag_time, raw) in enumerate(stream):
                 times[bag_time] += 1
-                try:
-                    message = reader.deserialize(raw, connection.msgtype)
-                    scan = self._scan(message, bag_time, index + 1)
-                except LogFormatError as error:
-                    self._bad_record(error)
-                    continue
-                except Exception as exc:  # a damaged message: any decoding error
-                    self._bad_record(
-                        LogFormatError(
-                            f"cannot decode ({describe(exc)})",
-                            path=self.path,
-                            record=index + 1,
-                            unit="message",
-                        )
-                    )
+                scan = self._decoded(reader.deserialize, raw, connection.msgtype, bag_time, index)
+                if scan is None:
                     continue
                 self.counts[self.topic] += 1
                 yield index, scan
@@ -363,21 +350,8 @@ class RosbagReader(LogReader):
                 continue
             index += 1
             conn, bag_time, raw = item
-            try:
-                message = deserialize(raw, wanted[conn].msgtype)
-                scan = self._scan(message, bag_time, index + 1)
-            except LogFormatError as error:
-                self._bad_record(error)
-                continue
-            except Exception as exc:  # a damaged message: any decoding error
-                self._bad_record(
-                    LogFormatError(
-                        f"cannot decode ({describe(exc)})",
-                        path=self.path,
-                        record=index + 1,
-                        unit="message",
-                    )
-                )
+            scan = self._decoded(deserialize, raw, wanted[conn].msgtype, bag_time, index)
+            if scan is None:
                 continue
             self.counts[self.topic] += 1
             yield index, scan
@@ -478,6 +452,24 @@ class RosbagReader(LogReader):
             unit="message",
         )
         self._bad_record(error, count=missing)
+
+    def _decoded(self, deserialize, raw, msgtype, bag_time, index):
+        """Message ``index``'s scan, or ``None`` once a malformed or undecodable message
+        is counted (or raised, in fail mode)."""
+        try:
+            return self._scan(deserialize(raw, msgtype), bag_time, index + 1)
+        except LogFormatError as error:
+            self._bad_record(error)
+        except Exception as exc:  # a damaged message: any decoding error
+            self._bad_record(
+                LogFormatError(
+                    f"cannot decode ({describe(exc)})",
+                    path=self.path,
+                    record=index + 1,
+                    unit="message",
+                )
+            )
+        return None
 
     def _scan(self, message: Any, bag_time: int, record: int) -> Scan:
         self._check_beams(len(message.ranges), record)
