@@ -183,3 +183,38 @@ def test_demo_writes_features_and_a_figure(tmp_path):
     assert len(lines) == 300
     assert (folder / "intel.png").read_bytes()[:4] == b"\x89PNG"
     assert str((folder / "intel.jsonl").resolve()) in out.stdout
+
+
+@pytest.mark.parametrize(
+    ("log", "scans", "counted"),
+    [
+        (FIXTURES / "intel_every5th_rows1098-1109.npz", None, "12/12"),  # the file says how many
+        (sample("intel"), "0:40", "40/40"),  # the selection bounds it
+    ],
+)
+def test_run_shows_percentage_and_time_left_when_the_count_is_known(
+    log, scans, counted, monkeypatch
+):
+    from typer.testing import CliRunner
+
+    from scanlines.cli import app
+
+    monkeypatch.setenv("FORCE_COLOR", "1")  # draw the bar as on a terminal
+    selection = ["--scans", scans] if scans else []
+    done = CliRunner().invoke(app, ["run", str(log), *selection, "--jobs", "1"])
+    assert done.exit_code == 0, done.output
+    assert "100%" in done.output
+    assert counted in done.output
+    assert "left" in done.output
+
+
+def test_run_counts_scans_without_a_total_when_the_log_does_not_say(monkeypatch):
+    from typer.testing import CliRunner
+
+    from scanlines.cli import app
+
+    monkeypatch.setenv("FORCE_COLOR", "1")
+    done = CliRunner().invoke(app, ["run", str(sample("intel")), "--jobs", "1"])
+    assert done.exit_code == 0, done.output
+    assert "%" not in done.output.split("extracting", 1)[1].split("\n", 1)[0]
+    assert "scans" in done.output

@@ -87,3 +87,27 @@ def test_stopped_runs_are_clean(long_log, tmp_path, request, signum, code) -> No
     print(f"{signal.Signals(signum).name}: {outcomes.count('stopped')} stopped, "
           f"{outcomes.count('finished')} finished first, of {runs}")  # fmt: skip
     assert outcomes.count("stopped") >= runs // 2, outcomes
+
+
+STOPPED_WHILE_PARSING = """
+import sys
+from typer.core import TyperGroup
+from scanlines.cli import main
+
+def interrupted(*args, **kwargs):
+    raise KeyboardInterrupt  # Ctrl-C while the options are parsed
+
+TyperGroup.make_context = interrupted
+sys.argv = ["scanlines", "run", sys.argv[1]]
+main()
+"""
+
+
+def test_ctrl_c_while_options_are_parsed_still_says_its_line() -> None:
+    """typer turns an interrupt during parsing into exit 130 of its own, with no line."""
+    done = subprocess.run(
+        [sys.executable, "-c", STOPPED_WHILE_PARSING, str(sample("intel"))],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert done.returncode == 130, done.stderr
+    assert done.stderr.strip().splitlines() == ["scanlines: interrupted"]

@@ -202,3 +202,23 @@ def test_a_process_pool_maps_an_extractor_over_scans(intel):
         here = extractor(scan)
         assert pickle.loads(pickle.dumps(here)).to_dict() == here.to_dict()
         assert result.to_dict() == here.to_dict()
+
+
+@pytest.mark.parametrize(
+    ("in_file", "text", "expected"),
+    [
+        (None, None, None),
+        (0, None, None),  # a declared 0 (a damaged index) is not a count
+        (100, None, 100),
+        (100, "10:20", 10),
+        (100, "90:200", 10),
+        (100, "::3", 34),
+        (None, "5:25:2", 10),
+        (None, "7", 1),
+        (100, "150:", 0),
+    ],
+)
+def test_selected_count_bounds_the_progress_bar(in_file, text, expected):
+    from scanlines.runner import parse_slice, selected_count
+
+    assert selected_count(in_file, parse_slice(text)) == expected

@@ -40,6 +40,7 @@ __all__ = [
     "parse_slice",
     "run_log",
     "run_log_to_file",
+    "selected_count",
 ]
 
 
@@ -73,6 +74,17 @@ def select(indexed: Iterator[tuple[int, Scan]], scans: slice) -> Iterator[tuple[
             break
         if index >= start and (index - start) % step == 0:
             yield index, scan
+
+
+def selected_count(scans_in_file: int | None, scans: slice) -> int | None:
+    """How many scan records of a log of ``scans_in_file`` fall in ``scans`` (``None``
+    when neither the log nor the selection bounds it; a declared 0 is taken as not known,
+    as a damaged index says that of a log that holds scans)."""
+    scans_in_file = scans_in_file or None
+    if scans_in_file is None and scans.stop is None:
+        return None
+    stop = scans.stop if scans_in_file is None else min(scans.stop or scans_in_file, scans_in_file)
+    return len(range(scans.start or 0, stop, scans.step or 1))
 
 
 def log_profile(

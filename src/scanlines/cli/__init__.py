@@ -35,6 +35,8 @@ def main() -> None:
     except SystemExit as done:
         ignore_signals()
         if done.code in (INTERRUPTED, TERMINATED):
+            if is_interrupt(done):  # Ctrl-C while typer parsed the options: it exits 130
+                print("scanlines: interrupted", file=sys.stderr)
             _leave(done.code)
         raise
     except BaseException as stop:  # an interrupt while starting, before a command runs

@@ -8,7 +8,7 @@ import math
 import sys
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Annotated, Any, Literal, TypeVar
 
@@ -103,18 +103,21 @@ def guarded(command: F, *, show_compilation: bool = True) -> F:
 class CompileProgress:
     """What the user sees on stderr while kernels compile (first use after an install).
 
-    Once compiling has gone on for :attr:`DELAY` seconds: on a terminal, a spinner naming
-    the kernel being compiled and the time so far; elsewhere (logs, CI) one line. When it
-    ends, a line says how long it took. Cache loads and short compilations say nothing.
+    A command compiles in bursts (the profile's kernels, then the method's, then the
+    writer's). Once a burst has gone on for :attr:`DELAY` seconds: on a terminal, a
+    spinner naming the kernel being compiled and the time so far; elsewhere (logs, CI)
+    one line, the first time only. When the command ends, one line says how many kernels
+    compiled in how long. Cache loads and short compilations say nothing.
     """
 
     DELAY = 1.0
 
     def __init__(self) -> None:
-        self.started: float | None = None
         self.kernels = 0
+        self.seconds = 0.0
+        self.announced = False
         self.current = ""
-        self.shown = False
+        self._burst_started: float | None = None
         self._display: Any = None
         self._task: Any = None
         self._timer: threading.Timer | None = None
@@ -124,8 +127,8 @@ class CompileProgress:
         with self._lock:
             self.kernels += 1
             self.current = name
-            if self.started is None:
-                self.started = time.perf_counter()
+            if self._burst_started is None:
+                self._burst_started = time.perf_counter()
                 self._timer = threading.Timer(self.DELAY, self._show)
                 self._timer.daemon = True
                 self._timer.start()
@@ -133,36 +136,45 @@ class CompileProgress:
                 self._display.update(self._task, description=self._text())
 
     def on_done(self) -> None:
+        """A burst of compilation ended."""
         with self._lock:
             if self._timer is not None:
                 self._timer.cancel()
             if self._display is not None:
                 self._display.stop()
-            if self.shown and self.started is not None:
-                seconds = time.perf_counter() - self.started
-                print(
-                    f"scanlines: compiled {self.kernels} kernels in {seconds:.0f} s "
-                    "(cached: later runs start at once)",
-                    file=sys.stderr,
-                )
-            self.__init__()
+                self._display = None
+            if self._burst_started is not None:
+                self.seconds += time.perf_counter() - self._burst_started
+                self._burst_started = None
+
+    def finish(self) -> None:
+        """The command ended: say what compiled, if the user was told it would."""
+        self.on_done()
+        if self.announced:
+            print(
+                f"scanlines: compiled {self.kernels} kernels in {self.seconds:.0f} s "
+                "(cached: later runs start at once)",
+                file=sys.stderr,
+            )
 
     def _text(self) -> str:
         return f"compiling kernels for first use (once per install): {self.current}"
 
     def _show(self) -> None:
         with self._lock:
-            if self.started is None or self.shown:
+            if self._burst_started is None or self._display is not None:
                 return
-            self.shown = True
             if not sys.stderr.isatty():
-                print(
-                    "scanlines: compiling kernels for first use (once per install; "
-                    "`scanlines compile` does it ahead of time)",
-                    file=sys.stderr,
-                    flush=True,
-                )
+                if not self.announced:
+                    print(
+                        "scanlines: compiling kernels for first use (once per install; "
+                        "`scanlines compile` does it ahead of time)",
+                        file=sys.stderr,
+                        flush=True,
+                    )
+                self.announced = True
                 return
+            self.announced = True
             from rich.console import Console
             from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
@@ -172,12 +184,19 @@ class CompileProgress:
             self._display.start()
 
 
-def compile_progress() -> Any:
+@contextlib.contextmanager
+def compile_progress() -> Iterator[CompileProgress]:
     """A context in which kernel compilation is shown on stderr (:class:`CompileProgress`)."""
     from scanlines._compile_watch import watch_compilation
 
     progress = CompileProgress()
-    return watch_compilation(progress.on_compile, progress.on_done)
+    with watch_compilation(progress.on_compile, progress.on_done):
+        try:
+            yield progress
+        except BaseException:  # an error or an interrupt says its own one line
+            progress.on_done()
+            raise
+    progress.finish()
 
 
 def jobs_option(jobs: int | None) -> int:

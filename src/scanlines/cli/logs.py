@@ -334,19 +334,13 @@ def _bins_text(profile) -> str:
 
 
 def _run_with_progress(reader, extractor, selection, out, frame, log, jobs, overwrite):
-    from rich.progress import BarColumn, Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+    from rich.progress import Progress
 
-    from scanlines.runner import run_log, run_log_to_file
+    from scanlines.runner import run_log, run_log_to_file, selected_count
 
-    columns = (
-        SpinnerColumn(),
-        TextColumn("{task.description}"),
-        BarColumn(),
-        TextColumn("{task.completed} scans"),
-        TimeElapsedColumn(),
-    )
-    with Progress(*columns, transient=True) as progress:
-        task = progress.add_task(f"extracting {log.name}", total=None)
+    total = selected_count(reader.scans_in_file, selection)
+    with Progress(*_progress_columns(total is not None), transient=True) as progress:
+        task = progress.add_task(f"extracting {log.name}", total=total)
 
         def advance(_index: int) -> None:
             progress.advance(task)
@@ -359,6 +353,28 @@ def _run_with_progress(reader, extractor, selection, out, frame, log, jobs, over
                 input_name=str(log), jobs=jobs, overwrite=overwrite,
             )  # fmt: skip
     return summary
+
+
+def _progress_columns(count_known: bool) -> tuple:
+    """A bar with percentage, count and time left when the scan count is known; a
+    spinner and the count so far when it is not."""
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        SpinnerColumn,
+        TaskProgressColumn,
+        TextColumn,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
+
+    description = TextColumn("{task.description}")
+    if count_known:
+        return (
+            description, BarColumn(), TaskProgressColumn(), MofNCompleteColumn(),
+            TimeElapsedColumn(), TextColumn("left"), TimeRemainingColumn(),
+        )  # fmt: skip
+    return (SpinnerColumn(), description, TextColumn("{task.completed} scans"), TimeElapsedColumn())
 
 
 def _print_summary(summary, out, notes=()) -> None:

@@ -137,6 +137,12 @@ class LogReader(ABC):
         return []
 
     @property
+    def scans_in_file(self) -> int | None:
+        """Scan records the file holds, counted or declared without reading it (``None``
+        where the format does not say), else those of the last complete iteration."""
+        return None if self.scan_count is None else self.scan_count + self.bad_scans
+
+    @property
     def recorded_mounting(self) -> tuple[float, float, float] | None:
         """See the class docstring; ``None`` for formats that record no robot pose."""
         return None

@@ -267,6 +267,10 @@ class NpzReader(LogReader):
             keys += [k for k in group if k in self.headers][:1]
         return keys
 
+    @property
+    def scans_in_file(self) -> int:
+        return self.n_scans
+
     def info(self) -> dict[str, Any]:
         """Metadata known from the array headers: scan and beam counts, keys used and ignored."""
         used = self._used_keys()

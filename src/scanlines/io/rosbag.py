@@ -279,6 +279,10 @@ class RosbagReader(LogReader):
         """Resolved options: the topic read."""
         return {**super().options(), "topic": self.topic}
 
+    @property
+    def scans_in_file(self) -> int:
+        return self.topics[self.topic][1]
+
     def info(self) -> dict[str, Any]:
         """Reader metadata plus the bag's topics and the scan count of the topic read (and,
         for a ROS 1 bag read by its chunks, ``index_note``: why)."""
@@ -287,7 +291,7 @@ class RosbagReader(LogReader):
             "ros_version": self.ros_version,
             "topic": self.topic,
             "topics": {t: {"type": m, "messages": n} for t, (m, n) in sorted(self.topics.items())},
-            "scans_in_file": self.topics[self.topic][1],
+            "scans_in_file": self.scans_in_file,
         }
         if self.index_note:
             info["index_note"] = self.index_note
