@@ -8,13 +8,16 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from scanlines import Extractor, _jit
+from scanlines.builtin_methods import BUILTIN_METHODS
 from scanlines.data import sample
 from scanlines.io import open_log
 from scanlines.methods import CompiledMethod, method_class
@@ -38,6 +41,7 @@ json.dump(out, sys.stdout)
 
 
 COMPILED_METHODS = ("adaptive", "iepf", "pdbs", "split_merge")
+ALL_METHODS = BUILTIN_METHODS
 
 
 def _run(disable_jit: bool, method: str = "adaptive") -> list:
@@ -62,11 +66,37 @@ def test_plain_python_kernels_give_the_compiled_results(method):
         )
 
 
-def test_cache_directory_is_keyed_by_the_sources(monkeypatch, tmp_path):
+def test_each_module_caches_under_the_hash_of_what_it_imports(monkeypatch, tmp_path):
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
-    directory = _jit._cache_dir()
+    directory = _jit.cache_dir("scanlines.methods.iepf")
     assert directory.parent == tmp_path
-    assert directory.name == f"numba-{_jit._source_hash()}"
+    assert directory.name == f"methods.iepf-{_jit._source_hash('scanlines.methods.iepf')}"
+    files = {path.name for path in _jit._imported_files("scanlines.methods.iepf")}
+    assert {"iepf.py", "base.py", "split.py", "fit.py", "_jit.py", "scan.py"} <= files
+    assert not {"hough.py", "adaptive.py", "partition.py"} & files
+
+
+def test_an_edit_to_one_method_leaves_the_other_methods_cached(monkeypatch, tmp_path):
+    """A copy of the package with ``hough.py`` edited: hough's key changes, every
+    method's key that does not import it stays; an edit to a step changes them all."""
+    copy = tmp_path / "scanlines"
+    shutil.copytree(Path(_jit.__file__).parent, copy, ignore=shutil.ignore_patterns("*.pyc"))
+    monkeypatch.setattr(_jit, "_PACKAGE", copy)
+
+    def keys() -> dict[str, str]:
+        _jit._source_hash.cache_clear()
+        return {m: _jit._source_hash(f"scanlines.methods.{m}") for m in ALL_METHODS}
+
+    before = keys()
+    with (copy / "methods" / "hough.py").open("a") as source:
+        source.write("\n# an edit\n")
+    after_hough = keys()
+    with (copy / "steps" / "fit.py").open("a") as source:
+        source.write("\n# an edit\n")
+    after_step = keys()
+    _jit._source_hash.cache_clear()
+    assert {m for m in ALL_METHODS if after_hough[m] != before[m]} == {"hough"}
+    assert all(after_step[m] != after_hough[m] for m in ALL_METHODS)
 
 
 @pytest.mark.parametrize("method", COMPILED_METHODS)

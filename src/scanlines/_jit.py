@@ -7,17 +7,22 @@ of the package) the kernels are compiled on first use and cached next to the
 sources' fingerprint; without it (or with ``NUMBA_DISABLE_JIT=1``) the same
 functions run as ordinary Python: identical results, far slower.
 
-The cache lives in a directory named by a hash of the kernels' sources: numba
-checks only the file of the function it compiles, while a kernel links
-kernels of other files, so a changed step must invalidate every kernel. It is
-``$NUMBA_CACHE_DIR/numba-<hash>`` if that variable is set, else under
-``$XDG_CACHE_HOME`` (default ``~/.cache``).
+Each module's kernels are cached in a directory of their own, named by a hash of the
+module's source and of every package module it imports, directly or not: numba checks
+only the file of the function it compiles, while a kernel links kernels (and reads
+constants) of the modules it imports. So an edit to one method recompiles that
+method's kernels alone, and an edit to a step recompiles every method built on it.
+The directories are ``<module>-<hash>`` under ``$NUMBA_CACHE_DIR`` if that variable is
+set, else under ``$XDG_CACHE_HOME/scanlines`` (default ``~/.cache``).
 """
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import os
+import re
+import sys
 import threading
 import time
 from collections.abc import Callable
@@ -33,35 +38,83 @@ try:
 except ImportError:  # pragma: no cover - exercised only without numba
     numba = None
 
-__all__ = ["COMPILED", "kernel", "kernel_seconds", "scan_kernel"]
+__all__ = ["COMPILED", "cache_dir", "cache_root", "kernel", "kernel_seconds", "scan_kernel"]
 
 COMPILED = numba is not None and not numba.config.DISABLE_JIT
 
 
-KERNEL_SOURCES = ("_jit.py", "steps/*.py", "methods/*.py", "io/_number_kernels.py")
-"""The package files that hold kernels (the cache key hashes them)."""
+_PACKAGE = Path(__file__).parent
 
 
-def _source_hash() -> str:
-    package = Path(__file__).parent
+def cache_root() -> Path:
+    """The folder holding every module's kernel cache."""
+    return Path(
+        os.environ.get("NUMBA_CACHE_DIR")
+        or os.path.join(
+            os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "scanlines"
+        )
+    )
+
+
+def cache_dir(module: str) -> Path:
+    """The cache folder of the kernels of ``module`` (the module docstring)."""
+    return cache_root() / f"{module.removeprefix('scanlines.')}-{_source_hash(module)}"
+
+
+@functools.cache
+def _source_hash(module: str) -> str:
     digest = hashlib.sha1()
-    for pattern in KERNEL_SOURCES:
-        for path in sorted(package.glob(pattern)):
-            digest.update(path.read_bytes())
+    for path in sorted(_imported_files(module)):
+        digest.update(path.relative_to(_PACKAGE.parent).as_posix().encode())
+        digest.update(path.read_bytes())
     return digest.hexdigest()[:16]
 
 
-def _cache_dir() -> Path:
-    root = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(
-        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "scanlines"
-    )
-    return Path(root) / f"numba-{_source_hash()}"
+def _imported_files(module: str) -> set[Path]:
+    """The file of ``module`` and of every package module it imports at its top level,
+    directly or through others (a module outside the package: its own file)."""
+    if not module.startswith("scanlines."):
+        found = sys.modules.get(module)
+        path = getattr(found, "__file__", None)
+        return {Path(path)} if path else set()
+    files: set[Path] = set()
+    waiting = [module]
+    while waiting:
+        path = _module_file(waiting.pop())
+        if path is None or path in files:
+            continue
+        files.add(path)
+        waiting.extend(_top_level_imports(path))
+    return files
+
+
+def _module_file(module: str) -> Path | None:
+    base = _PACKAGE.joinpath(*module.split(".")[1:])
+    for path in (base.with_suffix(".py"), base / "__init__.py"):
+        if path.is_file():
+            return path
+    return None
+
+
+_FROM_IMPORT = re.compile(r"^from (scanlines[\w.]*) import (\([^)]*\)|[^\n]*)", re.MULTILINE)
+_IMPORT = re.compile(r"^import (scanlines[\w.]*)", re.MULTILINE)
+
+
+@functools.cache
+def _top_level_imports(path: Path) -> list[str]:
+    """The package modules ``path`` imports at column 0 (``from a import b`` names
+    ``a.b`` where that is a module); imports under ``TYPE_CHECKING`` reach no kernel."""
+    text = path.read_text(encoding="utf-8")
+    found = _IMPORT.findall(text)
+    for module, names in _FROM_IMPORT.findall(text):
+        words = (name.split(" as ")[0].strip() for name in names.strip("()").split(","))
+        submodules = [f"{module}.{word}" for word in words if word and word.isidentifier()]
+        found += [name for name in submodules if _module_file(name)] or [module]
+    return found
 
 
 if numba is not None:
     import numba.core.event
-
-    numba.config.CACHE_DIR = str(_cache_dir())
 
     class _ClockListener(numba.core.event.Listener):
         def on_start(self, event: Any) -> None:
@@ -158,7 +211,7 @@ def kernel(function: F) -> F:
     """
     if numba is None:  # pragma: no cover
         return function
-    return numba.njit(cache=True, nogil=True, error_model="numpy")(function)
+    return _cached_in_own_folder(numba.njit(cache=True, nogil=True, error_model="numpy"), function)
 
 
 def scan_kernel(function: F) -> F:
@@ -168,4 +221,19 @@ def scan_kernel(function: F) -> F:
     on a cold cache (every kernel's machine code is emitted again with its callers')."""
     if numba is None:  # pragma: no cover
         return function
-    return numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")(function)
+    decorate = numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
+    return _cached_in_own_folder(decorate, function)
+
+
+_DECORATING = threading.Lock()
+
+
+def _cached_in_own_folder(decorate: Callable[[F], F], function: F) -> F:
+    """``decorate(function)`` with its cache in :func:`cache_dir` of its module (numba
+    places a function's cache where ``CACHE_DIR`` points when it is decorated)."""
+    with _DECORATING:
+        numba.config.CACHE_DIR = str(cache_dir(function.__module__))
+        try:
+            return decorate(function)
+        finally:
+            numba.config.CACHE_DIR = str(cache_root())

@@ -110,7 +110,10 @@ def start_stage_compiler(method: str) -> subprocess.Popen | None:
     from scanlines.runner import default_jobs
 
     stages = getattr(method_class(method), "stages", ())
-    if not (COMPILED and stages and default_jobs() > 1) or all(map(_cached, stages)):
+    if not (COMPILED and stages and default_jobs() > 1):
+        return None
+    module = sys.modules[method_class(method).__module__]
+    if all(_cached(getattr(module, stage)) for stage in stages):
         return None
     command = [sys.executable, "-m", "scanlines.warm", "stages", method]
     return subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -135,10 +138,12 @@ def stop(helper: subprocess.Popen | None) -> None:
         helper.wait(timeout=30)
 
 
-def _cached(kernel_name: str) -> bool:
-    import numba
+def _cached(dispatcher: Any) -> bool:
+    """Whether a compiled kernel has an entry in the cache of its module."""
+    from scanlines._jit import cache_dir
 
-    return any(Path(numba.config.CACHE_DIR).rglob(f"*.{kernel_name}-*.nbi"))
+    function = dispatcher.py_func
+    return any(cache_dir(function.__module__).rglob(f"*.{function.__name__}-*.nbi"))
 
 
 def _compile_stages(method: str) -> None:

@@ -28,7 +28,7 @@ def compile_command(
         typer.Option("--jobs", "-j", help="Processes compiling at once (default: every core)."),
     ] = None,
 ) -> None:
-    from scanlines._jit import COMPILED, _cache_dir
+    from scanlines._jit import COMPILED, cache_root
     from scanlines.warm import compile_kernels
 
     if not COMPILED:
@@ -40,4 +40,4 @@ def compile_command(
         typer.echo(f"{name}: {seconds:.1f} s", err=True)
 
     compile_kernels(method or None, jobs_option(jobs), on_done=done)
-    typer.echo(f"kernels ready in {time.perf_counter() - started:.1f} s, cached in {_cache_dir()}")
+    typer.echo(f"kernels ready in {time.perf_counter() - started:.1f} s, cached in {cache_root()}")
