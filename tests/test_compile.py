@@ -15,17 +15,42 @@ from scanlines._jit import COMPILED
 
 pytestmark = pytest.mark.skipif(not COMPILED, reason="numba disabled: nothing compiles")
 
-RUN_COLD = """
+COLD_PROCESS = """
 import json, sys
-from scanlines import Extractor
+import numpy as np
+from numba.core.registry import CPUDispatcher
+from scanlines import Extractor, Scan
+from scanlines.builtin_methods import BUILTIN_METHODS
 from scanlines.data import sample
 from scanlines.io import open_log
-from scanlines.runner import run_log
-with open_log(sample("intel")) as reader:
+from scanlines.runner import log_profile, run_log
+
+with open_log(sample("intel")) as reader:  # first: a run that compiles inside it
     summary = run_log(reader, Extractor(sys.argv[1]), jobs=2)
 print(json.dumps({"compile": summary.compile_seconds, "extract": summary.extract_seconds,
                   "total": summary.total_seconds, "scans": summary.scans}))
+with open_log(sample("intel")) as reader:  # then every method, every kind of input
+    scans = [scan for _, scan in zip(range(12), reader)]
+as_float32 = [Scan(s.ranges.astype(np.float32), s.angle_min, s.angle_increment,
+                   s.range_min, s.range_max) for s in scans]
+profile = log_profile(sample("intel"), {})
+ranges = np.stack([s.ranges for s in scans[:4]])
+for method in BUILTIN_METHODS:
+    for options, inputs in (({}, scans), ({"sensor_profile": profile}, scans), ({}, as_float32)):
+        extractor = Extractor(method, **options)
+        for scan in inputs:
+            extractor(scan)
+        extractor.batch(ranges, scans[0].angle_min, scans[0].angle_increment)
+for name, module in list(sys.modules.items()):
+    if name.startswith("scanlines"):
+        for attribute, value in vars(module).items():
+            if isinstance(value, CPUDispatcher) and value.__module__ == name:
+                if len(value.signatures) > 1 and attribute not in sys.argv[2:]:
+                    print(f"{name}.{attribute}: {value.signatures}")
 """
+
+#: Kernels meant for several argument types (one signature per array dtype).
+GENERIC_KERNELS = ("room_for",)
 
 #: A method whose own kernels are few (clustering, events and assembly are shared).
 CHEAP = "line_regression"
@@ -35,17 +60,33 @@ def fresh_cache(tmp_path: Path) -> dict[str, str]:
     return dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
 
 
-def test_run_summary_leaves_compilation_out_on_a_cold_cache(tmp_path):
-    out = subprocess.run(
-        [sys.executable, "-c", RUN_COLD, CHEAP],
-        env=fresh_cache(tmp_path), capture_output=True, text=True, check=True, timeout=600,
+@pytest.fixture(scope="module")
+def cold_process(tmp_path_factory) -> list[str]:
+    """One process from an empty cache: a run, then every method (:data:`COLD_PROCESS`)."""
+    folder = tmp_path_factory.mktemp("cold")
+    done = subprocess.run(
+        [sys.executable, "-c", COLD_PROCESS, CHEAP, *GENERIC_KERNELS],
+        env=fresh_cache(folder), capture_output=True, text=True, timeout=1800,
     )  # fmt: skip
-    summary = json.loads(out.stdout)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return done.stdout.splitlines()
+
+
+def test_run_summary_leaves_compilation_out_on_a_cold_cache(cold_process):
+    summary = json.loads(cold_process[0])
     assert summary["scans"] == 300
     assert summary["compile"] > 2.0  # compiled here, inside the run
     # 300 scans of 180 beams take milliseconds once compiled; compilation takes seconds.
     assert summary["extract"] < summary["compile"] / 4
     assert summary["total"] < summary["compile"] / 2
+
+
+def test_every_kernel_holds_one_signature_after_every_method_ran(cold_process):
+    """Production passes one type per argument (float32 ranges and profiles included):
+    a second signature is a second compile of that kernel and all it calls. From an
+    empty cache, since a kernel called inside another is typed (and specialised, a
+    literal ``True`` or ``0`` as a type of its own) only when its caller compiles."""
+    assert cold_process[1:] == []
 
 
 def test_compile_command_fills_the_cache_and_later_processes_only_load(tmp_path):

@@ -36,7 +36,7 @@ def read_fields(data, powers):
         end = i
         while end < n and not is_space(data[end]):
             end += 1
-        values[count], kinds[count] = read_number(data, i, end, powers)
+        values[count], kinds[count] = read_number(data, np.int64(i), end, powers)
         if kinds[count] == NOT_A_NUMBER:
             texts[text_count] = count
             text_count += 1

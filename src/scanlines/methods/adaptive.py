@@ -467,7 +467,7 @@ def direction_sigmas(returns, moments, a, b, sigma):
     """Standard deviation of each segment's direction, from the noise (``sigma`` per
     return) and its residuals."""
     rho, alpha, _ = fit_many(np.int64(TLS), moments, a, b)
-    covariance = run_covariances(returns, rho, alpha, a, b, sigma, True)
+    covariance = run_covariances(returns, rho, alpha, a, b, sigma, np.bool_(True))
     return np.sqrt(covariance[:, 1, 1])
 
 
@@ -581,7 +581,7 @@ def segments(returns, cost, start, end, corners, unit, s, noise, sigma):
         a, b, owner = merge_by_criterion(cost, a, b, owner, segment_cost)
         if s.merge_chi2 > 0.0 and s.fit != PAPER:
             a, b, owner = merge_by_chi_square(
-                returns, cost.moments, a, b, owner, sigma, s.merge_chi2, True
+                returns, cost.moments, a, b, owner, sigma, s.merge_chi2, np.bool_(True)
             )
     if s.max_residual < math.inf:
         tolerance = residual_tolerances(returns.r, noise, s.max_residual)

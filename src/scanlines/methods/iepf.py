@@ -200,4 +200,4 @@ def cluster_and_split(returns, n_beams, step, full_circle, s, noise):
     a, b, group = split_at_farthest(
         returns.x, returns.y, moments, start, end, clusters, s.split_distance, s.split_reference
     )
-    return returns, moments, (a, b, group), (True, ring, breakpoints)
+    return returns, moments, (a, b, group), (np.bool_(True), ring, breakpoints)

@@ -126,7 +126,7 @@ def _lines_and_covariances(
     a = np.ascontiguousarray(a, dtype=np.int64)
     b = np.ascontiguousarray(b, dtype=np.int64)
     rho, alpha, _ = fit_many(TLS, moments, a, b)
-    return rho, alpha, run_covariances(returns, rho, alpha, a, b, sigma, False)
+    return rho, alpha, run_covariances(returns, rho, alpha, a, b, sigma, np.bool_(False))
 
 
 def _similar_windows(

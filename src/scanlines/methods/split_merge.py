@@ -140,7 +140,9 @@ def split_merge_scan(ranges, valid, cos, sin, step, full_circle, angle_min, nois
     )
     a, b, group = drop_small(returns.x, returns.y, a, b, group, s.min_points, s.min_length)
     sigma = covariance_sigmas(s.range_sigma, noise, returns, beam_gaps(returns.index, n_beams))
-    a, b, group = merge_by_chi_square(returns, moments, a, b, group, sigma, s.merge_chi2, False)
+    a, b, group = merge_by_chi_square(
+        returns, moments, a, b, group, sigma, s.merge_chi2, np.bool_(False)
+    )
     return finish(
         returns, n_beams, full_circle, moments, (a, b, group), clusters, outliers, angle_min,
         output(s), noise,

@@ -85,7 +85,7 @@ def assemble(returns, fit, moments, a, b, angle_min, sigma, events, scan_shape):
     breakpoints, corners, outliers = np.sort(events[0]), np.sort(events[1]), np.sort(events[2])
     n_beams, wrap = scan_shape
     rho, alpha, _ = fit_many(fit, moments, a, b)
-    covariance = run_covariances(returns, rho, alpha, a, b, sigma, True)
+    covariance = run_covariances(returns, rho, alpha, a, b, sigma, np.bool_(True))
     m = a.shape[0]
     lines = np.empty((m, N_LINE_COLUMNS))
     cos_t, sin_t = math.cos(angle_min), math.sin(angle_min)

@@ -167,7 +167,7 @@ def segment_events(returns, n_beams, moments, a, b, group, clustered, wrap, boun
         to_start = math.hypot(x[start] - cx, y[start] - cy)
         near = (index[start] - index[end]) % max(n_beams, 1) <= corner_beams
         if near and turns and to_end <= corner_distance and to_start <= corner_distance:
-            at = nearest_return(x, y, cx, cy, a[i], end, start, b[j], reach, widest)
+            at = nearest_return(x, y, cx, cy, a[i], end, start, b[j], reach, np.int64(widest))
             corners[n_corners] = index[at]
             n_corners += 1
             continue

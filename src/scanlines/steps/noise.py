@@ -120,7 +120,7 @@ def local_residuals(returns, gap):
         stretch_start[i] = stretch_start[i - 1] if gap[i - 1] <= MAX_BRIDGED_GAP else i
     # A window without missing beams has the offsets -h..h: the same sums every time
     # (small integers, exact in any order of summation).
-    contiguous = offset_power_sums(np.arange(2 * h + 1), 0, 2 * h, h)
+    contiguous = offset_power_sums(np.arange(2 * h + 1), np.int64(0), np.int64(2 * h), np.int64(h))
     for i in range(h, n - h):
         if stretch_start[i + h] > i - h or r[i] <= 0.0:
             continue
