@@ -341,6 +341,59 @@ def test_api_world_view_needs_poses(tmp_path):
     assert "scans.csv has no poses" in answer["error"]
 
 
+def library_map(path: Path, config: dict):
+    """The line map ``scanlines map`` builds of the log at ``path`` with ``config``."""
+    from scanlines.map import build_map
+
+    checked = ExtractionConfig.from_dict(config)
+    extractor = Extractor(
+        checked.method, checked.preset, sensor_profile=log_profile(path, {}), **checked.params
+    )
+    with open_log(path) as reader:
+        return build_map(reader.enumerate(), extractor).line_map.lines()
+
+
+def test_api_map_is_the_library_map_of_the_log_in_the_world_frame(intel_server):
+    config = {"method": "adaptive", "params": {"min_points": 6}}
+    status, answer = request(intel_server, "/api/map", {"config": config})
+    assert status == 200, answer
+    lines = answer["lines"]
+    assert len(lines) > 10
+    ends = np.array([[line["start"], line["end"]] for line in lines])
+    assert np.isfinite(ends).all()
+    expected = library_map(sample("intel"), config)
+    assert len(lines) == len(expected)
+    np.testing.assert_allclose(ends[:, 0], expected.start)
+    np.testing.assert_allclose(ends[:, 1], expected.end)
+    assert [line["scans"] for line in lines] == expected.scans.tolist()
+    assert [line["first_scan"] for line in lines] == expected.first_scan.tolist()
+    assert [line["last_scan"] for line in lines] == expected.last_scan.tolist()
+    assert answer["config"]["params"] == {"min_points": 6}
+    assert answer["scans"] == 300
+
+
+def test_api_map_is_built_once_per_configuration(intel_server):
+    session = intel_server.session
+    first = session.line_map({"method": "adaptive"})
+    assert session.line_map({"method": "adaptive", "params": {}}) is first
+    other = session.line_map({"method": "split_merge"})
+    assert other is not first
+    assert other["config"]["method"] == "split_merge"
+
+
+def test_api_map_of_a_log_without_poses_says_why(tmp_path):
+    log = tmp_path / "scans.csv"
+    log.write_text("1.0, 1.0, 1.0, 1.0\n2.0, 2.0, 2.0, 2.0\n")
+    from scanlines.viewer import ViewerServer
+
+    store = ScanStore(log, {"angle_min": -0.1, "angle_increment": 0.05})
+    with ViewerServer(ViewerSession(store)) as server:
+        status, answer = request(server, "/api/map", {"config": {}})
+        assert request(server, "/api/map", b"{}")[0] == 400  # no configuration
+    assert status == 409
+    assert answer == {"error": "scans.csv has no poses: no line map"}
+
+
 def test_api_config_is_a_toml_file_and_a_command_line(intel_server, tmp_path):
     config = {
         "method": "split_merge",

@@ -265,12 +265,120 @@ def test_each_layer_can_be_switched_off_and_on(page, layer):
     layer_box(page, layer).uncheck()
     drawn = page.evaluate("window.viewer.stats.drawn")
     assert drawn["layers"][layer] == 0
-    assert all(n > 0 for name, n in drawn["layers"].items() if name != layer), drawn
+    shown = {name: n for name, n in drawn["layers"].items() if name not in (layer, "map")}
+    assert all(n > 0 for n in shown.values()), drawn
     assert page.evaluate(INKED_PIXELS) < inked
     assert page.locator(f'#legend li[data-layer="{layer}"]').count() == 0
     layer_box(page, layer).check()
     assert page.evaluate("window.viewer.stats.drawn")["layers"][layer] > 0
     assert page.evaluate(INKED_PIXELS) == inked
+
+
+#: Record every text the map's state line shows, in ``window.mapStates``.
+MAP_STATES_SEEN = """() => {
+  window.mapStates = [];
+  const line = document.querySelector('#map-state');
+  new MutationObserver(() => window.mapStates.push(line.textContent))
+    .observe(line, { childList: true, characterData: true, subtree: true });
+}"""
+
+
+def map_line_on_screen(page, line: dict, pose) -> tuple[float, float]:
+    """Where the page draws the middle of a map line: in the frame of the scan at ``pose``
+    (or the world frame, ``None``), through the view's transform."""
+    middle = (np.array(line["start"]) + np.array(line["end"])) / 2
+    if pose is not None:
+        x0, y0, theta = pose
+        c, s = np.cos(theta), np.sin(theta)
+        dx, dy = middle - (x0, y0)
+        middle = np.array([c * dx + s * dy, -s * dx + c * dy])
+    transform = page.evaluate("window.viewer.state.transform")
+    box = page.locator("#view-0 canvas").bounding_box()
+    return (
+        box["x"] + transform["x"] + middle[0] * transform["scale"],
+        box["y"] + transform["y"] - middle[1] * transform["scale"],
+    )
+
+
+def test_the_map_layer_draws_the_line_map_under_the_scan(page):
+    assert not layer_box(page, "map").is_checked()  # off at start
+    assert page.evaluate("window.viewer.stats.drawn.layers.map") == 0
+    page.evaluate(MAP_STATES_SEEN)
+    layer_box(page, "map").check()
+    page.wait_for_function("window.viewer.state.mapState !== 'building'", timeout=120_000)
+    assert page.evaluate("window.viewer.state.mapState") == "built"
+    lines = page.evaluate("window.viewer.state.map.lines")
+    assert len(lines) > 10
+    assert page.evaluate("window.viewer.stats.drawn.layers.map") == len(lines)
+    assert page.evaluate("window.viewer.stats.drawn.shapes.map") == "line"
+    assert page.evaluate("window.mapStates")[0] == "building map…"
+    assert f"{len(lines)} map lines" in page.locator("#map-state").inner_text()
+    legend = page.locator('#legend li[data-layer="map"]')
+    assert legend.inner_text() == "map lines"
+    assert legend.locator("svg").get_attribute("data-shape") == "line"
+    # drawn in the sensor frame of scan 0, in the map's colour, under its returns
+    pose = page.evaluate("window.viewer.state.frame.pose")
+    colour = page.evaluate("STROKES.map.colour")
+    box = page.locator("#view-0 canvas").bounding_box()
+    middles = [map_line_on_screen(page, line, pose) for line in lines]
+    in_view = [(x, y) for x, y in middles if within(box, x, y)]
+    assert len(in_view) > 3
+    assert sum(pixel_is(page, x, y, colour) for x, y in in_view) > len(in_view) // 2
+    ARTIFACTS.mkdir(exist_ok=True)
+    page.screenshot(path=ARTIFACTS / "viewer-map-layer.png")
+    page.locator("#world-span").fill("300")
+    before = frames(page)
+    page.locator("#scan-slider").fill("299")
+    redrawn(page, before)
+    before = frames(page)
+    page.locator("#world-radio").check()
+    drawn = redrawn(page, before)
+    assert drawn["layers"]["map"] == len(lines)
+    page.screenshot(path=ARTIFACTS / "viewer-map-layer-world.png")
+    layer_box(page, "map").uncheck()
+    assert page.evaluate("window.viewer.stats.drawn.layers.map") == 0
+    assert page.locator('#legend li[data-layer="map"]').count() == 0
+
+
+def test_the_map_layer_of_a_log_without_poses_says_why(browser, tmp_path):
+    from scanlines.viewer import ScanStore, ViewerServer, ViewerSession
+
+    log = tmp_path / "scans.csv"
+    log.write_text("1.0, 1.0, 1.0, 1.0\n2.0, 2.0, 2.0, 2.0\n")
+    store = ScanStore(log, {"angle_min": -0.1, "angle_increment": 0.05})
+    with ViewerServer(ViewerSession(store)) as server:
+        page = browser.new_page()
+        page.goto(server.url)
+        page.wait_for_function(FEATURES_DRAWN)
+        layer_box(page, "map").check()
+        page.wait_for_function("window.viewer.state.mapState === 'failed'", timeout=60_000)
+        message = "scans.csv has no poses: no line map"
+        assert message in page.locator("#map-state").inner_text()
+        assert message in page.locator("#error").inner_text()
+        page.close()
+
+
+def within(box: dict, x: float, y: float, margin: float = 5) -> bool:
+    return (
+        box["x"] + margin < x < box["x"] + box["width"] - margin
+        and box["y"] + margin < y < box["y"] + box["height"] - margin
+    )
+
+
+def pixel_is(page, x: float, y: float, colour: str) -> bool:
+    """Whether the canvas pixel at page position ``(x, y)`` is ``colour`` (``#rrggbb``)."""
+    box = page.locator("#view-0 canvas").bounding_box()
+    rgb = page.evaluate(
+        """([x, y]) => {
+          const canvas = document.querySelector('#view-0 canvas');
+          const ratio = canvas.width / canvas.clientWidth;
+          const data = canvas.getContext('2d').getImageData(x * ratio, y * ratio, 1, 1).data;
+          return [data[0], data[1], data[2], data[3]];
+        }""",
+        [x - box["x"], y - box["y"]],
+    )
+    expected = [int(colour[k : k + 2], 16) for k in (1, 3, 5)]
+    return rgb[3] == 255 and all(abs(a - b) <= 2 for a, b in zip(rgb[:3], expected, strict=True))
 
 
 def test_the_legend_shows_the_symbol_each_layer_is_drawn_with(page):

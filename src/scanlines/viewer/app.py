@@ -9,6 +9,8 @@
 ``/api/frame``           POST    ``{"index", "configs": [config, config?]}``: a scan's returns
                                  and, per configuration, its features and their differences
 ``/api/world``           POST    ``{"first", "last", "config"}``: a stretch in the world frame
+``/api/map``             POST    ``{"config"}``: the log's line map in the world frame (built
+                                 on first request and kept; 409 for a log without poses)
 ``/api/config``          POST    ``{"config", "log"?}``: the configuration as a TOML file and
                                  as a ``scanlines run`` command line
 =======================  ======  ===========================================================
@@ -39,7 +41,7 @@ from starlette.staticfiles import StaticFiles
 
 from scanlines.config import ExtractionConfig
 from scanlines.errors import ScanlinesError, one_line
-from scanlines.viewer.session import ViewerSession, methods
+from scanlines.viewer.session import NoPoses, ViewerSession, methods
 
 __all__ = ["MAX_BODY_BYTES", "BadRequest", "allowed_hosts", "create_app"]
 
@@ -128,6 +130,10 @@ def create_app(session: ViewerSession, hosts: frozenset[str] | None = None) -> A
         config = _field(body, "config", dict)
         return JSON(await run_in_threadpool(session.world, first, last, config))
 
+    async def line_map(request: Request) -> Response:
+        config = _field(await _body(request), "config", dict)
+        return JSON(await run_in_threadpool(session.line_map, config))
+
     async def config(request: Request) -> Response:
         body = await _body(request)
         checked = ExtractionConfig.from_dict(_field(body, "config", dict), source="configuration")
@@ -135,7 +141,7 @@ def create_app(session: ViewerSession, hosts: frozenset[str] | None = None) -> A
         return JSON({"toml": checked.to_toml(), "command": checked.command(str(log_name))})
 
     async def refused(request: Request, error: Exception) -> Response:
-        status = error.status if isinstance(error, Refused) else 400
+        status = error.status if isinstance(error, Refused | NoPoses) else 400
         return JSON({"error": one_line(str(error))}, status_code=status)
 
     async def failed(request: Request, error: Exception) -> Response:
@@ -147,6 +153,7 @@ def create_app(session: ViewerSession, hosts: frozenset[str] | None = None) -> A
         Route("/api/methods", method_list),
         Route("/api/frame", frame, methods=["POST"]),
         Route("/api/world", world, methods=["POST"]),
+        Route("/api/map", line_map, methods=["POST"]),
         Route("/api/config", config, methods=["POST"]),
         Mount("/static", StaticFiles(directory=str(STATIC)), name="static"),
     ]

@@ -1,6 +1,6 @@
 """What the viewer shows, computed through the library: a scan's features under one or two
-configurations (with their differences), a stretch of the log in the world frame, and the
-methods with their parameter domains.
+configurations (with their differences), a stretch of the log in the world frame, the
+log's line map, and the methods with their parameter domains.
 
 A configuration is ``{"method": ..., "preset": ..., "params": {...}}`` (the parameters the
 user changed; :class:`scanlines.config.ExtractionConfig`). Scans are extracted as
@@ -13,7 +13,7 @@ from __future__ import annotations
 import threading
 import time
 from collections import OrderedDict
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -25,14 +25,21 @@ from scanlines.viewer.scan_store import ScanStore
 if TYPE_CHECKING:  # the extraction modules load numba: imported on first use, so that
     # the page is served (and the first scan's returns drawn) while they load
     from scanlines.extractor import Extractor
+    from scanlines.map import MapLines
     from scanlines.scan import Scan
     from scanlines.sensor_profile import SensorProfile
 
-__all__ = ["MAX_WORLD_SCANS", "ViewerSession", "methods"]
+__all__ = ["MAX_WORLD_SCANS", "NoPoses", "ViewerSession", "methods"]
 
 #: Most scans a world view extracts (a longer stretch is sampled evenly).
 MAX_WORLD_SCANS = 600
 _CACHED_EXTRACTORS = 16
+
+
+class NoPoses(ParameterError):
+    """A view that needs the log's poses, asked of a log without them (HTTP 409)."""
+
+    status = 409
 
 
 def methods() -> list[dict[str, Any]]:
@@ -89,6 +96,8 @@ class ViewerSession:
         self.first_frame = threading.Event()
         """Set once a frame has been served (background work may wait for it)."""
         self._prepare_lock = threading.Lock()
+        self._map: tuple[str, dict[str, Any]] | None = None  # (configuration key, the map)
+        self._map_lock = threading.Lock()
         self.ready = threading.Event()
         """Set once the first configuration's kernels are loaded and the profile measured
         (:meth:`prepare`); the page says it is preparing until then."""
@@ -236,6 +245,59 @@ class ViewerSession:
             "segments": np.concatenate(segments) if segments else np.zeros((0, 4)),
             "x": np.concatenate(xs), "y": np.concatenate(ys), "path": np.array(path),
         }  # fmt: skip
+
+    # -- the line map ---------------------------------------------------------------------
+
+    def line_map(self, config: Mapping[str, Any]) -> dict[str, Any]:
+        """The line map of the whole log (:func:`scanlines.map.build_map`, as ``scanlines
+        map`` builds it: the log's poses, the default fusion settings) under ``config``:
+        built on first request and kept; built again only for another configuration.
+
+        Raises
+        ------
+        NoPoses
+            If the log's scans carry no poses.
+        """
+        checked = ExtractionConfig.from_dict(config, source="configuration")
+        key = repr((checked.method, checked.preset, sorted(checked.params.items())))
+        with self._map_lock:
+            if self._map is None or self._map[0] != key:
+                self._map = key, self._build_map(checked)
+            return self._map[1]
+
+    def _build_map(self, config: ExtractionConfig) -> dict[str, Any]:
+        from scanlines.map import build_map
+
+        self.store.wait_for(1)
+        if not self.store.with_pose:
+            raise NoPoses(f"{self.store.path.name} has no poses: no line map")
+        extractor = self.extractor(config.to_dict())
+        started = time.perf_counter()
+        build = build_map(self._every_scan(), extractor)
+        lines = build.line_map.lines()
+        return {
+            "config": config.to_dict(), "poses": build.poses, "scans": build.scans,
+            "segments": build.segments, "seconds": time.perf_counter() - started,
+            "lines": map_lines(lines),
+        }  # fmt: skip
+
+    def _every_scan(self) -> Iterator[tuple[int, Scan]]:
+        """``(index, scan)`` of every scan of the log, read to its end."""
+        self.store.resume()
+        self.store.wait_for(10**12)
+        for index in range(self.store.count):
+            yield index, self.store.scan(index)
+
+
+def map_lines(lines: MapLines) -> list[dict[str, Any]]:
+    """Map lines (:class:`scanlines.map.MapLines`) as the page draws them: end points in
+    the world frame, support, and the first and last scan (viewer index) that saw each."""
+    return [
+        {"start": lines.start[k].tolist(), "end": lines.end[k].tolist(),
+         "scans": int(lines.scans[k]), "first_scan": int(lines.first_scan[k]),
+         "last_scan": int(lines.last_scan[k])}
+        for k in range(len(lines))
+    ]  # fmt: skip
 
 
 def _result(extractor: Extractor, scan: Scan) -> dict[str, Any]:

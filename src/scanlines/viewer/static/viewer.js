@@ -9,7 +9,10 @@ const COLOURS = { returns: "#3c4043", breakpoint: "#f29900", corner: "#d93025",
 // The marks of the point features: the canvas and the legend draw them from this table.
 const MARKS = [["breakpoints", COLOURS.breakpoint, "circle"], ["corners", COLOURS.corner, "diamond"],
                ["outliers", COLOURS.outlier, "cross"]];
-const LAYERS = ["returns", "segments", "breakpoints", "corners", "outliers", "sensor"];
+// The strokes of the map's lines: the canvas and the legend draw them from this table.
+const STROKES = { map: { colour: "#a9bed3", width: 6 } };
+const LAYERS = ["returns", "segments", "breakpoints", "corners", "outliers", "sensor", "map"];
+const OFF_AT_START = ["map"];
 const AXIS_FONT_PX = 12;
 
 const state = {
@@ -17,7 +20,8 @@ const state = {
   view: "scan", compare: false, layout: "overlay", selected: null,
   transform: null,       // {scale: pixels per metre, x, y: screen position of the origin}
   requested: 0, drawn: 0, inputTime: null, playing: null,
-  layers: new Set(LAYERS),  // the layers drawn (the checkboxes under "Layers")
+  layers: new Set(LAYERS.filter((layer) => !OFF_AT_START.includes(layer))),  // the checkboxes under "Layers"
+  map: null, mapState: "none",  // the log's line map: "none", "building", "built" or "failed"
   speed: 10,                // playback, scans per second
 };
 // Read by the tests and the latency benchmark: input-to-redraw times, in milliseconds.
@@ -304,6 +308,7 @@ function draw() {
   list.forEach((canvas, k) => {
     const context = canvas.getContext("2d");
     const shown = list.length === 2 ? [k] : results.map((_, i) => i);
+    drawMap(context, frame.pose);
     for (const i of shown) drawResult(context, frame, results[i], i, list.length === 1 && i === 1);
     drawReturns(context, frame.x, frame.y);   // on top: how well the segments fit them
     drawSensor(context);
@@ -424,12 +429,53 @@ function drawSensor(context, pose = [0, 0, 0]) {
   stats.drawn.shapes.sensor = "arrow";
 }
 
+// The map's lines, under everything: in the world frame, or in the sensor frame of the scan
+// at ``pose`` (the scan view).
+function drawMap(context, pose) {
+  if (!state.layers.has("map") || !state.map) return;
+  const place = pose ? inSensorFrame(pose) : (point) => point;
+  const { colour, width } = STROKES.map;
+  for (const line of state.map.lines) {
+    strokeLine(context, toScreen(...place(line.start)), toScreen(...place(line.end)), colour, width, []);
+    stats.drawn.layers.map += 1;
+  }
+  stats.drawn.shapes.map = "line";
+}
+
+// World point -> the sensor frame of a scan at ``pose`` (x, y, theta).
+function inSensorFrame([x0, y0, theta]) {
+  const [c, s] = [Math.cos(theta), Math.sin(theta)];
+  return ([x, y]) => [c * (x - x0) + s * (y - y0), -s * (x - x0) + c * (y - y0)];
+}
+
+// The map is built once, on the first time its layer is switched on (configuration A's
+// settings at that time); a failure is said, and switching the layer on again retries.
+async function loadMap() {
+  if (state.mapState === "building" || state.mapState === "built") return;
+  state.mapState = "building";
+  showMapState("building map…");
+  try {
+    state.map = await api("/api/map", { config: configs()[0] });
+    state.mapState = "built";
+    const { method, preset } = state.map.config;
+    showMapState(`${state.map.lines.length} map lines, built with ${method}${preset ? ` ${preset}` : ""} (configuration A then)`);
+    draw();
+  } catch (error) {
+    state.mapState = "failed";
+    showMapState(`map: ${error.message || error}`);
+    showError(error);
+  }
+}
+
+function showMapState(text) { $("#map-state").textContent = text; }
+
 function drawWorld(context) {
   const world = state.world;
   if (!world) return;
   const segments = state.layers.has("segments") ? world.segments : [];
   stats.drawn = { world: world.scans, segments: [segments.length], differences: 0,
                   layers: Object.fromEntries(LAYERS.map((layer) => [layer, 0])), shapes: {} };
+  drawMap(context);
   drawReturns(context, world.x, world.y, "#b0b4ba", 1.5);
   if (state.layers.has("sensor")) {
     context.strokeStyle = COLOURS.path; context.lineWidth = 1;
@@ -446,7 +492,7 @@ function drawWorld(context) {
 // The legend: one entry per layer drawn, each with the symbol the canvas draws for it.
 function drawLegend(results) {
   const svg = (shape, body) => `<svg data-shape="${shape}" viewBox="0 0 22 12">${body}</svg>`;
-  const line = (colour, dash = "") => svg("line", `<line x1="1" y1="6" x2="21" y2="6" stroke="${colour}" stroke-width="3" stroke-dasharray="${dash}"/>`);
+  const line = (colour, dash = "", width = 3) => svg("line", `<line x1="1" y1="6" x2="21" y2="6" stroke="${colour}" stroke-width="${width}" stroke-dasharray="${dash}"/>`);
   const square = (colour, size) => svg("square", `<rect x="${11 - size / 2}" y="${6 - size / 2}" width="${size}" height="${size}" fill="${colour}"/>`);
   const symbol = (shape, colour) => ({
     circle: svg("circle", `<circle cx="11" cy="6" r="4" fill="${colour}"/>`),
@@ -456,6 +502,7 @@ function drawLegend(results) {
   const arrow = svg("arrow", `<line x1="2" y1="6" x2="12" y2="6" stroke="${COLOURS.path}" stroke-width="2.5" stroke-linecap="round"/><polygon points="20,6 11,1.5 11,10.5" fill="${COLOURS.path}"/>`);
   const on = (layer) => state.layers.has(layer);
   const items = [];
+  if (on("map") && state.map) items.push(["map", line(STROKES.map.colour, "", STROKES.map.width), "map lines"]);
   if (on("returns")) items.push(["returns", state.view === "world" ? square("#b0b4ba", 3) : square(COLOURS.returns, 3), "returns"]);
   if (on("segments")) {
     items.push(["segments", line(segmentColour(1)), state.view === "world" ? "segments" : "segments A"]);
@@ -650,6 +697,7 @@ async function start() {
     box.addEventListener("change", (event) => {
       if (event.target.checked) state.layers.add(event.target.dataset.layer);
       else state.layers.delete(event.target.dataset.layer);
+      if (event.target.checked && event.target.dataset.layer === "map") loadMap();
       draw();
     });
   }
