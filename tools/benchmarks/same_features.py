@@ -26,7 +26,7 @@ from scanlines.io import open_log
 
 FIELDS = ("first", "last", "n_points", "lines", "covariances", "breakpoints", "corners", "outliers")
 METHODS = ("adaptive", "iepf", "pdbs", "split_merge", "line_tracking", "line_regression")
-METHODS += ("ransac", "hough")
+METHODS += ("ransac", "hough", "partition")
 
 
 def scans(n: int, real: int | None) -> list:
