@@ -36,14 +36,14 @@ def test_same_features_finds_no_difference_and_names_one(tmp_path):
     recorded = tmp_path / "features.pkl"
     run("same_features.py", "record", str(recorded), "-n", "1", "--real", "2")
     out = run("same_features.py", "compare", str(recorded))
-    assert out.startswith("0 differences in 8 scans x 9 configurations")
+    assert out.startswith("0 differences in 8 scans x 10 configurations")
     data = pickle.loads(recorded.read_bytes())
     first, *rest = data["features"][("iepf", None)]["intel:1"]
     data["features"][("iepf", None)]["intel:1"] = (first + 1, *rest)
     recorded.write_bytes(pickle.dumps(data))
     out = run("same_features.py", "compare", str(recorded), code=1)
     assert out.splitlines()[:2] == [
-        "1 differences in 8 scans x 9 configurations",
+        "1 differences in 8 scans x 10 configurations",
         "   iepf:None intel:1 first",
     ]
 
