@@ -14,6 +14,8 @@ import pytest
 from scanlines.evaluation.evaluate import evaluate
 from scanlines.evaluation.specs import parse_specs
 
+pytestmark = pytest.mark.slow  # 300 scenes per sensor
+
 # sensor: (bp F1, corner F1, TruePos, FalsePos ceiling); measured 2026-11-25:
 # lms_1deg 0.942 0.877 0.975 0.045 | lms_05deg 0.947 0.867 0.918 0.089
 # tim571   0.945 0.802 0.690 0.313 | urg04lx   0.908 0.749 0.710 0.328

@@ -19,6 +19,8 @@ from scanlines.evaluation.report import microseconds
 from scanlines.methods import REGISTRY
 from scanlines.methods.iepf import Iepf
 
+pytestmark = pytest.mark.slow  # timing runs
+
 REPOSITORY = Path(__file__).parents[1]
 
 

@@ -7,6 +7,10 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
+pytestmark = pytest.mark.slow  # the benchmark scripts end to end
+
 BENCHMARKS = Path(__file__).parent.parent / "tools" / "benchmarks"
 
 

@@ -13,7 +13,10 @@ import pytest
 
 from scanlines._jit import COMPILED
 
-pytestmark = pytest.mark.skipif(not COMPILED, reason="numba disabled: nothing compiles")
+pytestmark = [
+    pytest.mark.slow,  # cold compiles
+    pytest.mark.skipif(not COMPILED, reason="numba disabled: nothing compiles"),
+]
 
 COLD_PROCESS = """
 import json, sys

@@ -22,6 +22,8 @@ from distributed import Client, LocalCluster
 from scanlines.data import sample
 from scanlines.fleet import run_fleet
 
+pytestmark = pytest.mark.slow  # a Dask LocalCluster per test
+
 CHUNK = 120
 SEGMENT_QUERY = """
     select log, scan, segment, first, last, rho, alpha, var_rho, start_kind, end_kind

@@ -21,6 +21,8 @@ import pytest
 import scanlines
 from scanlines import Extractor, Scan
 
+pytestmark = pytest.mark.slow  # million-beam scans
+
 BENCHMARK = Path(__file__).parents[1] / "tools" / "benchmarks" / "large_scans.py"
 SECONDS, MEGABYTES = 10.0, 1024.0
 

@@ -21,6 +21,8 @@ from scanlines.evaluation.scores import Tolerances
 from scanlines.evaluation.specs import parse_specs
 from scanlines.io import open_log
 
+pytestmark = pytest.mark.slow  # the experiments end to end
+
 
 @dataclass(frozen=True)
 class Frame:

@@ -17,6 +17,8 @@ from scanlines.ros2 import messages as msg
 from scanlines.ros2.dds import default_qos, participant, ros_topic, wait_for_match
 from scanlines.ros2.player import SETTLE
 
+pytestmark = pytest.mark.slow  # three processes over DDS per test
+
 SCANS = 40
 #: Seconds a node may take to start: imports and kernels from the cache (compiled on a
 #: first run, which the CLI tests have usually done).

@@ -22,6 +22,8 @@ import pytest
 
 from scanlines.data import sample
 
+pytestmark = pytest.mark.slow  # processes stopped at random moments
+
 RUNS = 5
 LONG_RUNS = 30
 

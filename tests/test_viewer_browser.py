@@ -21,6 +21,8 @@ from scanlines.data import sample
 from scanlines.runner import log_profile
 from viewer_helpers import serving
 
+pytestmark = pytest.mark.slow  # headless Chromium
+
 ARTIFACTS = Path(__file__).parent.parent / "test-artifacts"
 #: The first scan's features are drawn (its returns come first, alone).
 FEATURES_DRAWN = (

@@ -17,6 +17,8 @@ import pytest
 from .make_corpus import build_generated, corpus_inputs
 from .run import Case, fuzz, replay, report
 
+pytestmark = pytest.mark.slow  # thousands of damaged inputs
+
 SHORT_RUN = 300
 LONG_RUN = 5000
 SEED = 1
