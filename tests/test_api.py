@@ -193,7 +193,7 @@ LAYERS = (
     ("scanlines.steps",),
     ("scanlines.methods",),
     ("scanlines.extractor", "scanlines.sensor_profile", "scanlines.sensor_mounting",
-     "scanlines.config", "scanlines.sim"),
+     "scanlines.config", "scanlines.config_positions", "scanlines.sim"),
     ("scanlines.io", "scanlines.data"),
     ("scanlines.runner", "scanlines.warm", "scanlines.evaluation", "scanlines.fleet",
      "scanlines.ros2", "scanlines.map"),
