@@ -405,7 +405,7 @@ def _print_summary(summary, out, notes=()) -> None:
 def _many(logs: list[Path], out: Path | None, output_format: str | None) -> bool:
     """Several logs (or a folder of logs, or a glob), or a Parquet dataset: the fleet path.
     One folder that is a ROS 2 bag (``metadata.yaml``, or one storage file) is one log."""
-    from scanlines.io.rosbag import is_ros2_bag_dir
+    from scanlines.io.rosbag_files import is_ros2_bag_dir
 
     if len(logs) != 1 or output_format == "parquet":
         return True
