@@ -196,6 +196,7 @@ LAYERS = (
      "scanlines.config", "scanlines.config_positions", "scanlines.sim"),
     ("scanlines.io", "scanlines.data"),
     ("scanlines.runner", "scanlines.warm", "scanlines.evaluation", "scanlines.fleet",
+     "scanlines.fleet_executors", "scanlines.fleet_inputs",
      "scanlines.ros2", "scanlines.map"),
     ("scanlines.viz", "scanlines.viewer"),
     ("scanlines.cli", "scanlines.__main__"),
