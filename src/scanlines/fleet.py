@@ -24,11 +24,8 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import contextlib
-import glob
 import hashlib
 import json
-import logging
-import multiprocessing
 import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import asdict, dataclass, field
@@ -36,6 +33,11 @@ from pathlib import Path
 from typing import Any
 
 from scanlines.errors import ParameterError, ScanlinesError, describe
+
+# dask_setup: the Dask workers' preload is this module (see fleet_executors._executor)
+from scanlines.fleet_executors import _executor
+from scanlines.fleet_executors import dask_setup as dask_setup
+from scanlines.fleet_inputs import estimated_records, expand_inputs, log_names
 
 __all__ = [
     "CHUNK_RECORDS",
@@ -52,8 +54,6 @@ __all__ = [
 
 #: Scan records per task: a longer log is split into chunks of this many.
 CHUNK_RECORDS = 5000
-#: Suffixes of the log files a folder given as input is searched for.
-LOG_SUFFIXES = (".log", ".clf", ".gz", ".dat", ".csv", ".npz", ".bag", ".mcap", ".db3")
 
 
 @dataclass(frozen=True)
@@ -126,78 +126,6 @@ class FleetSummary:
 
 
 # -- inputs and plan ----------------------------------------------------------------------
-
-
-def expand_inputs(inputs: Iterable[str | Path]) -> list[Path]:
-    """Files, folders (searched for logs, ROS 2 bag folders kept whole) and glob patterns,
-    in a stable order without duplicates."""
-    found: list[Path] = []
-    for item in inputs:
-        text = str(item)
-        matches = sorted(glob.glob(text)) if any(c in text for c in "*?[") else [text]
-        if not matches:
-            raise ParameterError(f"no log matches {text!r}")
-        for match in map(Path, matches):
-            if match.is_dir() and not _is_bag_folder(match):
-                found += _logs_in(match)
-            else:
-                found.append(match)
-    return list(dict.fromkeys(p.resolve() for p in found))
-
-
-def _logs_in(folder: Path) -> list[Path]:
-    """The logs under ``folder``: files with a log suffix, ROS 2 bag folders whole; hidden
-    files and folders (temporary outputs) left out."""
-    found: list[Path] = []
-    for child in sorted(folder.iterdir()):
-        if child.name.startswith("."):
-            continue
-        if child.is_dir():
-            found += [child] if _is_bag_folder(child) else _logs_in(child)
-        elif child.suffix.lower() in LOG_SUFFIXES:
-            found.append(child)
-    return found
-
-
-def _is_bag_folder(path: Path) -> bool:
-    """A ROS 2 bag folder (with its ``metadata.yaml``); other folders are searched."""
-    return (path / "metadata.yaml").exists()
-
-
-def log_names(paths: Sequence[Path]) -> list[str]:
-    """A unique name per log: its file name, with as many parent folders as it takes to
-    tell equal names apart (joined by ``__``)."""
-    depth = 1
-    while True:
-        names = ["__".join(p.parts[-depth:]) for p in paths]
-        if len(set(names)) == len(names) or depth > max(len(p.parts) for p in paths):
-            return [_safe(name) for name in names]
-        depth += 1
-
-
-def _safe(name: str) -> str:
-    return "".join(c if c.isalnum() or c in "._-" else "_" for c in name)
-
-
-def estimated_records(path: Path, reader_options: dict[str, Any]) -> int:
-    """About how many scan records a log holds, cheaply (the last chunk is open-ended, so
-    this only decides how a log is split)."""
-    from scanlines.io import open_log
-    from scanlines.io.carmen import CarmenReader
-    from scanlines.io.npz import NpzReader
-    from scanlines.io.rosbag import RosbagReader
-    from scanlines.io.text import iter_lines
-
-    with open_log(path, **reader_options) as reader:
-        if isinstance(reader, NpzReader):
-            return reader.n_scans
-        if isinstance(reader, RosbagReader):
-            return reader.topics[reader.topic][1]
-        lines = (line.lstrip() for _, line in iter_lines(reader.path, 1 << 16))
-        if isinstance(reader, CarmenReader):
-            name = reader.message + " "
-            return sum(line.startswith(name) for line in lines)
-        return sum(1 for line in lines if line and not line.startswith("#"))
 
 
 def plan(
@@ -442,104 +370,6 @@ def _has_rows(dataset: Path, log: str) -> bool:
         for root in (dataset, dataset / STAGING)
         for table in TABLES
     )
-
-
-@contextlib.contextmanager
-def _interrupts_held() -> Any:
-    """SIGINT ignored while the worker processes start, so that they start with it ignored
-    (and their preload, :func:`dask_setup`, keeps it so), and blocked meanwhile, so that a
-    Ctrl-C then is held (Linux keeps a blocked signal pending even when ignored) and reaches
-    the command once the workers are up."""
-    import signal
-    import threading
-
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, previous)
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
-
-
-def dask_setup(worker: Any) -> None:
-    """Dask preload of the workers of the LocalCluster a fleet run starts: SIGINT ignored,
-    so that a Ctrl-C (sent to the whole process group) reaches the command alone, which
-    stops the cluster; and the workers' own logs (their tornado and distributed loggers)
-    kept off the console, where a cluster stopped under them would print tracebacks. A
-    task's error still reaches the command, with its log."""
-    import signal
-    import threading
-
-    if threading.current_thread() is threading.main_thread():
-        signal.signal(signal.SIGINT, signal.SIG_IGN)
-    for name in ("distributed", "tornado", "tornado.application"):
-        logging.getLogger(name).setLevel(logging.CRITICAL)
-
-
-class _executor:
-    """The executor of ``jobs`` and ``scheduler`` (see :func:`run_fleet`), and its name."""
-
-    def __init__(self, jobs: int, scheduler: str | None) -> None:
-        self.jobs, self.scheduler = jobs, scheduler
-        self._client = self._cluster = self._pool = None
-        self._quieted: list[tuple[logging.Logger, int]] = []
-
-    def __enter__(self) -> tuple[cf.Executor, str]:
-        if self.scheduler is None:
-            context = multiprocessing.get_context("spawn")
-            self._pool = cf.ProcessPoolExecutor(self.jobs, mp_context=context)
-            return self._pool, f"{self.jobs} local processes"
-        try:
-            from distributed import Client, LocalCluster
-        except ImportError:
-            raise ParameterError(
-                "a Dask scheduler needs dask and distributed: "
-                'pip install ".[fleet]" in a scanlines checkout'
-            ) from None
-        # The client's and the scheduler's logs (a tornado traceback when an interrupt
-        # closes the cluster under a pending gather) stay off the console while they run;
-        # a task's error still reaches the command, with its log.
-        self._quieted = _quiet_loggers(("tornado", "tornado.application", "distributed"))
-        if self.scheduler == "local":
-            # silence_logs: the workers' warnings (a task cancelled on Ctrl-C) stay off
-            # the console
-            with _interrupts_held():  # Ctrl-C is the command's to handle, not the workers'
-                self._cluster = LocalCluster(n_workers=self.jobs, threads_per_worker=1,
-                                             processes=True, dashboard_address=None,
-                                             silence_logs=logging.ERROR,
-                                             preload=["scanlines.fleet"])  # fmt: skip
-            self._client = Client(self._cluster)
-            engine = f"Dask LocalCluster of {self.jobs} workers"
-        else:
-            self._client = Client(self.scheduler)
-            engine = f"Dask scheduler {self.scheduler}"
-        return self._client.get_executor(), engine
-
-    def __exit__(self, *exc: object) -> None:
-        try:
-            if self._pool is not None:
-                self._pool.shutdown(cancel_futures=True)
-            if self._client is not None:
-                self._client.close()
-            if self._cluster is not None:
-                self._cluster.close()
-        finally:
-            for logger, level in self._quieted:
-                logger.setLevel(level)
-
-
-def _quiet_loggers(names: Sequence[str]) -> list[tuple[logging.Logger, int]]:
-    """Raise the loggers ``names`` to CRITICAL; their loggers and former levels."""
-    quieted = []
-    for name in names:
-        logger = logging.getLogger(name)
-        quieted.append((logger, logger.level))
-        logger.setLevel(logging.CRITICAL)
-    return quieted
 
 
 def _collect(executor, tasks, outcomes, on_chunk) -> None:

@@ -21,10 +21,10 @@ from scanlines.errors import ParameterError
 from scanlines.extraction import ExtractionTable
 from scanlines.extractor import Extractor
 from scanlines.scan import Scan
+from scanlines.sensor_mounting import estimate_mounting
 from scanlines.sensor_profile import (
     DEFAULT_SCANS,
     SensorProfile,
-    estimate_mounting,
     estimate_profile,
 )
 

@@ -22,9 +22,9 @@ from __future__ import annotations
 from pathlib import Path
 
 from scanlines.errors import LogFormatError
-from scanlines.io.carmen import looks_like_carmen
+from scanlines.io.carmen_messages import looks_like_carmen
 from scanlines.io.coreslam import looks_like_coreslam
-from scanlines.io.rosbag import is_ros2_bag_dir
+from scanlines.io.rosbag_files import is_ros2_bag_dir
 from scanlines.io.tabular import looks_like_table
 from scanlines.io.text import read_head
 

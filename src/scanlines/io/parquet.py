@@ -176,7 +176,7 @@ def _segments(pa: Any, indices, scans, table: ExtractionTable) -> Any:
 
 
 def _events(pa: Any, indices, scans, table: ExtractionTable) -> Any:
-    from scanlines.io.writers import beam_xy
+    from scanlines.io.feature_records import beam_xy
 
     parts = []
     for kind in ("breakpoints", "corners"):

@@ -1,0 +1,110 @@
+"""Where a fleet run's tasks run: local processes or a Dask cluster, Ctrl-C the command's."""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import contextlib
+import logging
+import multiprocessing
+from collections.abc import Sequence
+from typing import Any
+
+from scanlines.errors import ParameterError
+
+
+@contextlib.contextmanager
+def _interrupts_held() -> Any:
+    """SIGINT ignored while the worker processes start, so that they start with it ignored
+    (and their preload, :func:`dask_setup`, keeps it so), and blocked meanwhile, so that a
+    Ctrl-C then is held (Linux keeps a blocked signal pending even when ignored) and reaches
+    the command once the workers are up."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
+def dask_setup(worker: Any) -> None:
+    """Dask preload of the workers of the LocalCluster a fleet run starts: SIGINT ignored,
+    so that a Ctrl-C (sent to the whole process group) reaches the command alone, which
+    stops the cluster; and the workers' own logs (their tornado and distributed loggers)
+    kept off the console, where a cluster stopped under them would print tracebacks. A
+    task's error still reaches the command, with its log."""
+    import signal
+    import threading
+
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    for name in ("distributed", "tornado", "tornado.application"):
+        logging.getLogger(name).setLevel(logging.CRITICAL)
+
+
+class _executor:
+    """The executor of ``jobs`` and ``scheduler`` (see :func:`run_fleet`), and its name."""
+
+    def __init__(self, jobs: int, scheduler: str | None) -> None:
+        self.jobs, self.scheduler = jobs, scheduler
+        self._client = self._cluster = self._pool = None
+        self._quieted: list[tuple[logging.Logger, int]] = []
+
+    def __enter__(self) -> tuple[cf.Executor, str]:
+        if self.scheduler is None:
+            context = multiprocessing.get_context("spawn")
+            self._pool = cf.ProcessPoolExecutor(self.jobs, mp_context=context)
+            return self._pool, f"{self.jobs} local processes"
+        try:
+            from distributed import Client, LocalCluster
+        except ImportError:
+            raise ParameterError(
+                "a Dask scheduler needs dask and distributed: "
+                'pip install ".[fleet]" in a scanlines checkout'
+            ) from None
+        # The client's and the scheduler's logs (a tornado traceback when an interrupt
+        # closes the cluster under a pending gather) stay off the console while they run;
+        # a task's error still reaches the command, with its log.
+        self._quieted = _quiet_loggers(("tornado", "tornado.application", "distributed"))
+        if self.scheduler == "local":
+            # silence_logs: the workers' warnings (a task cancelled on Ctrl-C) stay off
+            # the console
+            with _interrupts_held():  # Ctrl-C is the command's to handle, not the workers'
+                self._cluster = LocalCluster(n_workers=self.jobs, threads_per_worker=1,
+                                             processes=True, dashboard_address=None,
+                                             silence_logs=logging.ERROR,
+                                             preload=["scanlines.fleet"])  # fmt: skip
+            self._client = Client(self._cluster)
+            engine = f"Dask LocalCluster of {self.jobs} workers"
+        else:
+            self._client = Client(self.scheduler)
+            engine = f"Dask scheduler {self.scheduler}"
+        return self._client.get_executor(), engine
+
+    def __exit__(self, *exc: object) -> None:
+        try:
+            if self._pool is not None:
+                self._pool.shutdown(cancel_futures=True)
+            if self._client is not None:
+                self._client.close()
+            if self._cluster is not None:
+                self._cluster.close()
+        finally:
+            for logger, level in self._quieted:
+                logger.setLevel(level)
+
+
+def _quiet_loggers(names: Sequence[str]) -> list[tuple[logging.Logger, int]]:
+    """Raise the loggers ``names`` to CRITICAL; their loggers and former levels."""
+    quieted = []
+    for name in names:
+        logger = logging.getLogger(name)
+        quieted.append((logger, logger.level))
+        logger.setLevel(logging.CRITICAL)
+    return quieted
