@@ -4,19 +4,16 @@ from __future__ import annotations
 
 import json
 import math
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 
+from cli_helpers import Ran, scanlines
 from scenes import scan_of, square_room
 
 
-def run(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, "-m", "scanlines", *args], capture_output=True, text=True, timeout=120
-    )
+def run(*args: str) -> Ran:
+    return scanlines(*args)
 
 
 @pytest.fixture(scope="module")

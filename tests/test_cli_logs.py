@@ -4,28 +4,21 @@ from __future__ import annotations
 
 import csv
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
+from cli_helpers import Ran, scanlines
 from scanlines.data import sample
 
 FIXTURES = Path(__file__).parent / "io" / "fixtures"
 
 
-def run(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, "-m", "scanlines", *map(str, args)],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        cwd=cwd,
-    )
+def run(*args: str, cwd: Path | None = None) -> Ran:
+    return scanlines(*args, cwd=cwd)
 
 
-def one_error_line(out: subprocess.CompletedProcess, *needles: str) -> None:
+def one_error_line(out: Ran, *needles: str) -> None:
     assert out.returncode == 2
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1, out.stderr
@@ -203,9 +196,9 @@ def test_run_shows_percentage_and_time_left_when_the_count_is_known(
     selection = ["--scans", scans] if scans else []
     done = CliRunner().invoke(app, ["run", str(log), *selection, "--jobs", "1"])
     assert done.exit_code == 0, done.output
-    assert "100%" in done.output
-    assert counted in done.output
-    assert "left" in done.output
+    assert "100%" in done.stderr  # the bar is drawn on stderr: stdout stays the summary
+    assert counted in done.stderr
+    assert "left" in done.stderr
 
 
 def test_run_counts_scans_without_a_total_when_the_log_does_not_say(monkeypatch):
@@ -216,5 +209,5 @@ def test_run_counts_scans_without_a_total_when_the_log_does_not_say(monkeypatch)
     monkeypatch.setenv("FORCE_COLOR", "1")
     done = CliRunner().invoke(app, ["run", str(sample("intel")), "--jobs", "1"])
     assert done.exit_code == 0, done.output
-    assert "%" not in done.output.split("extracting", 1)[1].split("\n", 1)[0]
-    assert "scans" in done.output
+    assert "%" not in done.stderr.split("extracting", 1)[1].split("\n", 1)[0]
+    assert "scans" in done.stderr

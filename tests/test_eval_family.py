@@ -5,25 +5,18 @@ from __future__ import annotations
 import csv
 import json
 import math
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 
+from cli_helpers import Ran, scanlines
 from scanlines.evaluation.family import FamilyRow, worst_rows
 from scanlines.evaluation.scenes import generate_scene_set, load_scene_set
 from scanlines.sim.family import CORNER_NAMES
 
 
-def run(*args: str, cwd: Path) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, "-m", "scanlines", *args],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        cwd=cwd,
-    )
+def run(*args: str, cwd: Path) -> Ran:
+    return scanlines(*args, cwd=cwd)
 
 
 def test_eval_family_end_to_end(tmp_path: Path) -> None:

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from cli_helpers import Ran, scanlines
 from scanlines.errors import LogFormatError, ParameterError
 from scanlines.evaluation.evaluate import ALL_SENSORS, evaluate, event_f1, worst_scans
 from scanlines.evaluation.scenes import (
@@ -27,14 +28,8 @@ SPECS = ("adaptive", "adaptive:paper")
 SENSORS = ("lms_1deg", "urg04lx")
 
 
-def run(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, "-m", "scanlines", *args],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        cwd=cwd,
-    )
+def run(*args: str, cwd: Path | None = None) -> Ran:
+    return scanlines(*args, cwd=cwd)
 
 
 def scores_of(result) -> list[dict]:

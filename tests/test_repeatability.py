@@ -5,13 +5,12 @@ from __future__ import annotations
 import csv
 import dataclasses
 import math
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from cli_helpers import Ran, scanlines
 from scanlines import Scan
 from scanlines.evaluation.registration import (
     compose,
@@ -220,14 +219,8 @@ def test_max_pairs_spreads_the_pairs_over_the_log():
     assert len(candidate_pairs(scans, RepeatTolerances())) == 299 + 298 + 297
 
 
-def run(*args: str, cwd: Path) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, "-m", "scanlines", *args],
-        capture_output=True,
-        text=True,
-        timeout=180,
-        cwd=cwd,
-    )
+def run(*args: str, cwd: Path) -> Ran:
+    return scanlines(*args, cwd=cwd)
 
 
 SUMMARY_COLUMNS = {

@@ -5,14 +5,13 @@ from __future__ import annotations
 
 import json
 import pickle
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from cli_helpers import scanlines
 from scanlines import Extractor, ParameterError
 from scanlines.data import sample
 from scanlines.extraction import ExtractionTable
@@ -118,11 +117,7 @@ def test_cli_jobs_output_is_byte_identical(tmp_path):
     texts = []
     for jobs in ("1", "2"):
         out = tmp_path / f"j{jobs}.jsonl"
-        done = subprocess.run(
-            [sys.executable, "-m", "scanlines", "run", str(sample("intel")), "--out", str(out),
-             "--jobs", jobs],
-            capture_output=True, text=True,
-        )  # fmt: skip
+        done = scanlines("run", sample("intel"), "--out", out, "--jobs", jobs)
         assert done.returncode == 0, done.stderr
         assert f"({jobs} jobs)" in done.stdout
         texts.append(out.read_bytes())

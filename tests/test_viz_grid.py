@@ -4,11 +4,10 @@ carry one legend for all their panels, styled as the panels draw each kind."""
 from __future__ import annotations
 
 import re
-import subprocess
-import sys
 
 import pytest
 
+from cli_helpers import scanlines
 from scanlines import Extractor
 from scanlines.data import sample
 from scanlines.io import open_log
@@ -68,11 +67,7 @@ def test_the_legend_symbols_are_those_of_the_panels(panels):
 
 def test_the_plot_command_writes_the_grid_with_its_legend(tmp_path):
     figure = tmp_path / "grid.svg"
-    out = subprocess.run(
-        [sys.executable, "-m", "scanlines", "plot", str(sample("intel")), "--scans", "0:300:50",
-         "-o", str(figure)],
-        capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
+    out = scanlines("plot", sample("intel"), "--scans", "0:300:50", "-o", figure)
     assert out.returncode == 0, out.stderr
     svg = figure.read_text()
     assert 'id="legend_1"' in svg

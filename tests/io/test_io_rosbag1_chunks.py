@@ -12,6 +12,7 @@ from pathlib import Path
 import pytest
 from bag_helpers import write_bag
 
+from cli_helpers import scanlines
 from scanlines.data import sample
 from scanlines.errors import LogFormatError
 from scanlines.io import open_log
@@ -152,11 +153,7 @@ def test_truncated_bag_through_the_command(tmp_path, bag_data) -> None:
     data, _ = truncated(bag_data)
     path = write(tmp_path, data)
     out = tmp_path / "out.jsonl"
-    done = subprocess.run(
-        [sys.executable, "-m", "scanlines", "run", str(path), "--out", str(out),
-         "--on-error", "skip"],
-        capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
+    done = scanlines("run", path, "--out", out, "--on-error", "skip")
     assert done.returncode == 0, done.stderr
     assert len(out.read_text().splitlines()) == sum(chunk_counts(bag_data)[:3])
     assert "truncated" in done.stdout + done.stderr

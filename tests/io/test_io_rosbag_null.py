@@ -5,14 +5,14 @@ from __future__ import annotations
 
 import shutil
 import sqlite3
-import subprocess
-import sys
 from itertools import islice
 from pathlib import Path
 
 import pytest
 from bag_helpers import write_bag
 
+from cli_helpers import Ran
+from cli_helpers import scanlines as run_in_process
 from scanlines.data import sample
 from scanlines.errors import LogFormatError
 from scanlines.io import open_log
@@ -44,13 +44,8 @@ def with_null(seed: Path, target: Path, table: str, column: str, where: str, met
     return target
 
 
-def scanlines(*args: object) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, "-m", "scanlines", *map(str, args)],
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
+def scanlines(*args: object) -> Ran:
+    return run_in_process(*args)
 
 
 @pytest.mark.parametrize("meta", [True, False])

@@ -96,12 +96,14 @@ def _bins_text(profile) -> str:
 
 
 def _run_with_progress(reader, extractor, selection, out, frame, log, jobs, overwrite):
+    from rich.console import Console
     from rich.progress import Progress
 
     from scanlines.runner import run_log, run_log_to_file, selected_count
 
     total = selected_count(reader.scans_in_file, selection)
-    with Progress(*_progress_columns(total is not None), transient=True) as progress:
+    columns = _progress_columns(total is not None)
+    with Progress(*columns, console=Console(stderr=True), transient=True) as progress:
         task = progress.add_task(f"extracting {log.name}", total=total)
 
         def advance(_index: int) -> None:
