@@ -17,15 +17,17 @@ class Ran:
     stderr: str
 
 
-def scanlines(*args: object, cwd: Path | None = None) -> Ran:
-    """``scanlines ARGS`` in this process; an exception escaping the command is a
-    traceback on stderr and exit code 1, as in a process of its own."""
+def scanlines(*args: object, cwd: Path | None = None, columns: int | None = None) -> Ran:
+    """``scanlines ARGS`` in this process (``columns``: the terminal width tables are
+    drawn to); an exception escaping the command is a traceback on stderr and exit code
+    1, as in a process of its own."""
     from typer.testing import CliRunner
 
     from scanlines.cli import app
 
     with contextlib.chdir(cwd) if cwd is not None else contextlib.nullcontext():
-        result = CliRunner().invoke(app, [str(arg) for arg in args])
+        env = None if columns is None else {"COLUMNS": str(columns)}
+        result = CliRunner().invoke(app, [str(arg) for arg in args], env=env)
     stderr = result.stderr
     if result.exception is not None and not isinstance(result.exception, SystemExit):
         stderr += "".join(traceback.format_exception(result.exception))

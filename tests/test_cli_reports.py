@@ -17,15 +17,20 @@ import pytest
 sys.path.insert(0, str(Path(__file__).parent / "io"))
 from bag_helpers import write_bag
 
+from cli_helpers import Ran
+from cli_helpers import scanlines as in_process
 from scanlines.data import sample
 from scanlines.io import open_log
 from scanlines.scan import Scan
 
 
-def scanlines(*args: object, warnings_as_errors: bool = False) -> subprocess.CompletedProcess:
-    flags = ["-W", "error::RuntimeWarning"] if warnings_as_errors else []
+def scanlines(*args: object, warnings_as_errors: bool = False) -> Ran | subprocess.CompletedProcess:
+    """The command in this process, or in a process of its own where numpy's warnings
+    must be errors (a process's ``-W`` reaches every module)."""
+    if not warnings_as_errors:
+        return in_process(*args, columns=200)
     return subprocess.run(
-        [sys.executable, *flags, "-m", "scanlines", *map(str, args)],
+        [sys.executable, "-W", "error::RuntimeWarning", "-m", "scanlines", *map(str, args)],
         capture_output=True,
         text=True,
         timeout=300,

@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import csv
 import math
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 
 import scanlines
+from cli_helpers import scanlines as run_command
 from scanlines.errors import ParameterError
 from scanlines.evaluation.evaluate import evaluate
 from scanlines.evaluation.metrics import score
@@ -117,12 +116,7 @@ def test_truth_row_in_workers_and_on_scene_sets():
 
 def test_eval_command_with_the_truth_row(tmp_path):
     args = ["eval", "-m", "adaptive", "-m", "truth", "-s", "lms_1deg", "-n", "2", "--seed", "3"]
-    out = subprocess.run(
-        [sys.executable, "-m", "scanlines", *args, "--worst", "1", "--out", str(tmp_path)],
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    out = run_command(*args, "--worst", "1", "--out", tmp_path)
     assert out.returncode == 0, out.stderr
     assert (tmp_path / "worst.png").stat().st_size > 0
     with (tmp_path / "summary.csv").open(newline="") as handle:
