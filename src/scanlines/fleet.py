@@ -46,7 +46,7 @@ __all__ = [
     "LogOutcome",
     "commit_chunks",
     "expand_inputs",
-    "extract_chunk",
+    "extract_task",
     "fleet_tasks",
     "plan",
     "run_fleet",
@@ -161,7 +161,7 @@ def plan(
 # -- one task -----------------------------------------------------------------------------
 
 
-def extract_chunk(task: ChunkTask) -> ChunkResult:
+def extract_task(task: ChunkTask) -> ChunkResult:
     """Extract the task's records and write them as one part of each table."""
     import os
     import resource
@@ -373,7 +373,7 @@ def _has_rows(dataset: Path, log: str) -> bool:
 
 
 def _collect(executor, tasks, outcomes, on_chunk) -> None:
-    futures = {executor.submit(extract_chunk, task): task for task in tasks}
+    futures = {executor.submit(extract_task, task): task for task in tasks}
     for future in cf.as_completed(futures):
         task = futures[future]
         outcome = outcomes[task.log]
@@ -439,7 +439,7 @@ def fleet_tasks(inputs: Iterable[str | Path], dataset: str | Path, **options: An
     for task in tasks:
         if task.log not in by_log:
             discard_staged(dataset, task.log)  # left by an earlier, interrupted compute
-        by_log.setdefault(task.log, []).append(dask.delayed(extract_chunk)(task))
+        by_log.setdefault(task.log, []).append(dask.delayed(extract_task)(task))
     return [
         dask.delayed(commit_chunks)(str(dataset), log, chunks) for log, chunks in by_log.items()
     ]

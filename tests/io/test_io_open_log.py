@@ -12,7 +12,7 @@ import pytest
 
 from scanlines.data import sample
 from scanlines.errors import LogFormatError, ParameterError
-from scanlines.io import detect_format, open_log, reader_options
+from scanlines.io import detect_format, open_log, reader_option_names
 
 
 @pytest.mark.parametrize(
@@ -150,8 +150,8 @@ def test_forced_format(tmp_path) -> None:
         open_log(path, format="excel")
 
 
-def test_reader_options_lists_keywords() -> None:
-    assert reader_options("carmen") == [
+def test_reader_option_names_lists_keywords() -> None:
+    assert reader_option_names("carmen") == [
         "message",
         "fov",
         "angle_convention",
@@ -164,7 +164,7 @@ def test_reader_options_lists_keywords() -> None:
         "max_beams",
         "max_record_bytes",
     ]
-    assert reader_options("rosbag") == ["topic", "on_error", "max_beams", "max_record_bytes"]
+    assert reader_option_names("rosbag") == ["topic", "on_error", "max_beams", "max_record_bytes"]
 
 
 def test_import_does_not_import_rosbags() -> None:

@@ -41,10 +41,10 @@ __all__ = [
     "intel_label_rule",
     "intel_label_set",
     "intel_labels",
+    "label_log_options",
     "label_set",
     "labelled_samples",
     "read_labels",
-    "reader_options",
 ]
 
 _HERE = Path(__file__).resolve().parent
@@ -246,12 +246,12 @@ def label_set(name: str) -> LabelSet:
     source = doc.get("source") if isinstance(doc, Mapping) else None
     if source != SAMPLES[name]:
         raise LabelError(f"{path}: source is {source!r}, expected {SAMPLES[name]!r}")
-    options = reader_options(name, doc.get("angle_convention", "step"))
+    options = label_log_options(name, doc.get("angle_convention", "step"))
     valid = [scan.valid for scan in open_log(sample(name), **options)]
     return read_labels(path, valid)
 
 
-def reader_options(name: str, angle_convention: str) -> dict[str, Any]:
+def label_log_options(name: str, angle_convention: str) -> dict[str, Any]:
     """The ``open_log`` options that read sample ``name`` with the bearings it was labelled
     with (CARMEN logs take the label file's ``angle_convention``; other readers no option)."""
     from scanlines.data import SAMPLES

@@ -141,14 +141,14 @@ def evaluate_labelled(
     """Score ``specs`` on the hand-labelled frames of ``samples`` (default: every one),
     with ``sensor_profile`` (``None``: one measured from each excerpt)."""
     from scanlines.data import sample
-    from scanlines.data.labels import label_set, labelled_samples, reader_options
+    from scanlines.data.labels import label_log_options, label_set, labelled_samples
     from scanlines.io import open_log
 
     result = LabelledResult(tolerance=tolerance)
     specs = parse_specs(specs)
     for name in samples or labelled_samples():
         labels = label_set(name)
-        options = reader_options(name, labels.angle_convention)
+        options = label_log_options(name, labels.angle_convention)
         scans = list(open_log(sample(name), **options))
         profile = sensor_profile or estimate_profile(scans, source=sample(name).name)
         for spec in specs:

@@ -92,7 +92,7 @@ __all__ = [
     "open_log",
     "open_writer",
     "points_to_world",
-    "reader_options",
+    "reader_option_names",
     "to_world",
     "writer_class",
 ]
@@ -107,7 +107,7 @@ READERS: dict[str, type[LogReader]] = {
 }
 
 
-def reader_options(format_name: str) -> list[str]:
+def reader_option_names(format_name: str) -> list[str]:
     """The keyword options the reader of ``format_name`` accepts."""
     cls = READERS[format_name]
     parameters = inspect.signature(cls.__init__).parameters.values()
@@ -124,7 +124,7 @@ def open_log(path: str | Path, *, format: str | None = None, **options: Any) -> 
     format:
         Force a reader (a key of :data:`READERS`) instead of detecting it.
     **options:
-        Options of that reader (see :func:`reader_options`), e.g. ``fov``,
+        Options of that reader (see :func:`reader_option_names`), e.g. ``fov``,
         ``angle_convention``, ``max_range`` (CARMEN), ``topic`` (bags),
         ``angle_min``/``angle_increment`` (CSV), ``on_error`` (all).
 
@@ -147,7 +147,7 @@ def open_log(path: str | Path, *, format: str | None = None, **options: Any) -> 
         format = detect_format(path)
     elif format not in READERS:
         raise ParameterError(f"unknown format {format!r}; formats: {', '.join(READERS)}")
-    accepted = reader_options(format)
+    accepted = reader_option_names(format)
     unknown = sorted(set(options) - set(accepted))
     if unknown:
         raise ParameterError(
