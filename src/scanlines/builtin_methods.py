@@ -17,3 +17,6 @@ BUILTIN_METHODS = (
     "hough",
     "partition",
 )
+
+#: The method used where none is named: ``Extractor()``, ``scanlines run``, a configuration.
+DEFAULT_METHOD = "adaptive"

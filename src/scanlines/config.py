@@ -43,6 +43,7 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
+from scanlines.builtin_methods import DEFAULT_METHOD
 from scanlines.config_positions import _line_of, _toml_error
 from scanlines.errors import ParameterError, describe, one_line
 from scanlines.params import Check, Choice, Either, Integer, Number, Pair
@@ -55,8 +56,6 @@ __all__ = [
     "load_config",
 ]
 
-#: The method of a configuration that names none (that of ``scanlines run``).
-DEFAULT_METHOD = "adaptive"
 #: The keys of a configuration (top-level keys of its TOML file, keys of its dict).
 CONFIG_KEYS = ("method", "preset", "params")
 #: Largest configuration file read: a configuration is a few lines; a log passed by

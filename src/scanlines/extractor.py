@@ -14,6 +14,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from scanlines.builtin_methods import DEFAULT_METHOD
 from scanlines.errors import ParameterError, ScanError
 from scanlines.extraction import Extraction, ExtractionTable
 from scanlines.interrupts import kernel_calls
@@ -125,7 +126,7 @@ class Extractor:
 
     def __init__(
         self,
-        method: str = "adaptive",
+        method: str = DEFAULT_METHOD,
         preset: str | None = None,
         *,
         sensor_profile: SensorProfile | str | Path | None = None,
@@ -261,7 +262,7 @@ def _rebuild_extractor(
 
 def extract(
     scan: Scan,
-    method: str = "adaptive",
+    method: str = DEFAULT_METHOD,
     preset: str | None = None,
     *,
     sensor_profile: SensorProfile | str | Path | None = None,

@@ -32,6 +32,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+from scanlines.builtin_methods import DEFAULT_METHOD
 from scanlines.errors import ParameterError, ScanlinesError, describe
 
 # dask_setup: the Dask workers' preload is this module (see fleet_executors._executor)
@@ -132,7 +133,7 @@ def plan(
     paths: Sequence[Path],
     dataset: Path,
     *,
-    method: str = "adaptive",
+    method: str = DEFAULT_METHOD,
     preset: str | None = None,
     params: dict[str, Any] | None = None,
     reader_options: dict[str, Any] | None = None,
@@ -243,7 +244,7 @@ def run_fleet(
     inputs: Iterable[str | Path],
     dataset: str | Path,
     *,
-    method: str = "adaptive",
+    method: str = DEFAULT_METHOD,
     preset: str | None = None,
     params: dict[str, Any] | None = None,
     reader_options: dict[str, Any] | None = None,

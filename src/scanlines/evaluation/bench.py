@@ -55,6 +55,7 @@ from typing import Any
 import numpy as np
 
 from scanlines import Extractor, ParameterError, Scan, method_names
+from scanlines.builtin_methods import DEFAULT_METHOD
 from scanlines.evaluation.bench_config import (
     DEFAULT_BEAMS,
     QUICK_BEAMS,
@@ -229,7 +230,7 @@ def _batch_row(timed: dict[str, Timed[Any]], n_scans: int) -> BatchRow:
 # --------------------------------------------------------------------------- profile
 
 
-def profile_extractor(scans: Sequence[Scan], top: int = 15, method: str = "adaptive") -> dict:
+def profile_extractor(scans: Sequence[Scan], top: int = 15, method: str = DEFAULT_METHOD) -> dict:
     """:mod:`cProfile` of ``Extractor(method)`` over ``scans``.
 
     Returns the profiled time and two lists: the ``top`` functions within scanlines by

@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from scanlines._jit import kernel
+from scanlines.builtin_methods import DEFAULT_METHOD
 from scanlines.evaluation.machine import cores_busy
 from scanlines.evaluation.report import TableData
 from scanlines.runner import CHUNK_SCANS
@@ -71,7 +72,7 @@ class ColdStart:
     cache_load_s: float
 
 
-def cold_start(method: str = "adaptive") -> ColdStart:
+def cold_start(method: str = DEFAULT_METHOD) -> ColdStart:
     """:class:`ColdStart` of ``method``, measured in three child processes."""
     with tempfile.TemporaryDirectory(prefix="scanlines-cold-") as cache:
         one = _child_timings(method, cache, "one")
@@ -189,7 +190,7 @@ class PipelineResult:
 def measure_pipeline(
     log: str | Path,
     *,
-    method: str = "adaptive",
+    method: str = DEFAULT_METHOD,
     repeats: int = 3,
     max_jobs: int = 1,
     max_scans: int | None = None,
