@@ -211,3 +211,10 @@ def test_run_counts_scans_without_a_total_when_the_log_does_not_say(monkeypatch)
     assert done.exit_code == 0, done.output
     assert "%" not in done.stderr.split("extracting", 1)[1].split("\n", 1)[0]
     assert "scans" in done.stderr
+
+
+def test_run_off_a_terminal_draws_no_bar_and_no_blank_line(tmp_path):
+    out = run("run", sample("intel"), "--scans", "0:20", "--out", tmp_path / "f.jsonl")
+    assert out.returncode == 0, out.stderr
+    assert "" not in out.stderr.strip().splitlines()
+    assert "extracting" not in out.stderr

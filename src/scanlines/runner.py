@@ -131,7 +131,7 @@ def mounted_options(
     """Reader options that give the laser's pose where the log records only the robot's
     (the profile's mounting, for a reader that takes one), and a note when they do."""
     from scanlines.io import detect_format, open_log
-    from scanlines.io import reader_options as options_of
+    from scanlines.io import reader_option_names as options_of
 
     if profile is None or profile.mounting is None:
         return reader_options, None

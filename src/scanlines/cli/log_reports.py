@@ -103,7 +103,10 @@ def _run_with_progress(reader, extractor, selection, out, frame, log, jobs, over
 
     total = selected_count(reader.scans_in_file, selection)
     columns = _progress_columns(total is not None)
-    with Progress(*columns, console=Console(stderr=True), transient=True) as progress:
+    console = Console(stderr=True)  # off the terminal (logs, pipes) no bar and no blank line
+    with Progress(
+        *columns, console=console, transient=True, disable=not console.is_terminal
+    ) as progress:
         task = progress.add_task(f"extracting {log.name}", total=total)
 
         def advance(_index: int) -> None:
