@@ -214,7 +214,11 @@ def test_run_counts_scans_without_a_total_when_the_log_does_not_say(monkeypatch)
 
 
 def test_run_off_a_terminal_draws_no_bar_and_no_blank_line(tmp_path):
-    out = run("run", sample("intel"), "--scans", "0:20", "--out", tmp_path / "f.jsonl")
-    assert out.returncode == 0, out.stderr
-    assert "" not in out.stderr.strip().splitlines()
+    """An error raised while the bar would be drawn: its one line, and no blank line."""
+    log = Path(__file__).parent / "fuzz" / "corpus" / "carmen_robotlaser_stamp_3e9.log"
+    out = run("run", log, "--out", tmp_path / "f.mcap")  # a stamp past 2038: no bag takes it
+    lines = out.stderr.strip().splitlines()
+    assert out.returncode == 2, out.stderr
+    assert "" not in lines
+    assert lines[-1].startswith("scanlines: error:")
     assert "extracting" not in out.stderr
