@@ -182,14 +182,19 @@ def test_clicking_a_segment_shows_its_numbers(page):
     assert "var alpha" in details
 
 
-def test_world_view_accumulates_the_scans_before(page):
+def world_view_of_the_last_300(page) -> dict:
+    """Go to scan 299 and switch to the world view of the 300 scans up to it; what was drawn."""
     page.locator("#world-span").fill("300")
     before = frames(page)
     page.locator("#scan-slider").fill("299")
     redrawn(page, before)
     before = frames(page)
     page.locator("#world-radio").check()
-    drawn = redrawn(page, before)
+    return redrawn(page, before)
+
+
+def test_world_view_accumulates_the_scans_before(page):
+    drawn = world_view_of_the_last_300(page)
     assert drawn["world"] == 300
     assert drawn["segments"][0] > 300
 
@@ -328,13 +333,7 @@ def test_the_map_layer_draws_the_line_map_under_the_scan(page):
     assert sum(pixel_is(page, x, y, colour) for x, y in in_view) > len(in_view) // 2
     ARTIFACTS.mkdir(exist_ok=True)
     page.screenshot(path=ARTIFACTS / "viewer-map-layer.png")
-    page.locator("#world-span").fill("300")
-    before = frames(page)
-    page.locator("#scan-slider").fill("299")
-    redrawn(page, before)
-    before = frames(page)
-    page.locator("#world-radio").check()
-    drawn = redrawn(page, before)
+    drawn = world_view_of_the_last_300(page)
     assert drawn["layers"]["map"] == len(lines)
     page.screenshot(path=ARTIFACTS / "viewer-map-layer-world.png")
     layer_box(page, "map").uncheck()

@@ -25,7 +25,6 @@ from scanlines.viewer.scan_store import ScanStore
 if TYPE_CHECKING:  # the extraction modules load numba: imported on first use, so that
     # the page is served (and the first scan's returns drawn) while they load
     from scanlines.extractor import Extractor
-    from scanlines.map import MapLines
     from scanlines.scan import Scan
     from scanlines.sensor_profile import SensorProfile
 
@@ -267,6 +266,7 @@ class ViewerSession:
 
     def _build_map(self, config: ExtractionConfig) -> dict[str, Any]:
         from scanlines.map import build_map
+        from scanlines.map.export import map_records
 
         self.store.wait_for(1)
         if not self.store.with_pose:
@@ -278,7 +278,7 @@ class ViewerSession:
         return {
             "config": config.to_dict(), "poses": build.poses, "scans": build.scans,
             "segments": build.segments, "seconds": time.perf_counter() - started,
-            "lines": map_lines(lines),
+            "lines": map_records(lines),
         }  # fmt: skip
 
     def _every_scan(self) -> Iterator[tuple[int, Scan]]:
@@ -287,17 +287,6 @@ class ViewerSession:
         self.store.wait_for(10**12)
         for index in range(self.store.count):
             yield index, self.store.scan(index)
-
-
-def map_lines(lines: MapLines) -> list[dict[str, Any]]:
-    """Map lines (:class:`scanlines.map.MapLines`) as the page draws them: end points in
-    the world frame, support, and the first and last scan (viewer index) that saw each."""
-    return [
-        {"start": lines.start[k].tolist(), "end": lines.end[k].tolist(),
-         "scans": int(lines.scans[k]), "first_scan": int(lines.first_scan[k]),
-         "last_scan": int(lines.last_scan[k])}
-        for k in range(len(lines))
-    ]  # fmt: skip
 
 
 def _result(extractor: Extractor, scan: Scan) -> dict[str, Any]:
