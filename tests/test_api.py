@@ -188,7 +188,7 @@ def import_cycles(graph: dict[str, list[str]]) -> list[list[str]]:
 LAYERS = (
     ("scanlines.errors", "scanlines.json_values", "scanlines.interrupts", "scanlines.outputs",
      "scanlines._compile_watch", "scanlines._jit", "scanlines.params", "scanlines.poses",
-     "scanlines.truth", "scanlines.builtin_methods"),
+     "scanlines.truth", "scanlines.builtin_methods", "scanlines.reader_options"),
     ("scanlines.scan", "scanlines.extraction"),
     ("scanlines.steps",),
     ("scanlines.methods",),

@@ -27,7 +27,7 @@ import contextlib
 import hashlib
 import json
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -39,6 +39,7 @@ from scanlines.errors import ParameterError, ScanlinesError, describe
 from scanlines.fleet_executors import _executor
 from scanlines.fleet_executors import dask_setup as dask_setup
 from scanlines.fleet_inputs import estimated_records, expand_inputs, log_names
+from scanlines.reader_options import ReaderOptions
 
 __all__ = [
     "CHUNK_RECORDS",
@@ -70,7 +71,7 @@ class ChunkTask:
     method: str
     preset: str | None
     params: dict[str, Any]
-    reader_options: dict[str, Any]
+    reader_options: ReaderOptions
     sensor_profile: str | None = None
     staged: bool = True  # written under _staging until the log is committed
 
@@ -136,7 +137,7 @@ def plan(
     method: str = DEFAULT_METHOD,
     preset: str | None = None,
     params: dict[str, Any] | None = None,
-    reader_options: dict[str, Any] | None = None,
+    reader_options: ReaderOptions | Mapping[str, Any] | None = None,
     sensor_profile: str | None = None,
     chunk_records: int = CHUNK_RECORDS,
 ) -> tuple[list[ChunkTask], list[LogOutcome]]:
@@ -145,7 +146,7 @@ def plan(
     tasks, failed = [], []
     for name, path in zip(log_names(paths), paths, strict=True):
         try:
-            records = estimated_records(path, reader_options or {})
+            records = estimated_records(path, ReaderOptions.of(reader_options))
         except (ScanlinesError, OSError) as error:
             failed.append(LogOutcome(name, str(path), "failed", str(error)))
             continue
@@ -154,7 +155,7 @@ def plan(
             stop = starts[k + 1] if k + 1 < len(starts) else None
             tasks.append(
                 ChunkTask(name, str(path), str(dataset), start, stop, method, preset,
-                          dict(params or {}), dict(reader_options or {}), sensor_profile)
+                          dict(params or {}), ReaderOptions.of(reader_options), sensor_profile)
             )  # fmt: skip
     return tasks, failed
 
@@ -178,7 +179,7 @@ def extract_task(task: ChunkTask) -> ChunkResult:
     profile = _task_profile(task)
     extractor = Extractor(task.method, task.preset, sensor_profile=profile, **task.params)
     indices, scans, tables = [], [], []
-    with open_log(task.path, **task.reader_options) as reader:
+    with open_log(task.path, options=task.reader_options) as reader:
         selected = select(reader.enumerate(), slice(task.start, task.stop))
         for piece in chunk_scans(selected, CHUNK_SCANS):
             tables.append(extract_piece(piece, extractor).table)
@@ -232,7 +233,7 @@ def _fingerprint(task: ChunkTask, digest: str) -> dict[str, Any]:
 
     profile = task.sensor_profile
     return jsonable({"input_sha256": digest, "method": task.method, "preset": task.preset,
-                     "params": task.params, "reader_options": task.reader_options,
+                     "params": task.params, "reader_options": task.reader_options.given(),
                      "sensor_profile_sha256": None if profile is None else checksum(Path(profile)),
                      })  # fmt: skip
 
@@ -247,7 +248,7 @@ def run_fleet(
     method: str = DEFAULT_METHOD,
     preset: str | None = None,
     params: dict[str, Any] | None = None,
-    reader_options: dict[str, Any] | None = None,
+    reader_options: ReaderOptions | Mapping[str, Any] | None = None,
     sensor_profile: str | Path | None = None,
     jobs: int = 1,
     scheduler: str | None = None,

@@ -5,9 +5,9 @@ from __future__ import annotations
 import glob
 from collections.abc import Iterable, Sequence
 from pathlib import Path
-from typing import Any
 
 from scanlines.errors import ParameterError
+from scanlines.reader_options import ReaderOptions
 
 #: Suffixes of the log files a folder given as input is searched for.
 LOG_SUFFIXES = (".log", ".clf", ".gz", ".dat", ".csv", ".npz", ".bag", ".mcap", ".db3")
@@ -64,7 +64,7 @@ def _safe(name: str) -> str:
     return "".join(c if c.isalnum() or c in "._-" else "_" for c in name)
 
 
-def estimated_records(path: Path, reader_options: dict[str, Any]) -> int:
+def estimated_records(path: Path, reader_options: ReaderOptions) -> int:
     """About how many scan records a log holds, cheaply (the last chunk is open-ended, so
     this only decides how a log is split)."""
     from scanlines.io import open_log
@@ -73,7 +73,7 @@ def estimated_records(path: Path, reader_options: dict[str, Any]) -> int:
     from scanlines.io.rosbag import RosbagReader
     from scanlines.io.text import iter_lines
 
-    with open_log(path, **reader_options) as reader:
+    with open_log(path, options=reader_options) as reader:
         if isinstance(reader, NpzReader):
             return reader.n_scans
         if isinstance(reader, RosbagReader):

@@ -20,6 +20,7 @@ from scanlines._jit import kernel_seconds
 from scanlines.errors import ParameterError
 from scanlines.extraction import ExtractionTable
 from scanlines.extractor import Extractor
+from scanlines.reader_options import ReaderOptions
 from scanlines.scan import Scan
 from scanlines.sensor_mounting import estimate_mounting
 from scanlines.sensor_profile import (
@@ -88,7 +89,7 @@ def selected_count(scans_in_file: int | None, scans: slice) -> int | None:
 
 
 def log_profile(
-    path: Any, reader_options: dict[str, Any], scans: slice = slice(None)
+    path: Any, reader_options: ReaderOptions, scans: slice = slice(None)
 ) -> SensorProfile:
     """The :class:`~scanlines.sensor_profile.SensorProfile` of a log, measured from its
     first selected scans (at most :data:`~scanlines.sensor_profile.DEFAULT_SCANS`).
@@ -98,12 +99,12 @@ def log_profile(
     """
     from scanlines.io import open_log
 
-    with open_log(path, **reader_options) as reader:
+    with open_log(path, options=reader_options) as reader:
         return measure_profile(reader, scans, max_scans=DEFAULT_SCANS, source=str(path))
 
 
 def run_profile(
-    path: Any, reader_options: dict[str, Any], scans: slice, given: Any = None
+    path: Any, reader_options: ReaderOptions, scans: slice, given: Any = None
 ) -> tuple[SensorProfile | None, str | None]:
     """The sensor profile a run of the log at ``path`` uses, and a note saying where it
     came from: the profile file ``given``; else measured from the log's first selected
@@ -126,8 +127,8 @@ def run_profile(
 
 
 def mounted_options(
-    path: Any, reader_options: dict[str, Any], profile: SensorProfile | None
-) -> tuple[dict[str, Any], str | None]:
+    path: Any, reader_options: ReaderOptions, profile: SensorProfile | None
+) -> tuple[ReaderOptions, str | None]:
     """Reader options that give the laser's pose where the log records only the robot's
     (the profile's mounting, for a reader that takes one), and a note when they do."""
     from scanlines.io import detect_format, open_log
@@ -137,8 +138,8 @@ def mounted_options(
         return reader_options, None
     if "mounting" not in options_of(detect_format(path)):
         return reader_options, None
-    options = {**reader_options, "mounting": profile.mounting}
-    with open_log(path, **options) as reader:
+    options = reader_options.but(mounting=profile.mounting)
+    with open_log(path, options=options) as reader:
         if not reader.moves_robot_poses:
             return options, None
         x, y, theta = profile.mounting

@@ -17,6 +17,7 @@ import typer
 from scanlines.builtin_methods import BUILTIN_METHODS
 from scanlines.errors import ParameterError, ScanlinesError
 from scanlines.interrupts import Terminated, any_terminated, is_interrupt
+from scanlines.reader_options import ReaderOptions
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -306,22 +307,21 @@ def reader_options(
     angle_increment: float | None = None,
     on_error: str | None = None,
     max_beams: int | None = None,
-) -> dict[str, Any]:
+) -> ReaderOptions:
     """The reader options the user gave on the command line (angles given in degrees),
     and only those: each reader refuses the ones it does not take."""
-    options: dict[str, Any] = {
-        "max_beams": max_beams,
-        "fov": fov,
-        "angle_convention": angle_convention,
-        "topic": topic,
-        "angle_min": None if angle_min is None else math.radians(angle_min),
-        "angle_increment": None if angle_increment is None else math.radians(angle_increment),
-        "on_error": on_error,
-    }
-    return {k: v for k, v in options.items() if v is not None}
+    return ReaderOptions(
+        max_beams=max_beams,
+        fov=fov,
+        angle_convention=angle_convention,
+        topic=topic,
+        angle_min=None if angle_min is None else math.radians(angle_min),
+        angle_increment=None if angle_increment is None else math.radians(angle_increment),
+        on_error=on_error,
+    )
 
 
-def profile_for_run(log: Path, options: dict[str, Any], selection: slice, given: Any):
+def profile_for_run(log: Path, options: ReaderOptions, selection: slice, given: Any):
     """:func:`scanlines.runner.run_profile`, its note on stderr."""
     from scanlines.runner import run_profile
 
@@ -331,7 +331,7 @@ def profile_for_run(log: Path, options: dict[str, Any], selection: slice, given:
     return profile
 
 
-def with_mounting(log: Path, options: dict[str, Any], profile: Any) -> dict[str, Any]:
+def with_mounting(log: Path, options: ReaderOptions, profile: Any) -> ReaderOptions:
     """:func:`scanlines.runner.mounted_options`, its note on stderr."""
     from scanlines.runner import mounted_options
 

@@ -9,6 +9,7 @@ from typing import Any
 import typer
 
 from scanlines.errors import ParameterError
+from scanlines.reader_options import ReaderOptions
 
 #: Exit code when some logs failed (the others are written).
 SOME_FAILED = 2
@@ -22,7 +23,7 @@ def run_many(
     method: str,
     preset: str | None,
     params: dict[str, Any],
-    options: dict[str, Any],
+    options: ReaderOptions,
     sensor_profile: Path | None,
     jobs: int,
     scheduler: str | None,
@@ -84,7 +85,7 @@ def _one_output_per_log(logs, out, output_format, method, preset, params, option
             profile = profile_for_run(path, options, selection, sensor_profile)
             extractor = Extractor(method, preset, sensor_profile=profile, **params)
             log_options = with_mounting(path, options, profile) if frame == "world" else options
-            with open_log(path, **log_options) as reader:
+            with open_log(path, options=log_options) as reader:
                 result = run_log_to_file(reader, extractor, out / f"{name}.{output_format}",
                                          frame=frame, scans=selection, jobs=jobs,
                                          overwrite=overwrite)  # fmt: skip

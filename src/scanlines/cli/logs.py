@@ -78,7 +78,7 @@ def info_command(
     options = reader_options(
         fov, angle_convention, topic, angle_min, angle_increment, on_error, max_beams
     )
-    with open_log(log, **options) as reader:
+    with open_log(log, options=options) as reader:
         description = describe_log(reader)
     if as_json:
         typer.echo(json.dumps(description.to_dict(), indent=2, default=str))
@@ -188,7 +188,7 @@ def run_command(
     # What is loaded now lives for the whole run: frozen, the collector no longer walks
     # it each time the chunks' records set off a collection.
     gc.freeze()
-    with open_log(log, **options) as reader:
+    with open_log(log, options=options) as reader:
         summary = _run_with_progress(reader, extractor, selection, out, frame, log, jobs, overwrite)
         notes = reader.notes
     summary.compile_seconds += compiled.seconds
@@ -231,7 +231,7 @@ def calibrate_command(
     writable(out, overwrite)
     writable(plot, overwrite)
     options = reader_options(fov, angle_convention, topic, angle_min, angle_increment)
-    with open_log(log, **options) as reader:
+    with open_log(log, options=options) as reader:
         profile = measure_profile(reader, parse_slice(scans), max_scans=max_scans, source=log.name)
     profile.save(out)
     table = Table(title=f"sensor profile of {log.name}", show_header=False)
@@ -300,7 +300,7 @@ def plot_command(
     extractor = Extractor(method, preset, **params)
     writable(output, overwrite)
     options = reader_options(fov, angle_convention, topic, angle_min, angle_increment)
-    with open_log(log, **options) as reader:
+    with open_log(log, options=options) as reader:
         chosen, selected = [], 0
         for index, item in select(reader.enumerate(), selection):
             selected += 1

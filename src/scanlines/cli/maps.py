@@ -21,6 +21,7 @@ from scanlines.cli.common import (
     guarded,
     reader_options,
 )
+from scanlines.reader_options import ReaderOptions
 
 OUT_HELP = "The map: .geojson, .svg, .dxf (needs ezdxf) or .json (with covariances)."
 PosesOption = Annotated[
@@ -98,7 +99,7 @@ def map_command(
 
 def prepare(
     log: Path,
-    options: dict[str, Any],
+    options: ReaderOptions,
     poses: Path | None,
     min_scans: int | None,
     method: str | None,
@@ -121,7 +122,7 @@ def prepare(
     method, preset, params = method_options(method, preset, param, config)
     Extractor(method, preset, **params)  # bad parameters fail before the log is read
     settings = FusionSettings() if min_scans is None else FusionSettings(min_scans=min_scans)
-    with open_log(log, **options) as reader:
+    with open_log(log, options=options) as reader:
         source = choose_poses(islice(iter(reader), 10), poses)
     if isinstance(source, RegistrationOdometry):
         typer.echo(f"poses: {log.name} carries none; {source.name}", err=True)
@@ -133,13 +134,13 @@ def prepare(
     return {"extractor": extractor, "poses": source, "settings": settings, "profile": profile}
 
 
-def run_build(log: Path, options: dict[str, Any], prepared: dict[str, Any], scans: int | None):
+def run_build(log: Path, options: ReaderOptions, prepared: dict[str, Any], scans: int | None):
     from itertools import islice
 
     from scanlines.io import open_log
     from scanlines.map import build_map
 
-    with open_log(log, **options) as reader:
+    with open_log(log, options=options) as reader:
         indexed = reader.enumerate() if scans is None else islice(reader.enumerate(), scans)
         return build_map(
             indexed, prepared["extractor"], poses=prepared["poses"], settings=prepared["settings"]

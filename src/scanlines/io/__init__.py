@@ -9,6 +9,7 @@ file and holds one record at a time)::
     from scanlines.io import open_log
     reader = open_log("intel.clf.gz")                  # format from name + content
     reader = open_log("run.bag", topic="/front/scan")  # reader options as keywords
+    reader = open_log("run.bag", options=ReaderOptions(topic="/front/scan"))  # or as one
     for index, scan in reader.enumerate():             # index = record number in the log
         ...
     reader.info()        # format, options, records/skipped/error counts of the last pass
@@ -71,6 +72,7 @@ from scanlines.io.writers import (
     ResultWriter,
     meta_path_for,
 )
+from scanlines.reader_options import ReaderOptions
 
 __all__ = [
     "CSV_COLUMNS",
@@ -83,6 +85,7 @@ __all__ = [
     "JsonlWriter",
     "LogReader",
     "NpzReader",
+    "ReaderOptions",
     "RerunWriter",
     "ResultWriter",
     "Ros2BagWriter",
@@ -114,7 +117,13 @@ def reader_option_names(format_name: str) -> list[str]:
     return [p.name for p in parameters if p.kind is inspect.Parameter.KEYWORD_ONLY]
 
 
-def open_log(path: str | Path, *, format: str | None = None, **options: Any) -> LogReader:
+def open_log(
+    path: str | Path,
+    *,
+    format: str | None = None,
+    options: ReaderOptions | Mapping[str, Any] | None = None,
+    **keywords: Any,
+) -> LogReader:
     """Open a laser log for streaming, choosing the reader by name and content.
 
     Parameters
@@ -123,10 +132,11 @@ def open_log(path: str | Path, *, format: str | None = None, **options: Any) -> 
         Log file, or ROS 2 bag directory.
     format:
         Force a reader (a key of :data:`READERS`) instead of detecting it.
-    **options:
-        Options of that reader (see :func:`reader_option_names`), e.g. ``fov``,
-        ``angle_convention``, ``max_range`` (CARMEN), ``topic`` (bags),
-        ``angle_min``/``angle_increment`` (CSV), ``on_error`` (all).
+    options, **keywords:
+        Options of that reader (see :func:`reader_option_names`), as a
+        :class:`ReaderOptions` (or a mapping of its names) and as keywords (these
+        win), e.g. ``fov``, ``angle_convention``, ``max_range`` (CARMEN), ``topic``
+        (bags), ``angle_min``/``angle_increment`` (CSV), ``on_error`` (all).
 
     Returns
     -------
@@ -147,14 +157,15 @@ def open_log(path: str | Path, *, format: str | None = None, **options: Any) -> 
         format = detect_format(path)
     elif format not in READERS:
         raise ParameterError(f"unknown format {format!r}; formats: {', '.join(READERS)}")
+    given = {**ReaderOptions.of(options).given(), **keywords}
     accepted = reader_option_names(format)
-    unknown = sorted(set(options) - set(accepted))
+    unknown = sorted(set(given) - set(accepted))
     if unknown:
         raise ParameterError(
             f"{path}: option(s) {', '.join(unknown)} do not apply to {format} logs; "
             f"{format} options: {', '.join(accepted)}"
         )
-    return READERS[format](path, **options)
+    return READERS[format](path, **given)
 
 
 #: Output suffix -> writer class (a path without suffix: a ROS 2 bag directory).

@@ -20,12 +20,14 @@ import os
 import tempfile
 import threading
 from collections import OrderedDict
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from scanlines.errors import ParameterError, ScanlinesError
+from scanlines.reader_options import ReaderOptions
 from scanlines.scan import Scan
 
 __all__ = ["CACHED_SCANS", "ScanStore"]
@@ -53,14 +55,14 @@ class ScanStore:
     """
 
     def __init__(
-        self, path: str | Path, reader_options: dict[str, Any] | None = None,
+        self, path: str | Path, reader_options: ReaderOptions | Mapping[str, Any] | None = None,
         *, spool_dir: str | Path | None = None,
     ) -> None:  # fmt: skip
         from scanlines.io import open_log
 
         self.path = Path(path)
-        self.reader_options = dict(reader_options or {})
-        self.reader = open_log(self.path, **self.reader_options)  # bad options fail here
+        self.reader_options = ReaderOptions.of(reader_options)
+        self.reader = open_log(self.path, options=self.reader_options)  # bad options fail here
         self.format_name = self.reader.format_name
         self.reader_info: dict[str, Any] = {}
         self.error: str | None = None
