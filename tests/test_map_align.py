@@ -85,3 +85,14 @@ def test_alignment_tightens_a_map_of_a_log_with_pose_noise():
     assert aligned.localised_median_distance < 0.7 * raw.median_distance
     assert aligned.localised_coverage >= raw.coverage
     assert aligned.segments_per_line >= raw.segments_per_line
+
+
+def test_a_damped_alignment_moves_the_pose_part_of_the_way():
+    scan = view(ROOM, (0.5, 0.2, 0.1), seed=4, sigma=0.003)
+    given = (0.54, 0.2, 0.1)
+    full = align_scan(scan, given, room_lines(ROOM), AlignSettings())
+    half = align_scan(scan, given, room_lines(ROOM), AlignSettings(damping=0.5))
+    assert full.used
+    assert half.used
+    assert half.pose[0] == pytest.approx((given[0] + full.pose[0]) / 2, abs=1e-9)
+    assert abs(half.pose[0] - 0.5) > 0.015

@@ -31,13 +31,17 @@ LEVER = 1.0
 
 @dataclass(frozen=True)
 class AlignSettings:
-    """The constants of scan-to-map alignment (metres, radians)."""
+    """The constants of scan-to-map alignment (metres, radians): the bounds of a correction,
+    the gate of a return's line, the least constraint per direction, the scans a map line
+    needs to be aligned to (``support``), the share of the correction applied (``damping``)."""
 
     max_shift: float = 0.1
     max_turn: float = math.radians(2.0)
     gate: float = 0.1
     least: float = 0.02
     iterations: int = 6
+    support: int = 3
+    damping: float = 1.0
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -158,8 +162,15 @@ def align_points(
 
 def align_scan(scan, pose: Pose, lines: LineSet, settings: AlignSettings) -> Alignment:
     """:func:`align_points` of a scan's valid returns."""
-    return align_points(
+    fit = align_points(
         scan.points[scan.valid], pose, lines, max_shift=settings.max_shift,
         max_turn=settings.max_turn, gate=settings.gate, least=settings.least,
         iterations=settings.iterations,
     )  # fmt: skip
+    if not fit.used or settings.damping == 1.0:
+        return fit
+    w = settings.damping
+    turn = math.remainder(fit.pose[2] - pose[2], 2 * math.pi)
+    damped = (pose[0] + w * (fit.pose[0] - pose[0]), pose[1] + w * (fit.pose[1] - pose[1]),
+              math.remainder(pose[2] + w * turn, 2 * math.pi))  # fmt: skip
+    return Alignment(damped, True, fit.pairs)

@@ -83,7 +83,7 @@ def build_map(
             build.held_out[index] = pose
             continue
         if align is not None:
-            fit = align_scan(scan, pose, LineSet(*line_map.settled()), align)
+            fit = align_scan(scan, pose, LineSet(*line_map.settled(align.support)), align)
             pose = fit.pose
             build.aligned += fit.used
         line_map.add(to_world(extractor(scan), pose), index, pose)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterable
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -87,6 +87,7 @@ def score_held_out(
     scan aligned to the finished map first, as a robot localising with it would)."""
     lines = build.line_map.lines()
     target = LineSet(lines.rho, lines.alpha, lines.start, lines.end)
+    locate = None if build.align is None else replace(build.align, damping=1.0)
     distances, tolerances, ranges, localised = [], [], [], []
     moved = 0
     for index, scan in indexed:
@@ -98,8 +99,8 @@ def score_held_out(
         distances.append(distances_to_lines(points_to_world(scan.points[valid], pose), lines))
         tolerances.append(np.maximum(3.0 * sigma_at(r), MIN_TOLERANCE))
         ranges.append(r)
-        if build.align is not None:
-            fit = align_scan(scan, pose, target, build.align)
+        if locate is not None:
+            fit = align_scan(scan, pose, target, locate)
             moved += fit.used
             world = points_to_world(scan.points[valid], fit.pose)
             localised.append(distances_to_lines(world, lines))
