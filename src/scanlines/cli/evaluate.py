@@ -15,6 +15,7 @@ from scanlines.cli.eval_reports import (
     _print_repeatability,
     _print_tables,
 )
+from scanlines.cli.maps import AlignOption, MapLogOption, MapPosesOption
 
 if TYPE_CHECKING:
     from scanlines.evaluation.evaluate import EvalResult
@@ -171,19 +172,9 @@ def eval_command(
             "--real and --labels, measured from the log; on simulated scenes, each scan's own.",
         ),
     ] = None,
-    map_log: Annotated[
-        Path | None,
-        typer.Option(
-            "--map",
-            help="Score a line map instead: built from every scan of LOG but each 10th "
-            "(`scanlines map`), scored on those: coverage of their returns, median distance, "
-            "map lines per 100 m and per segment, the loop test. Writes map_eval.json into --out.",
-        ),
-    ] = None,
-    poses: Annotated[
-        Path | None,
-        typer.Option("--poses", help="With --map: a TUM trajectory file of the log's poses."),
-    ] = None,
+    map_log: MapLogOption = None,
+    poses: MapPosesOption = None,
+    align: AlignOption = False,
 ) -> None:
     from scanlines.errors import ParameterError
     from scanlines.evaluation.specs import TRUTH, parse_specs
@@ -199,10 +190,10 @@ def eval_command(
             )
         from scanlines.cli.maps import evaluate_map_command
 
-        evaluate_map_command(map_log, specs[0], scans, sensor_profile, poses, out)
+        evaluate_map_command(map_log, specs[0], scans, sensor_profile, poses, out, align)
         return
-    if poses is not None:
-        raise ParameterError("--poses gives the poses of a --map LOG")
+    if poses is not None or align:
+        raise ParameterError("--poses and --align go with a --map LOG")
     profile = None if sensor_profile is None else read_profile(sensor_profile)
     if labels:
         _check_real_options(sensor, scenes_per_sensor, seed, scenes, save_scenes, noise, specs)

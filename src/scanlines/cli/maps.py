@@ -38,6 +38,27 @@ MinScansOption = Annotated[
         "--min-scans", min=1, help="Lines seen by fewer scans are dropped as clutter (default 3)."
     ),
 ]
+MapLogOption = Annotated[
+    Path | None,
+    typer.Option(
+        "--map",
+        help="Score a line map instead: built from every scan of LOG but each 10th "
+        "(`scanlines map`), scored on those: coverage of their returns, median distance, "
+        "map lines per 100 m and per segment, the loop test. Writes map_eval.json into --out.",
+    ),
+]
+MapPosesOption = Annotated[
+    Path | None,
+    typer.Option("--poses", help="With --map: a TUM trajectory file of the log's poses."),
+]
+AlignOption = Annotated[
+    bool,
+    typer.Option(
+        "--align",
+        help="With --map: align each scan to the map so far before fusing it; the held-out "
+        "scans are then scored at their poses and also localised (aligned to the map).",
+    ),
+]
 FirstScansOption = Annotated[
     int | None, typer.Option("--scans", min=1, help="Only the first N scans of the log.")
 ]
@@ -160,7 +181,13 @@ def map_meta(log: Path, build, prepared: dict[str, Any]) -> dict[str, Any]:
 
 
 def evaluate_map_command(
-    log: Path, spec, scans: int | None, sensor_profile: Path | None, poses: Path | None, out: Path
+    log: Path,
+    spec,
+    scans: int | None,
+    sensor_profile: Path | None,
+    poses: Path | None,
+    out: Path,
+    align: bool = False,
 ) -> None:
     """``scanlines eval --map LOG``: the map of every scan but each 10th, scored on those."""
     import json
@@ -171,6 +198,7 @@ def evaluate_map_command(
 
     from scanlines.errors import ParameterError
     from scanlines.io import open_log
+    from scanlines.map.align import AlignSettings
     from scanlines.map.holdout import evaluate_map
 
     if spec.is_truth:
@@ -185,6 +213,7 @@ def evaluate_map_command(
     score, build = evaluate_map(
         lambda: open_log(log), prepared["extractor"], profile.sigma_at,
         poses=prepared["poses"], settings=prepared["settings"], limit=scans,
+        align=AlignSettings() if align else None,
     )  # fmt: skip
     seconds = time.perf_counter() - started
     table = Table(title=f"line map of {log.name}: {score.poses}", show_header=False)
@@ -199,6 +228,7 @@ def evaluate_map_command(
             f"2 sigma at the median range ({score.median_range:.2f} m), mm",
             f"{2000 * score.sigma_at_median_range:.1f}",
         ),
+        *_localised_rows(score, build),
         ("map lines", f"{score.lines}"),
         ("segments mapped", f"{build.segments}"),
         ("segments per map line", f"{build.segments / max(score.lines, 1):.1f}"),
@@ -218,7 +248,21 @@ def evaluate_map_command(
         **score.to_dict(),
         "segments_mapped": build.segments,
         "segments_per_line": build.segments / max(score.lines, 1),
+        "align": None if build.align is None else build.align.to_dict(),
+        "scans_aligned": build.aligned,
         "seconds": seconds,
     }
     path.write_text(json.dumps(payload, indent=1) + "\n", encoding="utf-8")
     typer.echo(f"wrote {path}")
+
+
+def _localised_rows(score, build) -> list[tuple[str, str]]:
+    """The rows of a map built with alignment: the held-out scans localised on the map."""
+    if build.align is None:
+        return []
+    return [
+        ("scans aligned while mapping", f"{build.aligned} / {build.scans}"),
+        ("localised: held-out scans aligned", f"{score.localised_scans}"),
+        ("localised: coverage", f"{score.localised_coverage:.3f}"),
+        ("localised: median distance, mm", f"{1000 * score.localised_median_distance:.1f}"),
+    ]

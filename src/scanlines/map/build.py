@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 from scanlines.extractor import Extractor
 from scanlines.io.transform import to_world
+from scanlines.map.align import AlignSettings, LineSet, align_scan
 from scanlines.map.fusion import FusionSettings, LineMap
 from scanlines.poses import Pose
 from scanlines.scan import Scan
@@ -26,6 +27,8 @@ class MapBuild:
     without_pose: int = 0
     held_out: dict[int, Pose] = field(default_factory=dict)
     last_index: int = -1
+    align: AlignSettings | None = None
+    aligned: int = 0
 
     @property
     def segments(self) -> int:
@@ -40,6 +43,7 @@ def build_map(
     settings: FusionSettings | None = None,
     hold_out: Callable[[int], bool] | None = None,
     on_scan: Callable[[int], None] | None = None,
+    align: AlignSettings | None = None,
 ) -> MapBuild:
     """The line map of ``(index, scan)`` pairs, streamed (one scan in memory at a time).
 
@@ -57,13 +61,16 @@ def build_map(
     hold_out:
         Scans for which it is true are not mapped; their poses are kept in ``held_out``
         (for :func:`scanlines.map.holdout.score_held_out`).
+    align:
+        Align each scan to the map built so far before fusing it
+        (:mod:`scanlines.map.align`; ``None``: the poses as given).
     """
     from scanlines.map.poses import LogPoses
 
     extractor = extractor or Extractor()
     poses = poses or LogPoses()
     line_map = LineMap(settings)
-    build = MapBuild(line_map, poses=getattr(poses, "name", type(poses).__name__))
+    build = MapBuild(line_map, poses=getattr(poses, "name", type(poses).__name__), align=align)
     for index, scan in indexed:
         pose = poses(index, scan)
         build.last_index = index
@@ -75,6 +82,10 @@ def build_map(
         if hold_out is not None and hold_out(index):
             build.held_out[index] = pose
             continue
+        if align is not None:
+            fit = align_scan(scan, pose, LineSet(*line_map.settled(align.support)), align)
+            pose = fit.pose
+            build.aligned += fit.used
         line_map.add(to_world(extractor(scan), pose), index, pose)
         build.scans += 1
     return build

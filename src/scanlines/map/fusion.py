@@ -361,6 +361,12 @@ class LineMap:
         self.retired += int(stale.sum())
         self._remove(np.flatnonzero(stale))
 
+    def settled(self, floor: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``rho, alpha, start, end`` of the lines seen by ``floor`` scans or more so far."""
+        keep = np.flatnonzero(self._scans[: self._n] >= floor)
+        ends = self._all_ends()[keep]
+        return self._rho[keep], self._alpha[keep], ends[:, 0], ends[:, 1]
+
     def lines(self, min_scans: int | None = None) -> MapLines:
         """The map: lines seen by at least ``min_scans`` scans (default: the settings')."""
         self.merge_agreeing()

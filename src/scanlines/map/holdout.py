@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterable
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from typing import Any
 
 import numpy as np
 
 from scanlines.io.transform import points_to_world
+from scanlines.map.align import AlignSettings, LineSet, align_scan
 from scanlines.map.build import MapBuild, build_map
 from scanlines.map.fusion import FusionSettings, MapLines
 from scanlines.scan import Scan
@@ -38,6 +39,9 @@ class MapScore:
     lines_per_100m: float
     loop_lines: int
     poses: str
+    localised_coverage: float = math.nan
+    localised_median_distance: float = math.nan
+    localised_scans: int = 0
 
     @property
     def median_in_sigmas(self) -> float:
@@ -78,22 +82,30 @@ def score_held_out(
     build: MapBuild,
     sigma_at: Callable[[np.ndarray], np.ndarray],
 ) -> MapScore:
-    """Score ``build``'s map on its held-out scans, read again from ``indexed``."""
+    """Score ``build``'s map on its held-out scans, read again from ``indexed``: at the
+    poses given, and where the map was built with alignment, also localised (each held-out
+    scan aligned to the finished map first, as a robot localising with it would)."""
     lines = build.line_map.lines()
-    distances, tolerances, ranges = [], [], []
+    target = LineSet(lines.rho, lines.alpha, lines.start, lines.end)
+    locate = None if build.align is None else replace(build.align, damping=1.0)
+    distances, tolerances, ranges, localised = [], [], [], []
+    moved = 0
     for index, scan in indexed:
         pose = build.held_out.get(index)
         if pose is None:
             continue
         valid = scan.valid
         r = scan.ranges[valid].astype(np.float64)
-        world = points_to_world(scan.points[valid], pose)
-        distances.append(distances_to_lines(world, lines))
+        distances.append(distances_to_lines(points_to_world(scan.points[valid], pose), lines))
         tolerances.append(np.maximum(3.0 * sigma_at(r), MIN_TOLERANCE))
         ranges.append(r)
-    d = np.concatenate(distances) if distances else np.zeros(0)
-    tol = np.concatenate(tolerances) if tolerances else np.zeros(0)
-    r = np.concatenate(ranges) if ranges else np.zeros(0)
+        if locate is not None:
+            fit = align_scan(scan, pose, target, locate)
+            moved += fit.used
+            world = points_to_world(scan.points[valid], fit.pose)
+            localised.append(distances_to_lines(world, lines))
+    d, tol, r = (np.concatenate(a) if a else np.zeros(0) for a in (distances, tolerances, ranges))
+    near = _localised(localised, tol, moved)
     median_range = float(np.median(r)) if len(r) else math.nan
     length = float(lines.lengths.sum())
     fused = int(lines.segments.sum())
@@ -112,7 +124,22 @@ def score_held_out(
         lines_per_100m=100.0 * len(lines) / length if length > 0 else math.nan,
         loop_lines=loop_lines(lines, 0, build.last_index),
         poses=build.poses,
+        **near,
     )
+
+
+def _localised(distances: list[np.ndarray], tolerances: np.ndarray, moved: int) -> dict:
+    """The localised fields of a :class:`MapScore` (none without them)."""
+    if not distances:
+        return {}
+    d = np.concatenate(distances)
+    if not len(d):
+        return {}
+    return {
+        "localised_coverage": float(np.mean(d <= tolerances)),
+        "localised_median_distance": float(np.median(d)),
+        "localised_scans": moved,
+    }
 
 
 def evaluate_map(
@@ -124,6 +151,7 @@ def evaluate_map(
     settings: FusionSettings | None = None,
     every: int = 10,
     limit: int | None = None,
+    align: AlignSettings | None = None,
 ) -> tuple[MapScore, MapBuild]:
     """Build the map from all scans but every ``every``-th, then score it on those.
 
@@ -139,7 +167,7 @@ def evaluate_map(
     with open_indexed() as reader:
         build = build_map(
             indexed(reader), extractor, poses=poses, settings=settings,
-            hold_out=lambda index: index % every == 0,
+            hold_out=lambda index: index % every == 0, align=align,
         )  # fmt: skip
     with open_indexed() as reader:
         score = score_held_out(indexed(reader), build, sigma_at)
