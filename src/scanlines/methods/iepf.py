@@ -41,9 +41,7 @@ References
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
-from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
@@ -52,7 +50,7 @@ from scanlines._jit import kernel, scan_kernel
 from scanlines.methods.base import CompiledMethod, cluster_scan
 from scanlines.params import Param, number, segment_params, with_default
 from scanlines.steps.assemble import Output, empty_result, finish
-from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, LITERAL_CLUSTERING, RULE_CODES, RuleSpec
+from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, LITERAL_CLUSTERING, RuleSpec
 from scanlines.steps.events import EVENT_PARAMS
 from scanlines.steps.fit import prefix_moments
 from scanlines.steps.returns import valid_returns
@@ -60,59 +58,9 @@ from scanlines.steps.split import REFERENCE_CODES, split_at_farthest
 from scanlines.steps.stack import add_row, new_table
 
 
-@dataclass(frozen=True)
-class SplitSettings:
-    """The settings of the split methods (iepf, pdbs, split_merge), angles in radians.
-
-    ``split_reference`` is :data:`~scanlines.steps.split.CHORD` or
-    :data:`~scanlines.steps.split.LINE`; parameters a method does not have are NaN.
-    """
-
-    breakpoints: int
-    k: float
-    noise_k: float
-    line_k: float
-    abd_lambda: float
-    pdbs_c0: float
-    jump_distance: float
-    min_points: int
-    min_length: float
-    range_sigma: float
-    corner_beams: int
-    corner_distance: float
-    corner_angle: float
-    split_distance: float
-    split_reference: int
-    outlier_distance: float
-    merge_chi2: float
-
-    @classmethod
-    def of(cls, params: Mapping[str, Any], reference: str) -> SplitSettings:
-        """The settings of resolved ``params``; ``reference`` ``"chord"`` or ``"fit"``."""
-        return cls(
-            breakpoints=RULE_CODES[params["breakpoints"]],
-            k=params["k"],
-            noise_k=params["noise_k"],
-            line_k=params["line_k"],
-            abd_lambda=math.radians(params["abd_lambda"]),
-            pdbs_c0=params["pdbs_c0"],
-            jump_distance=params["jump_distance"],
-            min_points=params["min_points"],
-            min_length=params["min_length"],
-            range_sigma=math.nan if params["range_sigma"] == "auto" else params["range_sigma"],
-            corner_beams=params["corner_beams"],
-            corner_distance=params["corner_distance"],
-            corner_angle=math.radians(params["corner_angle"]),
-            split_distance=params["split_distance"],
-            split_reference=REFERENCE_CODES[reference],
-            outlier_distance=params.get("outlier_distance", math.nan),
-            merge_chi2=params.get("merge_chi2", math.nan),
-        )
-
-
 @kernel
 def rule_spec(s):
-    """The clustering rule of a :class:`SplitSettings` record."""
+    """The clustering rule of a split method's settings record."""
     return RuleSpec(
         s.breakpoints, s.k, s.noise_k, s.line_k, s.abd_lambda, s.pdbs_c0, s.jump_distance
     )
@@ -120,13 +68,27 @@ def rule_spec(s):
 
 @kernel
 def output(s):
-    """The :class:`~scanlines.steps.assemble.Output` of a :class:`SplitSettings` record."""
+    """The :class:`~scanlines.steps.assemble.Output` of a split method's settings record."""
     return Output(
         s.min_points, s.min_length, s.range_sigma, s.corner_beams, s.corner_distance, s.corner_angle
     )
 
 
-class Iepf(CompiledMethod):
+class SplitMethod(CompiledMethod):
+    """A method that splits clusters at their farthest point (iepf, pdbs, split_merge): its
+    settings record adds ``split_reference``, what the distance is measured from."""
+
+    reference: ClassVar[str] = "chord"
+    """A key of :data:`~scanlines.steps.split.REFERENCE_CODES`: ``"chord"`` or ``"fit"``."""
+
+    @classmethod
+    def settings_of(cls, params: Mapping[str, Any]) -> dict[str, np.generic]:
+        """The settings the parameters declare, and the method's ``split_reference``."""
+        reference = np.int64(REFERENCE_CODES[cls.reference])
+        return {**super().settings_of(params), "split_reference": reference}
+
+
+class Iepf(SplitMethod):
     """Iterative end-point fit (module docstring)."""
 
     name = "iepf"
@@ -145,9 +107,7 @@ class Iepf(CompiledMethod):
         **EVENT_PARAMS,
     }
 
-    @classmethod
-    def settings_of(cls, params: Mapping[str, Any]) -> SplitSettings:
-        return SplitSettings.of(params, reference="chord")
+    reference = "chord"
 
     @staticmethod
     def kernel(*arguments):

@@ -55,14 +55,12 @@ References
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
 
 from scanlines._jit import kernel, scan_kernel
-from scanlines.methods.base import CompiledMethod
-from scanlines.methods.iepf import SplitSettings, cluster_and_split, output
+from scanlines.methods.iepf import SplitMethod, cluster_and_split, output
 from scanlines.params import Param, number, segment_params, with_default
 from scanlines.steps.assemble import drop_small, empty_result, finish
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, LITERAL_CLUSTERING
@@ -73,7 +71,7 @@ from scanlines.steps.returns import beam_gaps, valid_returns, without
 from scanlines.steps.stack import add_row, new_table
 
 
-class SplitMerge(CompiledMethod):
+class SplitMerge(SplitMethod):
     """Split-and-merge with a chi-square merge (module docstring)."""
 
     name = "split_merge"
@@ -105,9 +103,7 @@ class SplitMerge(CompiledMethod):
         **EVENT_PARAMS,
     }
 
-    @classmethod
-    def settings_of(cls, params: Mapping[str, Any]) -> SplitSettings:
-        return SplitSettings.of(params, reference="fit")
+    reference = "fit"
 
     @staticmethod
     def kernel(*arguments):
