@@ -46,6 +46,11 @@ class Declared(CompiledMethod):
         ),
         "quiet": Param(True, choice(True, False), "a switch"),
     }
+    built: ClassVar[int] = 0
+
+    def __init__(self, params, noise=None) -> None:
+        super().__init__(params, noise)
+        Declared.built += 1
 
 
 @pytest.fixture
@@ -64,7 +69,9 @@ def test_a_declared_parameter_reaches_method_info_the_file_and_the_record(declar
     path = tmp_path / "declared.toml"
     path.write_text(config.to_toml())
     assert 'bound = "none"' in config.to_toml().splitlines()
+    Declared.built = 0
     assert load_config(path) == config
+    assert Declared.built == 1  # the file is validated once
     settings = config.extractor()._method.settings
     assert list(settings) == [
         *("min_points", "min_length", "range_sigma", "turn", "side", "bound", "width"),

@@ -270,17 +270,10 @@ def _from_mapping(mapping: Any, source: object, text: str | None = None) -> Extr
     for key in mapping:
         if key not in CONFIG_KEYS:
             raise fail(f"unknown key; valid: {', '.join(CONFIG_KEYS)}", str(key))
-    method = mapping.get("method", DEFAULT_METHOD)
-    if not isinstance(method, str):
-        raise fail(f"the method is a string, got {method!r}", "method")
-    preset = mapping.get("preset")
-    if preset is not None and not isinstance(preset, str):
-        raise fail(f"the preset is a string, got {preset!r}", "preset")
     params = mapping.get("params")
-    if params is None:
-        params = {}
-    if not isinstance(params, Mapping):
+    if params is not None and not isinstance(params, Mapping):
         raise fail(f"params is a table of NAME = VALUE, got {params!r}", "params")
+    method, preset = mapping.get("method", DEFAULT_METHOD), mapping.get("preset")
     try:
         return ExtractionConfig._of_checked(*_validated(method, preset, params, typed=True))
     except ConfigError as error:
