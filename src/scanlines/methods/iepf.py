@@ -47,7 +47,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from scanlines._jit import kernel, scan_kernel
-from scanlines.methods.base import CompiledMethod, cluster_scan
+from scanlines.methods.base import CompiledMethod, as_record, cluster_scan, kernel_tuple
 from scanlines.params import Param, number, segment_params, with_default
 from scanlines.steps.assemble import Output, empty_result, finish
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, LITERAL_CLUSTERING, RuleSpec
@@ -58,25 +58,10 @@ from scanlines.steps.split import REFERENCE_CODES, split_at_farthest
 from scanlines.steps.stack import add_row, new_table
 
 
-@kernel
-def rule_spec(s):
-    """The clustering rule of a split method's settings record."""
-    return RuleSpec(
-        s.breakpoints, s.k, s.noise_k, s.line_k, s.abd_lambda, s.pdbs_c0, s.jump_distance
-    )
-
-
-@kernel
-def output(s):
-    """The :class:`~scanlines.steps.assemble.Output` of a split method's settings record."""
-    return Output(
-        s.min_points, s.min_length, s.range_sigma, s.corner_beams, s.corner_distance, s.corner_angle
-    )
-
-
 class SplitMethod(CompiledMethod):
     """A method that splits clusters at their farthest point (iepf, pdbs, split_merge): its
-    settings record adds ``split_reference``, what the distance is measured from."""
+    settings record adds ``split_reference``, what the distance is measured from, and its
+    kernel takes the clustering rule and the output bounds as their tuples."""
 
     reference: ClassVar[str] = "chord"
     """A key of :data:`~scanlines.steps.split.REFERENCE_CODES`: ``"chord"`` or ``"fit"``."""
@@ -86,6 +71,12 @@ class SplitMethod(CompiledMethod):
         """The settings the parameters declare, and the method's ``split_reference``."""
         reference = np.int64(REFERENCE_CODES[cls.reference])
         return {**super().settings_of(params), "split_reference": reference}
+
+    def kernel_arguments(self) -> tuple[Any, ...]:
+        """The settings record, the :class:`~scanlines.steps.breakpoints.RuleSpec` and the
+        :class:`~scanlines.steps.assemble.Output`."""
+        rule = kernel_tuple(RuleSpec, self.parameters, self.params)
+        return as_record(self.settings), rule, kernel_tuple(Output, self.parameters, self.params)
 
 
 class Iepf(SplitMethod):
@@ -107,27 +98,26 @@ class Iepf(SplitMethod):
         **EVENT_PARAMS,
     }
 
-    reference = "chord"
-
     @staticmethod
     def kernel(*arguments):
         return iepf_stack(*arguments)
 
 
 @kernel
-def iepf_stack(stack, valid, cos, sin, step, full_circle, angle_min, noise, settings):
+def iepf_stack(stack, valid, cos, sin, step, full_circle, angle_min, noise, settings, rule, out):
     """:func:`iepf_scan` of each row of ``stack``, as one flat table."""
     table = new_table(stack.shape[0])
     for row in range(stack.shape[0]):
         result = iepf_scan(
-            stack[row], valid[row], cos, sin, step, full_circle, angle_min, noise, settings
-        )
+            stack[row], valid[row], cos, sin, step, full_circle, angle_min, noise, settings,
+            rule, out,
+        )  # fmt: skip
         table = add_row(table, row, result)
     return table
 
 
 @scan_kernel
-def iepf_scan(ranges, valid, cos, sin, step, full_circle, angle_min, noise, settings):
+def iepf_scan(ranges, valid, cos, sin, step, full_circle, angle_min, noise, settings, rule, out):
     """The whole method on one scan: the result arrays (see :class:`CompiledMethod`)."""
     s = settings[0]
     n_beams = ranges.shape[0]
@@ -136,24 +126,25 @@ def iepf_scan(ranges, valid, cos, sin, step, full_circle, angle_min, noise, sett
     if returns.index.shape[0] == 0:
         return empty_result(none, none)
     returns, moments, runs, clusters = cluster_and_split(
-        returns, n_beams, step, full_circle, s, noise
+        returns, n_beams, step, full_circle, s, rule, noise
     )
     return finish(
-        returns, n_beams, full_circle, moments, runs, clusters, none, angle_min, output(s), noise
+        returns, n_beams, full_circle, moments, runs, clusters, none, angle_min, out, noise
     )
 
 
 @kernel
-def cluster_and_split(returns, n_beams, step, full_circle, s, noise):
+def cluster_and_split(returns, n_beams, step, full_circle, s, rule, noise):
     """Steps 1-2 of the split methods: cluster by the rule, split every cluster at the point
-    farthest from its chord (or line) while it is farther than ``split_distance``.
+    farthest from its chord (or line) while it is farther than ``split_distance``
+    (``s``: the settings record, ``rule``: the :class:`~scanlines.steps.breakpoints.RuleSpec`).
 
     Returns the (possibly rotated) returns, their moments, the runs ``(a, b, group)`` and
     the clustering ``(True, ring, breakpoints)`` as :func:`~scanlines.steps.assemble.finish`
     takes them.
     """
     returns, start, end, breakpoints, ring = cluster_scan(
-        returns, n_beams, step, full_circle, rule_spec(s), noise
+        returns, n_beams, step, full_circle, rule, noise
     )
     moments = prefix_moments(returns.x, returns.y)
     clusters = np.arange(start.shape[0])
