@@ -126,7 +126,7 @@ def iepf_scan(ranges, valid, cos, sin, step, full_circle, angle_min, noise, sett
     if returns.index.shape[0] == 0:
         return empty_result(none, none)
     returns, moments, runs, clusters = cluster_and_split(
-        returns, n_beams, step, full_circle, s, rule, noise
+        returns, n_beams, step, full_circle, rule, (s.split_distance, s.split_reference), noise
     )
     return finish(
         returns, n_beams, full_circle, moments, runs, clusters, none, angle_min, out, noise
@@ -134,10 +134,12 @@ def iepf_scan(ranges, valid, cos, sin, step, full_circle, angle_min, noise, sett
 
 
 @kernel
-def cluster_and_split(returns, n_beams, step, full_circle, s, rule, noise):
-    """Steps 1-2 of the split methods: cluster by the rule, split every cluster at the point
+def cluster_and_split(returns, n_beams, step, full_circle, rule, split, noise):
+    """Steps 1-2 of the split methods: cluster by the rule (a
+    :class:`~scanlines.steps.breakpoints.RuleSpec`), split every cluster at the point
     farthest from its chord (or line) while it is farther than ``split_distance``
-    (``s``: the settings record, ``rule``: the :class:`~scanlines.steps.breakpoints.RuleSpec`).
+    (``split``: ``(split_distance, split_reference)``, not the record: the methods' records
+    differ, and one compiled kernel serves them all).
 
     Returns the (possibly rotated) returns, their moments, the runs ``(a, b, group)`` and
     the clustering ``(True, ring, breakpoints)`` as :func:`~scanlines.steps.assemble.finish`
@@ -148,7 +150,8 @@ def cluster_and_split(returns, n_beams, step, full_circle, s, rule, noise):
     )
     moments = prefix_moments(returns.x, returns.y)
     clusters = np.arange(start.shape[0])
+    distance, reference = split
     a, b, group = split_at_farthest(
-        returns.x, returns.y, moments, start, end, clusters, s.split_distance, s.split_reference
+        returns.x, returns.y, moments, start, end, clusters, distance, reference
     )
     return returns, moments, (a, b, group), (np.bool_(True), ring, breakpoints)

@@ -137,7 +137,7 @@ def split_merge_scan(
     if returns.index.shape[0] == 0:
         return empty_result(np.zeros(0, dtype=np.int64), outliers)
     returns, moments, (a, b, group), clusters = cluster_and_split(
-        returns, n_beams, step, full_circle, s, rule, noise
+        returns, n_beams, step, full_circle, rule, (s.split_distance, s.split_reference), noise
     )
     a, b, group = drop_small(returns.x, returns.y, a, b, group, s.min_points, s.min_length)
     sigma = covariance_sigmas(s.range_sigma, noise, returns, beam_gaps(returns.index, n_beams))
