@@ -140,7 +140,7 @@ def test_each_kind_of_value_has_its_spelling() -> None:
     for line in (
         'range_sigma = "auto"',
         "k = 2.0",
-        "dkth_range = [0.0, 0.05]",
+        "dkth_range = [",  # one number a line
         "dkth_step = 1e-09",
         'fit = "tls"',
         "merge = true",
@@ -160,6 +160,7 @@ def test_each_kind_of_value_has_its_spelling() -> None:
     assert config.to_dict()["params"]["dkth_range"] == [0.0, 0.05]
     assert config.to_dict()["params"]["max_residual"] is None
     assert tomllib.loads(text)["params"]["dkth_step"] == 1e-9
+    assert tomllib.loads(text)["params"]["dkth_range"] == [0.0, 0.05]
 
 
 def test_a_configuration_is_a_value() -> None:

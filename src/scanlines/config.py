@@ -11,7 +11,7 @@ One :class:`ExtractionConfig` has four spellings that give it back exactly:
 
       [params]
       min_points = 6
-      dkth_range = [0.0, 0.05]
+      dkth_range = [0.0, 0.05]   # written one number a line
       max_residual = "none"
 
 - a dict for a JSON API (:meth:`ExtractionConfig.to_dict`,
@@ -32,9 +32,7 @@ naming the file (or the ``source`` of a dict) and, where known, the line and the
 
 from __future__ import annotations
 
-import math
 import numbers
-import re
 import shlex
 import tomllib
 from collections.abc import Mapping
@@ -43,10 +41,12 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
+import tomli_w
+
 from scanlines.builtin_methods import DEFAULT_METHOD
 from scanlines.config_positions import _line_of, _toml_error
 from scanlines.errors import ParameterError, describe, one_line
-from scanlines.params import Check, Choice, Either, Integer, Number, Pair
+from scanlines.params import Check, Choice, Either, Integer, Number, Pair, resolve
 
 __all__ = [
     "CONFIG_KEYS",
@@ -128,7 +128,16 @@ class ExtractionConfig:
     params: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        method, preset, params = _validated(self.method, self.preset, self.params, typed=False)
+        self._set(*_validated(self.method, self.preset, self.params, typed=False))
+
+    @classmethod
+    def _of_checked(cls, method: str, preset: str | None, params: dict[str, Any]):
+        """The configuration of values :func:`_validated` gave (not validated again)."""
+        config = object.__new__(cls)
+        config._set(method, preset, params)
+        return config
+
+    def _set(self, method: str, preset: str | None, params: dict[str, Any]) -> None:
         object.__setattr__(self, "method", method)
         object.__setattr__(self, "preset", preset)
         object.__setattr__(self, "params", MappingProxyType(params))
@@ -161,14 +170,12 @@ class ExtractionConfig:
 
     def to_toml(self) -> str:
         """The configuration as a TOML file (what :func:`load_config` reads back equal)."""
-        lines = [HEADER, f"method = {_toml_value(self.method)}"]
+        document: dict[str, Any] = {"method": self.method}
         if self.preset is not None:
-            lines.append(f"preset = {_toml_value(self.preset)}")
-        lines += ["", "[params]"]
+            document["preset"] = self.preset
         checks = _checks(self.method)
-        for name, value in self.params.items():
-            lines.append(f"{_toml_key(name)} = {_toml_value(_spelled(checks[name], value))}")
-        return "\n".join(lines) + "\n"
+        document["params"] = {name: _spelled(checks[name], v) for name, v in self.params.items()}
+        return f"{HEADER}\n{tomli_w.dumps(document)}"
 
     def to_dict(self) -> dict[str, Any]:
         """``{"method": ..., "preset": ... or None, "params": {...}}`` as JSON holds it (a
@@ -263,22 +270,14 @@ def _from_mapping(mapping: Any, source: object, text: str | None = None) -> Extr
     for key in mapping:
         if key not in CONFIG_KEYS:
             raise fail(f"unknown key; valid: {', '.join(CONFIG_KEYS)}", str(key))
-    method = mapping.get("method", DEFAULT_METHOD)
-    if not isinstance(method, str):
-        raise fail(f"the method is a string, got {method!r}", "method")
-    preset = mapping.get("preset")
-    if preset is not None and not isinstance(preset, str):
-        raise fail(f"the preset is a string, got {preset!r}", "preset")
     params = mapping.get("params")
-    if params is None:
-        params = {}
-    if not isinstance(params, Mapping):
+    if params is not None and not isinstance(params, Mapping):
         raise fail(f"params is a table of NAME = VALUE, got {params!r}", "params")
+    method, preset = mapping.get("method", DEFAULT_METHOD), mapping.get("preset")
     try:
-        method, preset, checked = _validated(method, preset, params, typed=True)
+        return ExtractionConfig._of_checked(*_validated(method, preset, params, typed=True))
     except ConfigError as error:
         raise fail(error.reason, error.key) from None
-    return ExtractionConfig(method, preset, checked)
 
 
 def _validated(
@@ -293,7 +292,6 @@ def _validated(
     ConfigError
         Naming the key at fault.
     """
-    from scanlines.extractor import Extractor
     from scanlines.methods import method_class
 
     if not isinstance(method, str):
@@ -302,44 +300,43 @@ def _validated(
         cls = method_class(method)
     except ParameterError as error:
         raise ConfigError(str(error), key="method") from None
-    if preset is not None:
-        if not isinstance(preset, str):
-            raise ConfigError(f"the preset is a string, got {preset!r}", key="preset")
-        if preset not in cls.presets:
-            valid = ", ".join(sorted(cls.presets)) or "none"
-            raise ConfigError(
-                f"unknown preset {preset!r} for method {method!r}; valid: {valid}", key="preset"
-            )
+    if preset is not None and not isinstance(preset, str):
+        raise ConfigError(f"the preset is a string, got {preset!r}", key="preset")
     if params is None:
         params = {}
     if not isinstance(params, Mapping):
         raise ConfigError(f"params is a mapping of names to values, got {params!r}", key="params")
-    spec = cls.parameters
-    for name in params:
-        if not isinstance(name, str) or name not in spec:
-            valid = ", ".join(sorted(spec))
-            raise ConfigError(
-                f"unknown parameter {name!r} for method {method!r}; valid: {valid}",
-                key=f"params.{name}",
-            )
-    checked: dict[str, Any] = {}
-    for name in spec:
-        if name not in params:
-            continue
-        check, value = spec[name].check, params[name]
-        try:
-            if typed and not _type_fits(check, value):
-                raise ParameterError(
-                    f"{name} must be {check.describe()}, got {value!r}{_type_hint(check, value)}"
-                )
-            checked[name] = check(name, value)
-        except ParameterError as error:
-            raise ConfigError(str(error), key=f"params.{name}") from None
+    if typed:
+        _check_types(cls.parameters, params)
     try:
-        Extractor(method, preset, **checked)  # what the method itself refuses
+        resolved = resolve(method, cls.parameters, cls.presets, preset, params)
+    except ParameterError as error:
+        raise ConfigError(str(error), key=_key_of(error)) from None
+    try:
+        cls(resolved)  # what the method itself refuses
     except ParameterError as error:
         raise ConfigError(str(error)) from None
-    return method, preset, checked
+    return method, preset, {name: resolved[name] for name in cls.parameters if name in params}
+
+
+def _key_of(error: ParameterError) -> str:
+    """The key of a configuration that ``error`` of :func:`~scanlines.params.resolve`
+    names: ``params.NAME``, else the preset."""
+    return "preset" if error.parameter is None else f"params.{error.parameter}"
+
+
+def _check_types(spec: Mapping[str, Any], params: Mapping[str, Any]) -> None:
+    """That every value of a file or a dict has a type its check takes (see
+    :func:`_type_fits`); unknown names are left to :func:`~scanlines.params.resolve`."""
+    for name, value in params.items():
+        if name not in spec:
+            continue
+        check = spec[name].check
+        if not _type_fits(check, value):
+            raise ConfigError(
+                f"{name} must be {check.describe()}, got {value!r}{_type_hint(check, value)}",
+                key=f"params.{name}",
+            )
 
 
 def _checks(method: str) -> dict[str, Check]:
@@ -423,51 +420,3 @@ def _json_value(value: Any) -> Any:
     if isinstance(value, tuple | list):
         return [_json_value(v) for v in value]
     return value
-
-
-_BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
-#: TOML's short escapes of a basic string (other control characters: ``\\uXXXX``).
-_ESCAPES = {
-    '"': '\\"',
-    "\\": "\\\\",
-    "\b": "\\b",
-    "\t": "\\t",
-    "\n": "\\n",
-    "\f": "\\f",
-    "\r": "\\r",
-}
-
-
-def _toml_key(name: str) -> str:
-    return name if _BARE_KEY.fullmatch(name) else _toml_string(name)
-
-
-def _toml_string(text: str) -> str:
-    out = []
-    for char in text:
-        if char in _ESCAPES:
-            out.append(_ESCAPES[char])
-        elif ord(char) < 0x20 or ord(char) == 0x7F:
-            out.append(f"\\u{ord(char):04x}")
-        else:
-            out.append(char)
-    return '"' + "".join(out) + '"'
-
-
-def _toml_value(value: Any) -> str:
-    """A TOML value for a string, boolean, integer, finite float or flat array of them
-    (floats as ``repr``: read back exactly)."""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, str):
-        return _toml_string(value)
-    if isinstance(value, numbers.Integral):
-        return str(int(value))
-    if isinstance(value, numbers.Real):
-        number = float(value)
-        if not math.isfinite(number):  # no parameter takes one; written as TOML would
-            return "nan" if math.isnan(number) else ("inf" if number > 0 else "-inf")
-        return repr(number)
-    if isinstance(value, list | tuple):
-        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
-    raise ConfigError(f"cannot write {value!r} in TOML")

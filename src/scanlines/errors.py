@@ -17,7 +17,12 @@ class ScanError(ScanlinesError, ValueError):
 
 
 class ParameterError(ScanlinesError, ValueError):
-    """An unknown method, preset or parameter, or a parameter value out of range."""
+    """An unknown method, preset or parameter, or a parameter value out of range;
+    ``parameter`` names the parameter at fault, when there is one."""
+
+    def __init__(self, message: str = "", *, parameter: str | None = None) -> None:
+        super().__init__(message)
+        self.parameter = parameter
 
 
 class LogFormatError(ScanlinesError, ValueError):

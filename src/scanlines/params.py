@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import math
 import numbers
-from collections.abc import Mapping
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, replace
 from typing import Any
+
+import numpy as np
 
 from scanlines.errors import ParameterError
 
@@ -15,13 +17,19 @@ __all__ = [
     "MAX_METRES",
     "MAX_NUMBER",
     "Check",
+    "KernelField",
     "Param",
+    "as_float",
     "auto_or",
     "choice",
+    "coded",
+    "flag",
     "float_pair",
     "integer",
+    "kernel_settings",
     "number",
     "optional",
+    "radians",
     "resolve",
     "with_default",
 ]
@@ -44,18 +52,31 @@ class Check:
 
 
 @dataclass(frozen=True, slots=True)
+class KernelField:
+    """One field of a kernel's settings record: its name (``""``: the parameter's) and
+    ``encode``, the parameter's resolved value -> the field's numpy scalar."""
+
+    name: str
+    encode: Callable[[Any], np.generic]
+
+
+@dataclass(frozen=True, slots=True)
 class Param:
-    """One parameter of a method: its default, its domain (a :class:`Check`) and a
-    one-line doc."""
+    """One parameter of a method: its default, its domain (a :class:`Check`), a one-line
+    doc and how a compiled kernel reads it: ``kernel`` fields of its settings record
+    (``None``: the one field its check implies, see :func:`kernel_settings`; ``()``:
+    none)."""
 
     default: Any
     check: Check
     doc: str
+    kernel: tuple[KernelField, ...] | None = None
 
 
 def with_default(param: Param, default: Any, note: str = "") -> Param:
-    """``param`` with another default (and a note appended to its doc), same validation."""
-    return Param(default, param.check, param.doc + (f" ({note})" if note else ""))
+    """``param`` with another default (and a note appended to its doc), same validation
+    and kernel fields."""
+    return replace(param, default=default, doc=param.doc + (f" ({note})" if note else ""))
 
 
 def segment_params(
@@ -269,7 +290,8 @@ def resolve(
     Raises
     ------
     ParameterError
-        For an unknown preset or parameter (listing the valid ones) or a bad value.
+        For an unknown preset or parameter (listing the valid ones) or a bad value; its
+        ``parameter`` names the (first unknown) parameter, ``None`` for the preset.
     """
     values = {name: p.default for name, p in spec.items()}
     if preset is not None:
@@ -277,11 +299,71 @@ def resolve(
             valid = ", ".join(sorted(presets)) or "none"
             raise ParameterError(f"unknown preset {preset!r} for method {method!r}; valid: {valid}")
         values.update(presets[preset])
-    unknown = sorted(set(overrides) - set(spec))
+    unknown = sorted(map(str, set(overrides) - set(spec)))
     if unknown:
         valid = ", ".join(sorted(spec))
         raise ParameterError(
-            f"unknown parameter(s) {', '.join(unknown)} for method {method!r}; valid: {valid}"
+            f"unknown parameter(s) {', '.join(unknown)} for method {method!r}; valid: {valid}",
+            parameter=unknown[0],
         )
     values.update(overrides)
-    return {name: spec[name].check(name, value) for name, value in values.items()}
+    return {name: _checked(spec[name], name, value) for name, value in values.items()}
+
+
+def _checked(param: Param, name: str, value: Any) -> Any:
+    """``value`` checked by ``param``; an error names the parameter."""
+    try:
+        return param.check(name, value)
+    except ParameterError as error:
+        raise ParameterError(str(error), parameter=name) from None
+
+
+def _given(value: Any, scale: float = 1.0) -> np.float64:
+    """A number, ``"auto"`` as NaN (not given) and ``None`` as inf (no bound)."""
+    if value == "auto":
+        return np.float64(math.nan)
+    return np.float64(math.inf if value is None else value * scale)
+
+
+def as_float(name: str = "") -> KernelField:
+    """A float field of a number parameter (``"auto"``: NaN, ``None``: inf)."""
+    return KernelField(name, _given)
+
+
+def radians(name: str = "") -> KernelField:
+    """A field of an angle parameter in degrees, in radians (``"auto"``: NaN)."""
+    return KernelField(name, lambda value: _given(value, math.pi / 180.0))
+
+
+def coded(codes: Mapping[Any, int], name: str = "") -> KernelField:
+    """A field of a choice, as its code."""
+    return KernelField(name, lambda value: np.int64(codes[value]))
+
+
+def flag(name: str, when: Any) -> KernelField:
+    """A boolean field ``name``: whether the value is ``when`` (``"auto"``, ``None``...)."""
+    return KernelField(name, lambda value: np.bool_(value == when))
+
+
+def _implied_field(check: Check) -> KernelField:
+    """The field a check implies: a number (``"auto"``: NaN, ``None``: inf), an integer or a
+    boolean choice, under the parameter's name."""
+    inner = check.inner if isinstance(check, Either) else check
+    if isinstance(inner, Number):
+        return as_float()
+    if isinstance(check, Integer):
+        return KernelField("", np.int64)
+    if isinstance(check, Choice) and all(isinstance(o, bool) for o in check.options):
+        return KernelField("", np.bool_)
+    raise TypeError(f"declare the kernel fields of a parameter of {check.describe()}")
+
+
+def kernel_settings(spec: Mapping[str, Param], params: Mapping[str, Any]) -> dict[str, Any]:
+    """The fields of a kernel's settings record, name -> numpy scalar, as the parameters of
+    ``spec`` declare them (in their order), of the resolved ``params``."""
+    out: dict[str, Any] = {}
+    for name, param in spec.items():
+        fields = (_implied_field(param.check),) if param.kernel is None else param.kernel
+        for field in fields:
+            out[field.name or name] = field.encode(params[name])
+    return out

@@ -40,7 +40,7 @@ def main() -> None:
     args = parser.parse_args()
     scan = random_scene(args.seed, args.sensor).scan(args.seed).scan
     extractor = Extractor()
-    settings = ad.AdaptiveSettings.of(extractor.params)
+    settings = ad.Adaptive.settings_of(extractor.params)
     record, grid = as_record(settings), np.zeros(0)
     s = record[0]
     local = scan.angle_increment * np.arange(len(scan))

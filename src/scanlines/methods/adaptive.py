@@ -133,13 +133,12 @@ References
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from typing import Any, ClassVar
 
 import numpy as np
 
 from scanlines._jit import kernel, scan_kernel
-from scanlines.methods.adaptive_settings import PARAMETERS, PRESETS, AdaptiveSettings
+from scanlines.methods.adaptive_settings import PARAMETERS, PRESETS
 from scanlines.methods.base import CompiledMethod, as_record
 from scanlines.params import Param
 from scanlines.steps.assemble import assemble, empty_result
@@ -199,10 +198,6 @@ class Adaptive(CompiledMethod):
         *("run_cost_of", "corner_scores", "choose_corners", "segments", "junction_events"),
         "assemble",
     )
-
-    @classmethod
-    def settings_of(cls, params: Mapping[str, Any]) -> AdaptiveSettings:
-        return AdaptiveSettings.of(params)
 
     def kernel_arguments(self) -> tuple[np.ndarray, np.ndarray]:
         """The settings record and the thresholds of a fixed ``dkth_range`` (else empty)."""

@@ -7,10 +7,10 @@ resolved, validated parameters; :class:`~scanlines.Extractor` builds it once and
 it per scan.
 
 :class:`CompiledMethod`
-    The whole method is one kernel (adaptive, iepf, pdbs, split_merge). Its parameters
-    become a frozen dataclass of typed settings (:meth:`CompiledMethod.settings_of`),
-    passed to the kernel as a one-element numpy record whose fields the kernel reads
-    by name.
+    The whole method is one kernel (adaptive, iepf, pdbs, split_merge, partition). Its
+    parameters become typed settings, the fields each declares
+    (:func:`~scanlines.params.kernel_settings`), passed to the kernel as a one-element
+    numpy record whose fields the kernel reads by name.
 :class:`ClusteredMethod`
     The method's own search is Python over numpy (line tracking, line regression,
     RANSAC, Hough); clustering before it and the events and assembly after it are the
@@ -19,19 +19,17 @@ it per scan.
 
 from __future__ import annotations
 
-import dataclasses
-import math
 from collections.abc import Mapping
-from typing import Any, ClassVar
+from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
 
 from scanlines._jit import COMPILED, kernel
 from scanlines.extraction import Extraction, ExtractionTable
-from scanlines.params import Param
+from scanlines.params import Param, kernel_settings
 from scanlines.scan import is_full_circle
 from scanlines.steps.assemble import Output, empty_result, finish, to_extraction
-from scanlines.steps.breakpoints import NO_RULE, RULE_CODES, RuleSpec, scan_rule
+from scanlines.steps.breakpoints import NO_RULE, RuleSpec, scan_rule
 from scanlines.steps.clusters import cluster_returns
 from scanlines.steps.fit import prefix_moments
 from scanlines.steps.noise import UNKNOWN_NOISE, NoiseLine
@@ -44,8 +42,7 @@ __all__ = [
     "Method",
     "as_record",
     "cluster_scan",
-    "output_of",
-    "rule_spec_of",
+    "kernel_tuple",
 ]
 
 NO_CLUSTERING = "none"
@@ -106,18 +103,14 @@ class Method:
         return ExtractionTable.concatenate(rows, self.name, self.params)
 
 
-_FIELD_TYPES = {"bool": np.bool_, "int": np.int64, "float": np.float64}
-
-
-def as_record(settings: Any) -> np.ndarray:
-    """A frozen dataclass of ``bool``, ``int`` and ``float`` fields as a one-element numpy
-    record array, the form a kernel takes (numba reads its fields by name, and the
-    dispatcher types it as fast as a plain array)."""
-    fields = dataclasses.fields(settings)
-    dtype = np.dtype([(field.name, _FIELD_TYPES[str(field.type)]) for field in fields])
+def as_record(settings: Mapping[str, np.generic]) -> np.ndarray:
+    """Settings (field name -> numpy scalar) as a one-element numpy record array, the form
+    a kernel takes (numba reads its fields by name, and the dispatcher types it as fast
+    as a plain array)."""
+    dtype = np.dtype([(name, value.dtype) for name, value in settings.items()])
     record = np.zeros(1, dtype=dtype)
-    for field in fields:
-        record[field.name] = getattr(settings, field.name)
+    for name, value in settings.items():
+        record[name] = value
     # Plain Python (no numba) reads fields as attributes of a recarray's elements; numba
     # types a recarray more slowly than the plain array it reads the same way.
     return record if COMPILED else record.view(np.recarray)
@@ -126,14 +119,14 @@ def as_record(settings: Any) -> np.ndarray:
 class CompiledMethod(Method):
     """A method that is one kernel from a stack of scans' arrays to one flat table.
 
-    A subclass sets :meth:`settings_of` (resolved parameters -> a frozen dataclass of
-    typed settings) and ``kernel(stack, valid, cos, sin, step, full_circle,
+    A subclass sets ``kernel(stack, valid, cos, sin, step, full_circle,
     angle_min, *arguments)`` as a ``staticmethod``: the method's stack kernel, a loop
     over the rows of its per-scan kernel (:mod:`scanlines.steps.stack`). One scan is a
     stack of one. :meth:`kernel_arguments` returns the kernel's last arguments, by
-    default the settings record. ``stages`` may name the kernels of the method's module
-    that its per-scan kernel calls, in order, so that a second core can compile them
-    (:mod:`scanlines.warm`).
+    default the settings record of :meth:`settings_of` (the fields the parameters
+    declare; a subclass may add constants of its own). ``stages`` may name the kernels
+    of the method's module that its per-scan kernel calls, in order, so that a second
+    core can compile them (:mod:`scanlines.warm`).
     """
 
     stages: ClassVar[tuple[str, ...]] = ()
@@ -144,8 +137,9 @@ class CompiledMethod(Method):
         self.arguments = self.kernel_arguments()
 
     @classmethod
-    def settings_of(cls, params: Mapping[str, Any]) -> Any:
-        raise NotImplementedError
+    def settings_of(cls, params: Mapping[str, Any]) -> dict[str, np.generic]:
+        """The kernel's settings of resolved ``params``: field name -> numpy scalar."""
+        return kernel_settings(cls.parameters, params)
 
     def kernel_arguments(self) -> tuple[Any, ...]:
         return (as_record(self.settings),)
@@ -169,31 +163,12 @@ class CompiledMethod(Method):
         )
 
 
-def rule_spec_of(params: Mapping[str, Any]) -> RuleSpec:
-    """The clustering rule of a method's resolved parameters (``breakpoints="none"``:
-    :data:`~scanlines.steps.breakpoints.NO_RULE`)."""
-    name = params["breakpoints"]
-    return RuleSpec(
-        NO_RULE if name == NO_CLUSTERING else RULE_CODES[name],
-        params["k"],
-        params.get("noise_k", 0.0),
-        params.get("line_k", 0.0),
-        math.radians(params["abd_lambda"]),
-        params["pdbs_c0"],
-        params["jump_distance"],
-    )
-
-
-def output_of(params: Mapping[str, Any]) -> Output:
-    """The :class:`~scanlines.steps.assemble.Output` of a method's resolved parameters."""
-    return Output(
-        params["min_points"],
-        params["min_length"],
-        math.nan if params["range_sigma"] == "auto" else params["range_sigma"],
-        params["corner_beams"],
-        params["corner_distance"],
-        math.radians(params["corner_angle"]),
-    )
+def kernel_tuple(kind: type[NamedTuple], spec: Mapping[str, Param], params: Mapping[str, Any]):
+    """The kernel tuple ``kind`` (:class:`~scanlines.steps.breakpoints.RuleSpec`,
+    :class:`~scanlines.steps.assemble.Output`) of resolved ``params``: its fields as the
+    parameters of ``spec`` named like them declare them."""
+    group = {name: spec[name] for name in kind._fields}
+    return kind(**kernel_settings(group, params))
 
 
 class ClusteredMethod(Method):
@@ -207,8 +182,8 @@ class ClusteredMethod(Method):
 
     def __init__(self, params: Mapping[str, Any], noise: NoiseLine | None = None) -> None:
         super().__init__(params, noise)
-        self.rule = rule_spec_of(params)
-        self.output = output_of(params)
+        self.rule = kernel_tuple(RuleSpec, self.parameters, params)
+        self.output = kernel_tuple(Output, self.parameters, params)
 
     def find_runs(
         self, returns: Returns, gap: np.ndarray, start: np.ndarray, end: np.ndarray
@@ -242,7 +217,7 @@ class ClusteredMethod(Method):
             returns, a, b = _without_positions(returns, a, b, dropped)
         arrays = finish(
             returns, n_beams, full_circle, prefix_moments(returns.x, returns.y), (a, b, group),
-            (self.rule.kind != NO_RULE, ring, breakpoints), outliers, angle_min, self.output,
+            (self.rule.breakpoints != NO_RULE, ring, breakpoints), outliers, angle_min, self.output,
             self.noise,
         )  # fmt: skip
         return to_extraction(arrays, self.name, self.params)
@@ -270,7 +245,7 @@ def cluster_scan(returns, n_beams, step, full_circle, spec, noise):
     returns, start, end, breakpoints, ring = cluster_returns(
         returns, n_beams, step, full_circle, rule, ring_window, no_flags
     )
-    if spec.kind == NO_RULE:
+    if spec.breakpoints == NO_RULE:
         last = returns.index.shape[0] - 1
         return returns, np.zeros(1, np.int64), np.full(1, last, np.int64), breakpoints[:0], ring
     return returns, start, end, breakpoints, ring

@@ -20,8 +20,8 @@ from typing import Any, Protocol
 import numpy as np
 
 from scanlines.methods.base import NO_CLUSTERING, ClusteredMethod
-from scanlines.params import Param, choice, integer
-from scanlines.steps.breakpoints import RULES
+from scanlines.params import Param, choice, coded, integer
+from scanlines.steps.breakpoints import NO_RULE, RULE_CODES, RULES
 from scanlines.steps.fit import prefix_moments, tls_run
 from scanlines.steps.returns import MAX_BRIDGED_GAP, Returns
 
@@ -48,6 +48,7 @@ WHOLE_SCAN = Param(
     NO_CLUSTERING,
     choice(NO_CLUSTERING, *RULES),
     "clustering rule: none (whole scan) | " + " | ".join(RULES),
+    (coded({NO_CLUSTERING: NO_RULE, **RULE_CODES}),),
 )
 """The ``breakpoints`` parameter of a consensus method: the whole scan by default."""
 

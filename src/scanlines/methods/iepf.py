@@ -41,18 +41,16 @@ References
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
-from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
 
 from scanlines._jit import kernel, scan_kernel
-from scanlines.methods.base import CompiledMethod, cluster_scan
+from scanlines.methods.base import CompiledMethod, as_record, cluster_scan, kernel_tuple
 from scanlines.params import Param, number, segment_params, with_default
 from scanlines.steps.assemble import Output, empty_result, finish
-from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, LITERAL_CLUSTERING, RULE_CODES, RuleSpec
+from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, LITERAL_CLUSTERING, RuleSpec
 from scanlines.steps.events import EVENT_PARAMS
 from scanlines.steps.fit import prefix_moments
 from scanlines.steps.returns import valid_returns
@@ -60,73 +58,28 @@ from scanlines.steps.split import REFERENCE_CODES, split_at_farthest
 from scanlines.steps.stack import add_row, new_table
 
 
-@dataclass(frozen=True)
-class SplitSettings:
-    """The settings of the split methods (iepf, pdbs, split_merge), angles in radians.
+class SplitMethod(CompiledMethod):
+    """A method that splits clusters at their farthest point (iepf, pdbs, split_merge): its
+    settings record adds ``split_reference``, what the distance is measured from, and its
+    kernel takes the clustering rule and the output bounds as their tuples."""
 
-    ``split_reference`` is :data:`~scanlines.steps.split.CHORD` or
-    :data:`~scanlines.steps.split.LINE`; parameters a method does not have are NaN.
-    """
-
-    breakpoints: int
-    k: float
-    noise_k: float
-    line_k: float
-    abd_lambda: float
-    pdbs_c0: float
-    jump_distance: float
-    min_points: int
-    min_length: float
-    range_sigma: float
-    corner_beams: int
-    corner_distance: float
-    corner_angle: float
-    split_distance: float
-    split_reference: int
-    outlier_distance: float
-    merge_chi2: float
+    reference: ClassVar[str] = "chord"
+    """A key of :data:`~scanlines.steps.split.REFERENCE_CODES`: ``"chord"`` or ``"fit"``."""
 
     @classmethod
-    def of(cls, params: Mapping[str, Any], reference: str) -> SplitSettings:
-        """The settings of resolved ``params``; ``reference`` ``"chord"`` or ``"fit"``."""
-        return cls(
-            breakpoints=RULE_CODES[params["breakpoints"]],
-            k=params["k"],
-            noise_k=params["noise_k"],
-            line_k=params["line_k"],
-            abd_lambda=math.radians(params["abd_lambda"]),
-            pdbs_c0=params["pdbs_c0"],
-            jump_distance=params["jump_distance"],
-            min_points=params["min_points"],
-            min_length=params["min_length"],
-            range_sigma=math.nan if params["range_sigma"] == "auto" else params["range_sigma"],
-            corner_beams=params["corner_beams"],
-            corner_distance=params["corner_distance"],
-            corner_angle=math.radians(params["corner_angle"]),
-            split_distance=params["split_distance"],
-            split_reference=REFERENCE_CODES[reference],
-            outlier_distance=params.get("outlier_distance", math.nan),
-            merge_chi2=params.get("merge_chi2", math.nan),
-        )
+    def settings_of(cls, params: Mapping[str, Any]) -> dict[str, np.generic]:
+        """The settings the parameters declare, and the method's ``split_reference``."""
+        reference = np.int64(REFERENCE_CODES[cls.reference])
+        return {**super().settings_of(params), "split_reference": reference}
+
+    def kernel_arguments(self) -> tuple[Any, ...]:
+        """The settings record, the :class:`~scanlines.steps.breakpoints.RuleSpec` and the
+        :class:`~scanlines.steps.assemble.Output`."""
+        rule = kernel_tuple(RuleSpec, self.parameters, self.params)
+        return as_record(self.settings), rule, kernel_tuple(Output, self.parameters, self.params)
 
 
-@kernel
-def rule_spec(s):
-    """The clustering rule of a :class:`SplitSettings` record."""
-    return RuleSpec(
-        s.breakpoints, s.k, s.noise_k, s.line_k, s.abd_lambda, s.pdbs_c0, s.jump_distance
-    )
-
-
-@kernel
-def output(s):
-    """The :class:`~scanlines.steps.assemble.Output` of a :class:`SplitSettings` record."""
-    return Output(
-        s.min_points, s.min_length, s.range_sigma, s.corner_beams, s.corner_distance, s.corner_angle
-    )
-
-
-class Iepf(CompiledMethod):
+class Iepf(SplitMethod):
     """Iterative end-point fit (module docstring)."""
 
     name = "iepf"
@@ -145,29 +98,26 @@ class Iepf(CompiledMethod):
         **EVENT_PARAMS,
     }
 
-    @classmethod
-    def settings_of(cls, params: Mapping[str, Any]) -> SplitSettings:
-        return SplitSettings.of(params, reference="chord")
-
     @staticmethod
     def kernel(*arguments):
         return iepf_stack(*arguments)
 
 
 @kernel
-def iepf_stack(stack, valid, cos, sin, step, full_circle, angle_min, noise, settings):
+def iepf_stack(stack, valid, cos, sin, step, full_circle, angle_min, noise, settings, rule, out):
     """:func:`iepf_scan` of each row of ``stack``, as one flat table."""
     table = new_table(stack.shape[0])
     for row in range(stack.shape[0]):
         result = iepf_scan(
-            stack[row], valid[row], cos, sin, step, full_circle, angle_min, noise, settings
-        )
+            stack[row], valid[row], cos, sin, step, full_circle, angle_min, noise, settings,
+            rule, out,
+        )  # fmt: skip
         table = add_row(table, row, result)
     return table
 
 
 @scan_kernel
-def iepf_scan(ranges, valid, cos, sin, step, full_circle, angle_min, noise, settings):
+def iepf_scan(ranges, valid, cos, sin, step, full_circle, angle_min, noise, settings, rule, out):
     """The whole method on one scan: the result arrays (see :class:`CompiledMethod`)."""
     s = settings[0]
     n_beams = ranges.shape[0]
@@ -176,28 +126,32 @@ def iepf_scan(ranges, valid, cos, sin, step, full_circle, angle_min, noise, sett
     if returns.index.shape[0] == 0:
         return empty_result(none, none)
     returns, moments, runs, clusters = cluster_and_split(
-        returns, n_beams, step, full_circle, s, noise
+        returns, n_beams, step, full_circle, rule, (s.split_distance, s.split_reference), noise
     )
     return finish(
-        returns, n_beams, full_circle, moments, runs, clusters, none, angle_min, output(s), noise
+        returns, n_beams, full_circle, moments, runs, clusters, none, angle_min, out, noise
     )
 
 
 @kernel
-def cluster_and_split(returns, n_beams, step, full_circle, s, noise):
-    """Steps 1-2 of the split methods: cluster by the rule, split every cluster at the point
-    farthest from its chord (or line) while it is farther than ``split_distance``.
+def cluster_and_split(returns, n_beams, step, full_circle, rule, split, noise):
+    """Steps 1-2 of the split methods: cluster by the rule (a
+    :class:`~scanlines.steps.breakpoints.RuleSpec`), split every cluster at the point
+    farthest from its chord (or line) while it is farther than ``split_distance``
+    (``split``: ``(split_distance, split_reference)``, not the record: the methods' records
+    differ, and one compiled kernel serves them all).
 
     Returns the (possibly rotated) returns, their moments, the runs ``(a, b, group)`` and
     the clustering ``(True, ring, breakpoints)`` as :func:`~scanlines.steps.assemble.finish`
     takes them.
     """
     returns, start, end, breakpoints, ring = cluster_scan(
-        returns, n_beams, step, full_circle, rule_spec(s), noise
+        returns, n_beams, step, full_circle, rule, noise
     )
     moments = prefix_moments(returns.x, returns.y)
     clusters = np.arange(start.shape[0])
+    distance, reference = split
     a, b, group = split_at_farthest(
-        returns.x, returns.y, moments, start, end, clusters, s.split_distance, s.split_reference
+        returns.x, returns.y, moments, start, end, clusters, distance, reference
     )
     return returns, moments, (a, b, group), (np.bool_(True), ring, breakpoints)

@@ -46,7 +46,6 @@ References
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from typing import Any, ClassVar
 
 import numpy as np
@@ -59,7 +58,6 @@ from scanlines.methods.partition_settings import (
     GRAZING_ANGLE,
     PARAMETERS,
     PRESETS,
-    PartitionSettings,
 )
 from scanlines.params import Param
 from scanlines.steps.assemble import assemble, empty_result
@@ -68,7 +66,7 @@ from scanlines.steps.noise import NoiseLine, noise_at, resolve_noise
 from scanlines.steps.returns import MAX_BRIDGED_GAP, Returns, beam_gaps, rotated, valid_returns
 from scanlines.steps.stack import add_row, new_table
 
-__all__ = ["Partition", "PartitionSettings"]
+__all__ = ["Partition"]
 
 
 class Partition(CompiledMethod):
@@ -78,10 +76,6 @@ class Partition(CompiledMethod):
     name = "partition"
     parameters: ClassVar[dict[str, Param]] = PARAMETERS
     presets: ClassVar[dict[str, dict[str, Any]]] = PRESETS
-
-    @classmethod
-    def settings_of(cls, params: Mapping[str, Any]) -> PartitionSettings:
-        return PartitionSettings.of(params)
 
     @staticmethod
     def kernel(*arguments):

@@ -1,10 +1,8 @@
-"""The partition method's fixed bounds, parameters, presets and the settings its kernel reads."""
+"""The partition method's fixed bounds, parameters (the fields its kernel reads) and presets."""
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from dataclasses import dataclass
 from typing import Any
 
 from scanlines.params import MAX_METRES, Param, auto_or, number, optional, segment_params
@@ -51,36 +49,3 @@ PARAMETERS: dict[str, Param] = {
 PRESETS: dict[str, dict[str, Any]] = {
     "repeatable": {"max_rho_sigma": 0.02},
 }
-
-
-@dataclass(frozen=True)
-class PartitionSettings:
-    """The resolved parameters as the kernel reads them (NaN: not given, inf: no bound)."""
-
-    penalty: float
-    clutter_cost: float
-    model_error: float
-    min_points: int
-    min_length: float
-    range_sigma: float
-    max_rho_sigma: float
-    noise_sigma: float
-
-    @classmethod
-    def of(cls, params: Mapping[str, Any]) -> PartitionSettings:
-        """The settings of resolved ``params``."""
-        bound, sigma, covariance = (
-            params["max_rho_sigma"],
-            params["noise_sigma"],
-            params["range_sigma"],
-        )
-        return cls(
-            penalty=params["penalty"],
-            clutter_cost=params["clutter_cost"],
-            model_error=params["model_error"],
-            min_points=params["min_points"],
-            min_length=params["min_length"],
-            range_sigma=math.nan if covariance == "auto" else covariance,
-            max_rho_sigma=math.inf if bound is None else bound,
-            noise_sigma=math.nan if sigma == "auto" else sigma,
-        )

@@ -55,14 +55,12 @@ References
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
 
 from scanlines._jit import kernel, scan_kernel
-from scanlines.methods.base import CompiledMethod
-from scanlines.methods.iepf import SplitSettings, cluster_and_split, output
+from scanlines.methods.iepf import SplitMethod, cluster_and_split
 from scanlines.params import Param, number, segment_params, with_default
 from scanlines.steps.assemble import drop_small, empty_result, finish
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, LITERAL_CLUSTERING
@@ -73,7 +71,7 @@ from scanlines.steps.returns import beam_gaps, valid_returns, without
 from scanlines.steps.stack import add_row, new_table
 
 
-class SplitMerge(CompiledMethod):
+class SplitMerge(SplitMethod):
     """Split-and-merge with a chi-square merge (module docstring)."""
 
     name = "split_merge"
@@ -105,9 +103,7 @@ class SplitMerge(CompiledMethod):
         **EVENT_PARAMS,
     }
 
-    @classmethod
-    def settings_of(cls, params: Mapping[str, Any]) -> SplitSettings:
-        return SplitSettings.of(params, reference="fit")
+    reference = "fit"
 
     @staticmethod
     def kernel(*arguments):
@@ -115,19 +111,24 @@ class SplitMerge(CompiledMethod):
 
 
 @kernel
-def split_merge_stack(stack, valid, cos, sin, step, full_circle, angle_min, noise, settings):
+def split_merge_stack(
+    stack, valid, cos, sin, step, full_circle, angle_min, noise, settings, rule, out
+):
     """:func:`split_merge_scan` of each row of ``stack``, as one flat table."""
     table = new_table(stack.shape[0])
     for row in range(stack.shape[0]):
         result = split_merge_scan(
-            stack[row], valid[row], cos, sin, step, full_circle, angle_min, noise, settings
-        )
+            stack[row], valid[row], cos, sin, step, full_circle, angle_min, noise, settings,
+            rule, out,
+        )  # fmt: skip
         table = add_row(table, row, result)
     return table
 
 
 @scan_kernel
-def split_merge_scan(ranges, valid, cos, sin, step, full_circle, angle_min, noise, settings):
+def split_merge_scan(
+    ranges, valid, cos, sin, step, full_circle, angle_min, noise, settings, rule, out
+):
     """The whole method on one scan: the result arrays (see :class:`CompiledMethod`)."""
     s = settings[0]
     n_beams = ranges.shape[0]
@@ -136,7 +137,7 @@ def split_merge_scan(ranges, valid, cos, sin, step, full_circle, angle_min, nois
     if returns.index.shape[0] == 0:
         return empty_result(np.zeros(0, dtype=np.int64), outliers)
     returns, moments, (a, b, group), clusters = cluster_and_split(
-        returns, n_beams, step, full_circle, s, noise
+        returns, n_beams, step, full_circle, rule, (s.split_distance, s.split_reference), noise
     )
     a, b, group = drop_small(returns.x, returns.y, a, b, group, s.min_points, s.min_length)
     sigma = covariance_sigmas(s.range_sigma, noise, returns, beam_gaps(returns.index, n_beams))
@@ -145,7 +146,7 @@ def split_merge_scan(ranges, valid, cos, sin, step, full_circle, angle_min, nois
     )
     return finish(
         returns, n_beams, full_circle, moments, (a, b, group), clusters, outliers, angle_min,
-        output(s), noise,
+        out, noise,
     )  # fmt: skip
 
 

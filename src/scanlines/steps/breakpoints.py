@@ -45,7 +45,7 @@ from typing import NamedTuple
 import numpy as np
 
 from scanlines._jit import kernel
-from scanlines.params import Param, choice, number
+from scanlines.params import Param, choice, coded, number, radians
 from scanlines.steps.noise import NoiseLine, noise_at, resolve_noise
 from scanlines.steps.returns import MAX_BRIDGED_GAP
 
@@ -75,7 +75,9 @@ RULE_CODES = {name: code for code, name in enumerate(RULES)}
 ADAPTIVE, ABD, PDBS, FIXED = range(4)
 
 BREAKPOINT_PARAMS: dict[str, Param] = {
-    "breakpoints": Param("abd", choice(*RULES), "clustering rule: " + ", ".join(RULES)),
+    "breakpoints": Param(
+        "abd", choice(*RULES), "clustering rule: " + ", ".join(RULES), (coded(RULE_CODES),)
+    ),
     "k": Param(3.0, number(low=0.0, low_open=True), "adaptive rule: D = k rho dtheta (eq. 7)"),
     "noise_k": Param(
         3.0, number(low=0.0), "adaptive/abd: noise margin in sigmas of a range difference"
@@ -86,7 +88,10 @@ BREAKPOINT_PARAMS: dict[str, Param] = {
         "continuing a line bridges any step: tolerance in sigmas of an extrapolation (0: off)",
     ),
     "abd_lambda": Param(
-        10.0, number(low=0.0, high=90.0, low_open=True), "ABD: worst incidence angle, degrees"
+        10.0,
+        number(low=0.0, high=90.0, low_open=True),
+        "ABD: worst incidence angle, degrees",
+        (radians(),),
     ),
     "pdbs_c0": Param(0.1, number(low=0.0), "PDBS: constant C0 in metres"),
     "jump_distance": Param(
@@ -125,10 +130,10 @@ class BreakpointRule(NamedTuple):
 
 class RuleSpec(NamedTuple):
     """A clustering rule as a method's parameters give it: the noise terms in sigmas
-    (``noise_k``, ``line_k``), ``abd_lambda`` in radians, ``kind`` a rule code or
-    :data:`NO_RULE`."""
+    (``noise_k``, ``line_k``), ``abd_lambda`` in radians, ``breakpoints`` a rule code or
+    :data:`NO_RULE` (the fields of the parameters of :data:`BREAKPOINT_PARAMS`)."""
 
-    kind: int
+    breakpoints: int
     k: float
     noise_k: float
     line_k: float
@@ -138,7 +143,7 @@ class RuleSpec(NamedTuple):
 
 
 NO_RULE = -1
-"""The ``kind`` of a method that works on the whole scan: cuts at missing beams only."""
+"""The ``breakpoints`` code of a method that works on the whole scan: cuts at missing beams only."""
 
 ABD_LAMBDA_FLOOR = math.radians(10.0)
 """Borges and Aldon's ``lambda``: walls up to 80 deg incidence stay one cluster."""
@@ -196,17 +201,17 @@ def scan_rule(spec, returns, gap, noise):
     only when the rule uses it). :data:`NO_RULE` gives a rule that cuts at missing
     beams only.
     """
-    if spec.kind == NO_RULE:
+    if spec.breakpoints == NO_RULE:
         fixed = np.int64(FIXED)  # not a literal: one compiled make_rule for every caller
         quiet = NoiseLine(0.0, 0.0)
         return make_rule(fixed, spec.k, 0.0, 0.0, spec.abd_lambda, spec.pdbs_c0, math.inf, quiet)
-    noisy_rule = spec.kind in (ADAPTIVE, ABD) and spec.noise_k > 0.0
+    noisy_rule = spec.breakpoints in (ADAPTIVE, ABD) and spec.noise_k > 0.0
     if noisy_rule or spec.line_k > 0.0:
         noise = resolve_noise(noise, returns, gap)
     else:
         noise = NoiseLine(0.0, 0.0)
     return make_rule(
-        spec.kind, spec.k, spec.noise_k, spec.line_k, spec.abd_lambda, spec.pdbs_c0,
+        spec.breakpoints, spec.k, spec.noise_k, spec.line_k, spec.abd_lambda, spec.pdbs_c0,
         spec.jump_distance, noise,
     )  # fmt: skip
 

@@ -46,7 +46,7 @@ import numpy as np
 
 from scanlines._jit import kernel
 from scanlines.extraction import END_KINDS
-from scanlines.params import Param, integer, number
+from scanlines.params import Param, integer, number, radians
 from scanlines.steps.fit import TLS, fit_many, fit_run, hesse_difference, line_intersection
 from scanlines.steps.returns import MAX_BRIDGED_GAP
 from scanlines.steps.split import line_residual
@@ -71,7 +71,10 @@ EVENT_PARAMS: dict[str, Param] = {
         "corner: largest distance (m) of a facing end from the two lines' intersection",
     ),
     "corner_angle": Param(
-        10.0, number(low=0.0, high=90.0), "corner: smallest turn between the two lines (deg)"
+        10.0,
+        number(low=0.0, high=90.0),
+        "corner: smallest turn between the two lines (deg)",
+        (radians(),),
     ),
 }
 """Parameters of the shared corner/breakpoint rule (:func:`segment_events`)."""
