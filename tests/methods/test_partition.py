@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -147,3 +148,12 @@ def test_repeatable_keeps_only_well_determined_lines():
         assert len(kept) <= len(every(scan))
         assert np.all(np.sqrt(kept.covariances[:, 0, 0]) <= 0.02 * (1 + 1e-9))
     assert sum(len(every(s)) - len(repeatable(s)) for s in scans) > 0
+
+
+def test_a_run_left_with_too_few_returns_in_its_fit_is_not_a_segment():
+    """A scan found by the property test: a run of four returns lost two of them as
+    outliers and was reported as a 2-point segment (min_points 4)."""
+    ranges = np.load(Path(__file__).parent / "fixtures" / "partition_outliers_in_a_short_run.npy")
+    result = extract(Scan(ranges, 0.0, 0.0140879), "partition")
+    assert len(result) > 20
+    assert np.all(result.n_points >= result.params["min_points"])

@@ -126,7 +126,7 @@ def partition_scan(ranges, valid, cos, sin, step, full_circle, angle_min, noise,
         returns, sums, sigma, a, b, gap, step, (full_circle, ring, n_beams)
     )
     outliers = returns.index[~held]
-    keep = kept_runs(returns, a, b, s.min_length)
+    keep = kept_runs(returns, held, a, b, s.min_points, s.min_length)
     returns, a, b = without_left_out(returns, held, a[keep], b[keep])
     sigma = sigma[held]
     if s.range_sigma == s.range_sigma:
@@ -195,6 +195,7 @@ def best_partition(returns, sigma, n_beams, step, s):
         for p in range(a[k], b[k] + 1):
             held[p] = True
     held &= np.asarray(inside_fit(x, y, sums, sigma, s.model_error, a, b, s.clutter_cost))
+    a, b = trimmed_runs(held, a, b)  # a run's end may have left its fit
     return a, b, held, sums, gap
 
 
@@ -470,12 +471,15 @@ def left_out(index, a, b):
 
 
 @kernel
-def kept_runs(returns, a, b, min_length):
-    """Which runs are at least ``min_length`` long."""
+def kept_runs(returns, held, a, b, min_points, min_length):
+    """Which runs hold at least ``min_points`` returns in their fit and are at least
+    ``min_length`` long."""
     x, y = returns.x, returns.y
     keep = np.empty(a.shape[0], dtype=np.bool_)
     for k in range(a.shape[0]):
-        keep[k] = math.hypot(x[b[k]] - x[a[k]], y[b[k]] - y[a[k]]) >= min_length
+        count = np.sum(held[a[k] : b[k] + 1])
+        length = math.hypot(x[b[k]] - x[a[k]], y[b[k]] - y[a[k]])
+        keep[k] = count >= min_points and length >= min_length
     return keep
 
 
