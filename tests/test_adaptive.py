@@ -237,9 +237,9 @@ def test_grazing_wall_stays_one_cluster():
     assert default.n_points[0] == returns
     # k = 3 alone cuts (or drops) the returns beyond 70.5 deg incidence; with the line
     # continuation the wall stays whole, its last returns included
-    cut = extract(scan, breakpoints="adaptive", line_k=0)
+    cut = extract(scan, breakpoints="paper", line_k=0)
     assert cut.breakpoints.size + cut.outliers.size > 0
-    continued = extract(scan, breakpoints="adaptive")
+    continued = extract(scan, breakpoints="paper")
     assert continued.breakpoints.size == 0
     assert continued.n_points.sum() == returns
 

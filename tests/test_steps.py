@@ -52,7 +52,7 @@ from scanlines.steps.select import (
 from scenes import cast, returns_of, scan_of, square_room
 
 
-def rule_of(name="adaptive", *, k=3.0, noise_margin=0.0, abd_lambda=10.0, pdbs_c0=0.1):
+def rule_of(name="paper", *, k=3.0, noise_margin=0.0, abd_lambda=10.0, pdbs_c0=0.1):
     """A breakpoint rule with its margin in metres and ``abd_lambda`` in degrees."""
     lam = math.radians(abd_lambda)
     sigmas = 1.0 if noise_margin else 0.0

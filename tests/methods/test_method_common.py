@@ -246,7 +246,7 @@ def test_batch_is_the_single_call_on_full_circles_and_clockwise_scans(
 # --------------------------------------------------------------------------- clustering rules
 
 
-@pytest.mark.parametrize("rule", ["adaptive", "abd", "pdbs", "fixed"])
+@pytest.mark.parametrize("rule", ["paper", "abd", "pdbs", "fixed"])
 @pytest.mark.parametrize("seed", range(3))
 def test_every_clustering_rule_cuts_the_door(rule, seed):
     scan = door_scan(seed)

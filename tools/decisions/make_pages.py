@@ -8,11 +8,11 @@ The numbers come from ``eval-300-summary.csv``, written by (300 scenes per senso
       -m 'adaptive?corner_score=dk@score=dk,range=auto' \\
       -m 'adaptive?corner_score=dk&dkth_range=0,0.052@score=dk,range=(0,0.052)' \\
       -m 'adaptive?corner_score=dk_signed@score=dk_signed' -m 'adaptive?fit=paper@fit=paper' \\
-      -m 'adaptive?breakpoints=adaptive&k=3@rule=adaptive,k=3' \\
-      -m 'adaptive?breakpoints=adaptive&k=5@rule=adaptive,k=5' \\
+      -m 'adaptive?breakpoints=paper&k=3@rule=adaptive,k=3' \\
+      -m 'adaptive?breakpoints=paper&k=5@rule=adaptive,k=5' \\
       -m 'adaptive?abd_lambda=10@rule=abd,lambda=10' \\
       -m 'adaptive?abd_lambda=15@rule=abd,lambda=15' \\
-      -m 'adaptive?breakpoints=adaptive&k=3&noise_k=0&line_k=0@rule=paper(k=3,no margin)' \\
+      -m 'adaptive?breakpoints=paper&k=3&noise_k=0&line_k=0@rule=paper(k=3,no margin)' \\
       -m 'adaptive?corner_check=false@corner_check=false' \\
       -m 'adaptive?min_cluster_points=1@mcp=1' -m 'adaptive?min_cluster_points=3@mcp=3' \\
       -m 'adaptive?noise_model=range@noise_model=range'
@@ -182,7 +182,7 @@ Known limit: when noise puts a 3-point segment across the step, both of its junc
             "rule=adaptive,k=5",
             "rule=paper(k=3,no margin)",
         ],
-        """Options: the paper's `D = k rho dtheta` (`breakpoints="adaptive"`, k = 3 or 5) and the
+        """Options: the paper's `D = k rho dtheta` (`breakpoints="paper"`, k = 3 or 5) and the
 Adaptive Breakpoint Detector of Borges and Aldon (`"abd"`, the same range-proportional threshold
 made exact for a surface at incidence up to 90 - lambda deg; lambda = 10, 15 or `"auto"`), each
 with a noise margin of `noise_k` = 3 standard deviations of a range difference and with collinear

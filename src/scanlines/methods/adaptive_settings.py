@@ -130,7 +130,7 @@ PARAMETERS: dict[str, Param] = {
 
 PRESETS: dict[str, dict[str, Any]] = {
     "paper": {
-        "breakpoints": "adaptive",
+        "breakpoints": "paper",
         "k": 3.0,
         "noise_k": 0.0,
         "line_k": 0.0,

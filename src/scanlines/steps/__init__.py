@@ -7,7 +7,7 @@ validated entry points are :class:`~scanlines.Scan` and :class:`~scanlines.Extra
 
 ``returns``      the valid returns of a scan (:class:`~scanlines.steps.returns.Returns`)
 ``noise``        range noise measured from the scan: one sigma, its growth with range
-``breakpoints``  the clustering rules (adaptive, ABD, PDBS, fixed) and the break test
+``breakpoints``  the clustering rules (paper, ABD, PDBS, fixed) and the break test
 ``clusters``     runs of one surface, with the seam of full circles joined
 ``denoise``      isolated returns, small and in-between clusters, the paper's window mean
 ``corners``      corner scores (turn angle, the paper's Dk) and their peaks

@@ -4,7 +4,7 @@ Four rules for the largest distance ``D`` two consecutive returns may be apart
 and still be one cluster (each compares the Cartesian neighbour distance
 ``d_i = |P_{i+1} - P_i|``, eq. 4/19 of [1]_, against ``D``):
 
-``"adaptive"``  ``D = k rho_i dtheta + noise_k sqrt(2) sigma`` (eq. 6-7 and 21 of [1]_,
+``"paper"``     ``D = k rho_i dtheta + noise_k sqrt(2) sigma`` (eq. 6-7 and 21 of [1]_,
                 ``k = 3``; the paper has no noise term, ``noise_k = 0``). Without it,
                 at fine resolution the difference of two noisy ranges alone
                 crosses ``k rho dtheta``: at 0.33 deg, 2 m and 1 cm noise, ``D`` is
@@ -70,7 +70,7 @@ __all__ = [
     "threshold",
 ]
 
-RULES = ("adaptive", "abd", "pdbs", "fixed")
+RULES = ("paper", "abd", "pdbs", "fixed")
 RULE_CODES = {name: code for code, name in enumerate(RULES)}
 ADAPTIVE, ABD, PDBS, FIXED = range(4)
 
@@ -78,9 +78,9 @@ BREAKPOINT_PARAMS: dict[str, Param] = {
     "breakpoints": Param(
         "abd", choice(*RULES), "clustering rule: " + ", ".join(RULES), (coded(RULE_CODES),)
     ),
-    "k": Param(3.0, number(low=0.0, low_open=True), "adaptive rule: D = k rho dtheta (eq. 7)"),
+    "k": Param(3.0, number(low=0.0, low_open=True), "paper rule: D = k rho dtheta (eq. 7)"),
     "noise_k": Param(
-        3.0, number(low=0.0), "adaptive/abd: noise margin in sigmas of a range difference"
+        3.0, number(low=0.0), "paper/abd: noise margin in sigmas of a range difference"
     ),
     "line_k": Param(
         3.0,
