@@ -51,7 +51,7 @@ def main() -> None:
     noise = scan_noise(returns, gap)
     sigma = noise_at(noise, np.median(returns.r))
     rule = ad.breakpoint_rule(s, noise, step)
-    margin = settings.noise_k * math.sqrt(2.0) * sigma
+    margin = settings["noise_k"] * math.sqrt(2.0) * sigma
     window = turn_window(returns.x, returns.y, returns.index, sigma)
     no_breaks = np.zeros(0, np.bool_)
     clustered = cluster_returns(returns, n_beams, step, False, rule, window, no_breaks)
@@ -60,7 +60,7 @@ def main() -> None:
     sigmas = return_sigmas(returns.r, noise)
     cost = ad.run_cost_of(s, moments, returns, sigmas)
     scores = ad.corner_scores(
-        returns, n_beams, step, moments, start, end, window, settings.corner_score
+        returns, n_beams, step, moments, start, end, window, settings["corner_score"]
     )
     corners, scale = ad.choose_corners(cost, start, end, scores, True, s, grid)
     a, b, owner = ad.segments(returns, cost, start, end, corners, scale * scale, s, noise, sigmas)
@@ -88,9 +88,9 @@ def main() -> None:
             step,
             False,
             rule,
-            settings.denoise,
-            settings.window,
-            settings.min_cluster_points,
+            settings["denoise"],
+            settings["window"],
+            settings["min_cluster_points"],
             margin,
         ),
         "turn window (median)": lambda: turn_window(returns.x, returns.y, returns.index, sigma),
@@ -99,7 +99,7 @@ def main() -> None:
         ),
         "running sums": lambda: fit.prefix_moments(returns.x, returns.y),
         "turn-angle scores": lambda: ad.corner_scores(
-            returns, n_beams, step, moments, start, end, window, settings.corner_score
+            returns, n_beams, step, moments, start, end, window, settings["corner_score"]
         ),
         "candidates + sweep + choice": lambda: ad.choose_corners(
             cost, start, end, scores, True, s, grid
@@ -109,10 +109,10 @@ def main() -> None:
         ),
         "  of which: refine cuts": lambda: refine_cuts(cost, *cut),
         "corner beams": lambda: junction_events(
-            returns, settings.fit, moments, a, b, owner, False, False, scale * sigma, turn_sigmas
+            returns, settings["fit"], moments, a, b, owner, False, False, scale * sigma, turn_sigmas
         ),
         "assembly (fits, covariances)": lambda: assemble(
-            returns, settings.fit, moments, a, b, 0.0, sigmas, events, scan_shape
+            returns, settings["fit"], moments, a, b, 0.0, sigmas, events, scan_shape
         ),
     }
     timed = time_calls(
