@@ -15,9 +15,17 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from scanlines.io.transform import points_to_world
 from scanlines.poses import Pose
 
-__all__ = ["AlignSettings", "Alignment", "LineSet", "align_points", "align_scan"]
+__all__ = [
+    "AlignSettings",
+    "Alignment",
+    "LineSet",
+    "align_points",
+    "align_scan",
+    "nearest_segments",
+]
 
 #: Returns used for an alignment (evenly subsampled).
 MAX_POINTS = 400
@@ -70,14 +78,6 @@ def _subsample(points: np.ndarray) -> np.ndarray:
     return points[np.linspace(0, len(points) - 1, MAX_POINTS).round().astype(np.intp)]
 
 
-def _world(points: np.ndarray, pose: Pose) -> np.ndarray:
-    x, y, t = pose
-    c, s = math.cos(t), math.sin(t)
-    return np.column_stack(
-        (c * points[:, 0] - s * points[:, 1] + x, s * points[:, 0] + c * points[:, 1] + y)
-    )
-
-
 def _near(lines: LineSet, world: np.ndarray, margin: float) -> LineSet:
     """The lines whose extent comes within ``margin`` of the points' bounding box."""
     lo, hi = world.min(axis=0) - margin, world.max(axis=0) + margin
@@ -87,15 +87,30 @@ def _near(lines: LineSet, world: np.ndarray, margin: float) -> LineSet:
     return LineSet(*(array[keep] for array in lines))
 
 
+def nearest_segments(
+    points: np.ndarray, start: np.ndarray, end: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """For each ``K x 2`` point: its distance to the nearest of the segments ``start[l]`` to
+    ``end[l]`` and that segment's index (inf and -1 without segments)."""
+    distance = np.full(len(points), np.inf)
+    nearest = np.full(len(points), -1, dtype=np.intp)
+    if not len(start):
+        return distance, nearest
+    ab = end - start
+    length2 = np.maximum(np.sum(ab**2, axis=1), 1e-18)
+    for lo in range(0, len(points), 256):  # bounded K x L blocks
+        ap = points[lo : lo + 256, None, :] - start[None, :, :]
+        t = np.clip(np.einsum("klj,lj->kl", ap, ab) / length2[None, :], 0.0, 1.0)
+        d2 = np.sum((ap - t[:, :, None] * ab[None, :, :]) ** 2, axis=2)
+        nearest[lo : lo + 256] = np.argmin(d2, axis=1)
+        distance[lo : lo + 256] = np.sqrt(np.min(d2, axis=1))
+    return distance, nearest
+
+
 def _pairs(world: np.ndarray, lines: LineSet, gate: float):
     """For each point within ``gate`` of a line segment: its index and the nearest line's."""
-    a, ab = lines.start, lines.end - lines.start
-    length2 = np.maximum(np.sum(ab**2, axis=1), 1e-18)
-    ap = world[:, None, :] - a[None, :, :]
-    t = np.clip(np.einsum("klj,lj->kl", ap, ab) / length2[None, :], 0.0, 1.0)
-    d2 = np.sum((ap - t[:, :, None] * ab[None, :, :]) ** 2, axis=2)
-    line = np.argmin(d2, axis=1)
-    ok = np.sqrt(d2[np.arange(len(world)), line]) <= gate
+    distance, line = nearest_segments(world, lines.start, lines.end)
+    ok = distance <= gate
     return np.flatnonzero(ok), line[ok]
 
 
@@ -139,12 +154,12 @@ def align_points(
     start = tuple(float(v) for v in pose)
     if len(src) < MIN_PAIRS or not len(lines.rho):
         return Alignment(start, False, 0)  # type: ignore[arg-type]
-    lines = _near(lines, _world(src, start), gate + max_shift)
+    lines = _near(lines, points_to_world(src, start), gate + max_shift)
     if not len(lines.rho):
         return Alignment(start, False, 0)  # type: ignore[arg-type]
     current, found = start, None
     for _ in range(iterations):
-        found = _step(_world(src, current), current, lines, gate)
+        found = _step(points_to_world(src, current), current, lines, gate)
         if found is None:
             return Alignment(start, False, 0)  # type: ignore[arg-type]
         update = found[0]

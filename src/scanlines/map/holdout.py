@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from scanlines.io.transform import points_to_world
-from scanlines.map.align import AlignSettings, LineSet, align_scan
+from scanlines.map.align import AlignSettings, LineSet, align_scan, nearest_segments
 from scanlines.map.build import MapBuild, build_map
 from scanlines.map.fusion import FusionSettings, MapLines
 from scanlines.scan import Scan
@@ -53,19 +53,7 @@ class MapScore:
 
 def distances_to_lines(points: np.ndarray, lines: MapLines) -> np.ndarray:
     """Distance of each ``K x 2`` world point to the nearest map line segment (inf if none)."""
-    if not len(lines) or not len(points):
-        return np.full(len(points), np.inf)
-    a, b = lines.start, lines.end
-    ab = b - a
-    length2 = np.maximum(np.sum(ab**2, axis=1), 1e-18)
-    best = np.full(len(points), np.inf)
-    for lo in range(0, len(points), 256):  # bounded K x L blocks
-        p = points[lo : lo + 256]
-        ap = p[:, None, :] - a[None, :, :]
-        t = np.clip(np.einsum("klj,lj->kl", ap, ab) / length2[None, :], 0.0, 1.0)
-        nearest = a[None, :, :] + t[:, :, None] * ab[None, :, :]
-        best[lo : lo + 256] = np.sqrt(np.min(np.sum((p[:, None, :] - nearest) ** 2, axis=2), 1))
-    return best
+    return nearest_segments(points, lines.start, lines.end)[0]
 
 
 def loop_lines(lines: MapLines, first: int, last: int, share: float = 0.1) -> int:
