@@ -1,23 +1,10 @@
-"""The partition method's fixed bounds, parameters (the fields its kernel reads) and presets."""
+"""The partition method's parameters (the fields its kernel reads) and presets."""
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 from scanlines.params import MAX_METRES, Param, auto_or, number, optional, segment_params
-
-EVENT_SIGMAS = 3.0
-"""Standard deviations by which a turn must be resolved and within which lines meet."""
-
-CUT_SIGMAS = 5.0
-"""Standard deviations of a range difference beyond the surface bound at which two
-neighbouring returns cannot share a segment (Gaussian noise crosses it once in about 1.7
-million pairs, so noise alone never cuts a wall)."""
-
-GRAZING_ANGLE = math.radians(10.0)
-"""Smallest angle between a beam and a surface at which neighbouring returns still lie on
-one surface (80 deg of incidence: the breakpoint bound of Borges and Aldon)."""
 
 PARAMETERS: dict[str, Param] = {
     "penalty": Param(

@@ -1,0 +1,90 @@
+// numpy arrays to kernel views and kernel results to numpy arrays, for the bindings.
+#pragma once
+
+#include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
+
+#include <array>
+#include <cstring>
+#include <utility>
+#include <vector>
+
+#include "scanlines/core.hpp"
+#include "scanlines/steps/stack.hpp"
+
+namespace scanlines::bind {
+
+namespace nb = nanobind;
+
+template <typename T, typename... Extra>
+using In = nb::ndarray<const T, nb::numpy, nb::c_contig, nb::device::cpu, Extra...>;
+
+template <typename T>
+View<T> view(const In<T, nb::ndim<1>>& array) {
+    return {array.data(), static_cast<Index>(array.shape(0))};
+}
+
+// A vector moved into a numpy array that owns it.
+template <typename T>
+nb::object to_numpy(std::vector<T>&& values, std::initializer_list<std::size_t> shape) {
+    auto* owned = new std::vector<T>(std::move(values));
+    nb::capsule owner(owned, [](void* p) noexcept { delete static_cast<std::vector<T>*>(p); });
+    return nb::cast(nb::ndarray<nb::numpy, T>(owned->data(), shape.size(), shape.begin(), owner));
+}
+
+template <typename T>
+nb::object to_numpy(std::vector<T>&& values) {
+    std::size_t n = values.size();
+    return to_numpy(std::move(values), {n});
+}
+
+// bool flags as a numpy bool array.
+inline nb::object flags_to_numpy(const std::vector<bool>& flags) {
+    std::vector<bool> copy = flags;
+    std::vector<std::uint8_t> bytes(copy.begin(), copy.end());
+    auto* owned = new std::vector<std::uint8_t>(std::move(bytes));
+    nb::capsule owner(owned, [](void* p) noexcept { delete static_cast<std::vector<std::uint8_t>*>(p); });
+    std::size_t shape[1] = {owned->size()};
+    return nb::cast(nb::ndarray<nb::numpy, bool>(reinterpret_cast<bool*>(owned->data()), 1, shape, owner));
+}
+
+// A stack kernel's table as ExtractionTable.of_flat_table reads it: the nine columns
+// flat, each scan's counts (rows x 4) and their sums.
+inline nb::tuple table_to_numpy(Table&& table) {
+    ScanResult& c = table.columns;
+    std::vector<Index> counts, used(4, 0);
+    for (const auto& row : table.counts)
+        for (int k = 0; k < 4; ++k) {
+            counts.push_back(row[k]);
+            used[k] += row[k];
+        }
+    std::size_t rows = table.counts.size();
+    return nb::make_tuple(
+        to_numpy(std::move(c.first)), to_numpy(std::move(c.last)), to_numpy(std::move(c.n_points)),
+        to_numpy(std::move(c.lines)), to_numpy(std::move(c.covariances)),
+        to_numpy(std::move(c.breakpoints)), to_numpy(std::move(c.corners)),
+        to_numpy(std::move(c.outliers)), to_numpy(std::move(c.end_kinds)),
+        to_numpy(std::move(counts), {rows, 4}), to_numpy(std::move(used)));
+}
+
+// The sensor of a stack kernel's call, as the Python side passes it.
+inline Stack stack_of(const In<double, nb::ndim<2>>& ranges, const In<bool, nb::ndim<2>>& valid,
+                      const In<double, nb::ndim<1>>& cos, const In<double, nb::ndim<1>>& sin,
+                      double step, bool full_circle, double angle_min,
+                      std::pair<double, double> noise) {
+    Index rows = static_cast<Index>(ranges.shape(0)), beams = static_cast<Index>(ranges.shape(1));
+    if (valid.shape(0) != ranges.shape(0) || valid.shape(1) != ranges.shape(1) ||
+        static_cast<Index>(cos.shape(0)) != beams || static_cast<Index>(sin.shape(0)) != beams)
+        throw nb::value_error("ranges, valid and the bearing tables disagree in shape");
+    return {ranges.data(), valid.data(), rows, beams, view(cos), view(sin),
+            step, full_circle, angle_min, {noise.first, noise.second}};
+}
+
+// A setting read by name from the settings the method's module passes.
+template <typename T>
+T setting(const nb::dict& settings, const char* name) {
+    if (!settings.contains(name)) throw nb::key_error(name);
+    return nb::cast<T>(settings[name]);
+}
+
+}  // namespace scanlines::bind

@@ -1,0 +1,11 @@
+// scanlines._core: the compiled kernels. Each method's binding lives in its own file.
+#include "arrays.hpp"
+
+namespace scanlines::bind {
+void bind_partition(nb::module_& m);
+}
+
+NB_MODULE(_core, m) {
+    m.doc() = "The compiled kernels of scanlines (C++17); called by the methods' modules.";
+    scanlines::bind::bind_partition(m);
+}
