@@ -9,11 +9,8 @@ namespace {
 constexpr double PI = 3.141592653589793;
 constexpr Index PAPER_SUBSETS = 5;
 
-struct Axis {
-    double nx, ny, sse, mx, my;
-};
+}  // namespace
 
-// Normal of the total-least-squares line of run [a, b], up to its sign (half-angle formulas).
 Axis tls_axis(const Moments& m, Index a, Index b) {
     double n = static_cast<double>(b + 1 - a);
     double sx = m.at(0, b + 1) - m.at(0, a);
@@ -33,6 +30,7 @@ Axis tls_axis(const Moments& m, Index a, Index b) {
     return {nx, ny, sse, mx, my};
 }
 
+namespace {
 // Normalise to rho >= 0 and alpha in (-pi, pi]: (alpha, rho).
 void hesse(double& alpha, double& rho) {
     if (rho < 0.0) {
@@ -115,10 +113,14 @@ Line paper_run(const Moments& moments, Index a, Index b) {
     return {rho, alpha, sse};
 }
 
-Line fit_run(Index fit, const Moments& moments, Index a, Index b) {
-    if (fit == PAPER) return paper_run(moments, a, b);
+Line tls_run(const Moments& moments, Index a, Index b) {
     Normal normal = tls_normal(moments, a, b);
     return {normal.rho, std::atan2(normal.ny, normal.nx), normal.sse};
+}
+
+Line fit_run(Index fit, const Moments& moments, Index a, Index b) {
+    if (fit == PAPER) return paper_run(moments, a, b);
+    return tls_run(moments, a, b);
 }
 
 Lines fit_many(Index fit, const Moments& moments, const Ints& a, const Ints& b) {
@@ -131,6 +133,53 @@ Lines fit_many(Index fit, const Moments& moments, const Ints& a, const Ints& b) 
         out.sse[k] = line.sse;
     }
     return out;
+}
+
+Reals inverse_square_sums(const Reals& r) {
+    Reals out(r.size() + 1, 0.0);
+    for (std::size_t i = 0; i < r.size(); ++i) {
+        double ri = std::max(r[i], 1e-6);
+        out[i + 1] = out[i] + 1.0 / (ri * ri);
+    }
+    return out;
+}
+
+double run_cost(const RunCost& cost, Index a, Index b) {
+    double rho, sse;
+    if (cost.fit == PAPER) {
+        Line line = paper_run(cost.moments, a, b);
+        rho = line.rho;
+        sse = line.sse;
+    } else {
+        Normal normal = tls_normal(cost.moments, a, b);
+        rho = normal.rho;
+        sse = normal.sse;
+    }
+    const Reals& inv_r2 = cost.inv_r2;
+    if (inv_r2.empty() || b < a) return sse;
+    double count = static_cast<double>(b - a + 1);
+    double mean_inv_r2 = (inv_r2[b + 1] - inv_r2[a]) / count;
+    double weight = rho * rho * mean_inv_r2;
+    if (weight != weight) return sse;  // NaN line: the cost stays NaN
+    double variance = (cost.variances[b + 1] - cost.variances[a]) / count;
+    return sse / (std::min(std::max(weight, MIN_INCIDENCE_WEIGHT), 1.0) * variance);
+}
+
+std::pair<double, double> hesse_difference(double rho_1, double alpha_1, double rho_2,
+                                           double alpha_2) {
+    double direct = wrap_angle(alpha_1 - alpha_2);
+    double flipped = wrap_angle(alpha_1 - alpha_2 + PI);
+    if (std::fabs(flipped) < std::fabs(direct)) return {rho_1 + rho_2, flipped};
+    return {rho_1 - rho_2, direct};
+}
+
+std::pair<double, double> line_intersection(double rho_i, double alpha_i, double rho_j,
+                                            double alpha_j) {
+    double det = std::sin(alpha_j - alpha_i);
+    if (!(std::fabs(det) > 1e-12)) return {NAN, NAN};
+    double x = (rho_i * std::sin(alpha_j) - rho_j * std::sin(alpha_i)) / det;
+    double y = (rho_j * std::cos(alpha_i) - rho_i * std::cos(alpha_j)) / det;
+    return {x, y};
 }
 
 Reals run_covariances(const Returns& returns, const Reals& rho, const Reals& alpha, const Ints& a,

@@ -1,6 +1,8 @@
 // Line fitting for runs of points in O(1) from prefix sums (scanlines/steps/fit.py).
 #pragma once
 
+#include <utility>
+
 #include "scanlines/core.hpp"
 
 namespace scanlines {
@@ -40,10 +42,48 @@ Line fit_run(Index fit, const Moments& moments, Index a, Index b);
 // Eq. 15-17 of the paper on the five sub-set means of run [a, b].
 Line paper_run(const Moments& moments, Index a, Index b);
 
+// Total-least-squares line (rho, alpha, sse) of run [a, b]; NaN for an empty run.
+Line tls_run(const Moments& moments, Index a, Index b);
+
 struct Lines {
     Reals rho, alpha, sse;
 };
 Lines fit_many(Index fit, const Moments& moments, const Ints& a, const Ints& b);
+
+// What the fitting error of a run needs: the fit code, the moments and, for a cost in
+// noise units, the running sums of 1 / r^2 and of each return's noise variance (both
+// empty for the plain error in square metres).
+struct RunCost {
+    Index fit;
+    Moments moments;
+    Reals inv_r2;
+    Reals variances;
+};
+
+// Floor of run_cost's weight cos^2 of the incidence (72 deg).
+constexpr double MIN_INCIDENCE_WEIGHT = 0.1;
+
+// Running sums of 1 / r^2 (a micrometre floor keeps one absurd range harmless).
+Reals inverse_square_sums(const Reals& r);
+
+// Fitting error of run [a, b]; in noise units when cost.inv_r2 is given.
+double run_cost(const RunCost& cost, Index a, Index b);
+
+// (rho_1 - rho_2, alpha_1 - alpha_2) of two Hesse lines, the angle wrapped; of the two
+// forms of a line through the origin, the one with the smaller angle difference.
+std::pair<double, double> hesse_difference(double rho_1, double alpha_1, double rho_2,
+                                           double alpha_2);
+
+// Intersection (x, y) of two Hesse lines; NaN for parallel lines.
+std::pair<double, double> line_intersection(double rho_i, double alpha_i, double rho_j,
+                                            double alpha_j);
+
+struct Axis {
+    double nx, ny, sse, mx, my;
+};
+// Normal of the TLS line of run [a, b] up to its sign, its error and the run's centroid
+// relative to the moments' origin. The run must not be empty.
+Axis tls_axis(const Moments& m, Index a, Index b);
 
 // Covariance of (rho, alpha) of each run's line, 4 values (row-major 2 x 2) per run.
 Reals run_covariances(const Returns& returns, const Reals& rho, const Reals& alpha, const Ints& a,
