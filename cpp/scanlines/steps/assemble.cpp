@@ -4,61 +4,10 @@
 #include <cmath>
 #include <numeric>
 
+#include "scanlines/steps/events.hpp"
 #include "scanlines/steps/returns.hpp"
 
 namespace scanlines {
-
-namespace {
-
-// Whether a corner beam lies within one beam of beam (corners sorted).
-bool near_corner(const Ints& corners, Index beam) {
-    auto at = std::lower_bound(corners.begin(), corners.end(), beam - 1);
-    return at != corners.end() && *at <= beam + 1;
-}
-
-bool is_listed(const Ints& sorted_beams, Index beam) {
-    auto at = std::lower_bound(sorted_beams.begin(), sorted_beams.end(), beam);
-    return at != sorted_beams.end() && *at == beam;
-}
-
-}  // namespace
-
-std::vector<std::int8_t> end_kinds(const Returns& returns, const Ints& a, const Ints& b,
-                                   Index n_beams, bool wrap, const Ints& breakpoints,
-                                   const Ints& corners) {
-    const Ints& index = returns.index;
-    const Reals& r = returns.r;
-    const Index n = returns.size();
-    std::vector<std::int8_t> out(2 * a.size());
-    for (std::size_t k = 0; k < a.size(); ++k) {
-        for (int side = 0; side < 2; ++side) {
-            Index p = side == 0 ? a[k] : b[k];
-            Index step = side == 0 ? -1 : 1;
-            Index q = p + step;
-            if (wrap) q = py_mod(q, n);
-            Index beam = index[p];
-            std::int8_t kind;
-            if (near_corner(corners, beam)) {
-                kind = END_CORNER;
-            } else if (q < 0 || q >= n || q == p) {
-                kind = END_EDGE;
-            } else {
-                Index apart = (index[q] - beam) * step;
-                if (apart < 0) apart += n_beams;
-                Index last_before = side == 1 ? beam : index[q];
-                if (apart > MAX_BRIDGED_GAP) {
-                    kind = END_GAP;
-                } else if (is_listed(breakpoints, last_before)) {
-                    kind = r[q] < r[p] ? END_OCCLUDED : END_JUMP;
-                } else {
-                    kind = END_OPEN;
-                }
-            }
-            out[2 * k + side] = kind;
-        }
-    }
-    return out;
-}
 
 ScanResult assemble(const Returns& returns, Index fit, const Moments& moments, const Ints& a,
                     const Ints& b, double angle_min, const Reals& sigma, Events events,

@@ -2,17 +2,10 @@
 #pragma once
 
 #include "scanlines/core.hpp"
+#include "scanlines/steps/events.hpp"
 #include "scanlines/steps/fit.hpp"
 
 namespace scanlines {
-
-// Codes of END_KINDS (scanlines/extraction.py).
-enum EndKind : std::int8_t { END_CORNER, END_JUMP, END_OCCLUDED, END_GAP, END_EDGE, END_OPEN };
-
-// What ends each run [a, b] at its start and at its end (breakpoints, corners sorted).
-std::vector<std::int8_t> end_kinds(const Returns& returns, const Ints& a, const Ints& b,
-                                   Index n_beams, bool wrap, const Ints& breakpoints,
-                                   const Ints& corners);
 
 // The events of a scan, beams: breakpoints, corners, outliers.
 struct Events {

@@ -1,0 +1,43 @@
+// Splitting runs of points into line segments (scanlines/steps/split.py).
+#pragma once
+
+#include <cmath>
+#include <utility>
+
+#include "scanlines/core.hpp"
+#include "scanlines/steps/fit.hpp"
+
+namespace scanlines {
+
+enum SplitReference : Index { CHORD = 0, LINE = 1 };
+
+// Runs [a, b] and the group of each.
+struct Runs {
+    Ints a, b, group;
+};
+
+// Distance of point p to the chord from point a to point b (the segment between them).
+double chord_distance(const Reals& x, const Reals& y, Index a, Index b, Index p);
+
+// Orthogonal distance of point p to the line (rho, alpha).
+inline double line_residual(const Reals& x, const Reals& y, Index p, double rho, double alpha) {
+    return std::fabs(x[p] * std::cos(alpha) + y[p] * std::sin(alpha) - rho);
+}
+
+// Each run split recursively at its farthest point, depth first (iterative end-point fit).
+Runs split_at_farthest(const Reals& x, const Reals& y, const Moments& moments, const Runs& runs,
+                       double threshold, Index reference);
+
+// Cut runs at their worst point until every point is within its tolerance.
+Runs split_by_residual(const Reals& x, const Reals& y, Index fit, const Moments& moments,
+                       const Ints& a, const Ints& b, const Ints& cluster, const Reals& tolerance,
+                       Index min_points);
+
+// Runs and their cluster number after cutting the clusters at corners.
+Runs cut_at(const Ints& start, const Ints& end, const Ints& corners, bool shared);
+
+// Each cut moved by one position where that fits better: (a, b).
+std::pair<Ints, Ints> refine_cuts(const RunCost& cost, const Ints& a, const Ints& b,
+                                  const Ints& owner);
+
+}  // namespace scanlines
