@@ -10,6 +10,8 @@
 #include <vector>
 
 #include "scanlines/core.hpp"
+#include "scanlines/steps/assemble.hpp"
+#include "scanlines/steps/breakpoints.hpp"
 #include "scanlines/steps/stack.hpp"
 
 namespace scanlines::bind {
@@ -85,6 +87,23 @@ template <typename T>
 T setting(const nb::dict& settings, const char* name) {
     if (!settings.contains(name)) throw nb::key_error(name);
     return nb::cast<T>(settings[name]);
+}
+
+// A clustering rule's fields (RuleSpec in scanlines/steps/breakpoints.py), by name.
+inline RuleSpec rule_spec_of(const nb::dict& d) {
+    return {setting<Index>(d, "breakpoints"), setting<double>(d, "k"),
+            setting<double>(d, "noise_k"),    setting<double>(d, "line_k"),
+            setting<double>(d, "abd_lambda"), setting<double>(d, "pdbs_c0"),
+            setting<double>(d, "jump_distance")};
+}
+
+// A comparison method's output bounds (Output in scanlines/steps/assemble.py), by name.
+inline Output output_of(const nb::dict& d) {
+    return {setting<Index>(d, "min_points"),
+            setting<double>(d, "min_length"),
+            setting<double>(d, "range_sigma"),
+            {setting<Index>(d, "corner_beams"), setting<double>(d, "corner_distance"),
+             setting<double>(d, "corner_angle")}};
 }
 
 }  // namespace scanlines::bind

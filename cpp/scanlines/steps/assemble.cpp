@@ -5,6 +5,7 @@
 #include <numeric>
 
 #include "scanlines/steps/events.hpp"
+#include "scanlines/steps/noise.hpp"
 #include "scanlines/steps/returns.hpp"
 
 namespace scanlines {
@@ -64,6 +65,38 @@ ScanResult assemble(const Returns& returns, Index fit, const Moments& moments, c
     out.corners = std::move(events.corners);
     out.outliers = std::move(events.outliers);
     return out;
+}
+
+void drop_small(const Reals& x, const Reals& y, Ints& a, Ints& b, Ints& group, Index min_points,
+                double min_length) {
+    std::size_t count = 0;
+    const double fewest = std::max(static_cast<double>(min_points), 2.0);
+    for (std::size_t k = 0; k < a.size(); ++k) {
+        double length = std::hypot(x[b[k]] - x[a[k]], y[b[k]] - y[a[k]]);
+        if (static_cast<double>(b[k] - a[k] + 1) >= fewest && length >= min_length) {
+            a[count] = a[k];
+            b[count] = b[k];
+            group[count] = group[k];
+            ++count;
+        }
+    }
+    a.resize(count);
+    b.resize(count);
+    group.resize(count);
+}
+
+ScanResult finish(const Returns& returns, Index n_beams, bool full_circle, const Moments& moments,
+                  Ints a, Ints b, Ints group, const Clustering& clusters, Ints outliers,
+                  double angle_min, const Output& output, NoiseLine noise) {
+    drop_small(returns.x, returns.y, a, b, group, output.min_points, output.min_length);
+    bool wrap = clusters.clustered ? clusters.ring : full_circle;
+    auto [corners, jumps] = segment_events(returns, n_beams, moments, a, b, group,
+                                           clusters.clustered, wrap, output.corners);
+    Ints breakpoints = clusters.clustered ? clusters.breakpoints : jumps;
+    Ints gap = beam_gaps(returns.index, n_beams);
+    Reals sigma = covariance_sigmas(output.range_sigma, noise, returns, gap);
+    Events events{sorted_distinct(breakpoints), corners, sorted_distinct(outliers)};
+    return assemble(returns, TLS, moments, a, b, angle_min, sigma, events, n_beams, full_circle);
 }
 
 ScanResult empty_result(Ints breakpoints, Ints outliers) {

@@ -18,6 +18,32 @@ ScanResult assemble(const Returns& returns, Index fit, const Moments& moments, c
                     const Ints& b, double angle_min, const Reals& sigma, Events events,
                     Index n_beams, bool wrap);
 
+// What a comparison method keeps and reports: the smallest segment, the range noise of
+// the covariances (NaN: the noise model's) and the bounds of the corner rule.
+struct Output {
+    Index min_points;
+    double min_length, range_sigma;
+    CornerBounds corners;
+};
+
+// Runs with at least min_points points (two at least) and an end-to-end length of
+// min_length.
+void drop_small(const Reals& x, const Reals& y, Ints& a, Ints& b, Ints& group, Index min_points,
+                double min_length);
+
+// The clustering a method's runs came from: whether its breakpoints come from it (else
+// they are the jumps between segments), whether the scan is one closed ring, and the
+// clustering's breakpoint beams.
+struct Clustering {
+    bool clustered, ring;
+    Ints breakpoints;
+};
+
+// Drop small runs, find corners (and breakpoints) and assemble the result arrays.
+ScanResult finish(const Returns& returns, Index n_beams, bool full_circle, const Moments& moments,
+                  Ints a, Ints b, Ints group, const Clustering& clusters, Ints outliers,
+                  double angle_min, const Output& output, NoiseLine noise);
+
 // assemble's output without segments.
 ScanResult empty_result(Ints breakpoints, Ints outliers);
 

@@ -43,6 +43,7 @@ __all__ = [
     "as_record",
     "cluster_scan",
     "kernel_tuple",
+    "kernel_values",
 ]
 
 NO_CLUSTERING = "none"
@@ -161,6 +162,13 @@ class CompiledMethod(Method):
         return self.kernel(
             stack, valid, cos, sin, abs(step), full_circle, angle_min, self.noise, *self.arguments
         )
+
+
+def kernel_values(settings: Mapping[str, Any]) -> dict[str, Any]:
+    """Settings (field name -> numpy scalar) as plain Python numbers, the form the compiled
+    kernels read by name."""
+    return {name: value.item() if isinstance(value, np.generic) else value
+            for name, value in settings.items()}  # fmt: skip
 
 
 def kernel_tuple(kind: type[NamedTuple], spec: Mapping[str, Param], params: Mapping[str, Any]):

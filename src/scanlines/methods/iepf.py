@@ -28,6 +28,9 @@ farthest point of a noisy wall is a noise peak, and a threshold near the noise
 cuts the wall there -- the over-segmentation the paper shows for IEPF (its
 Fig. 10a).
 
+The kernel is C++ (``cpp/scanlines/methods/split_methods.cpp``), shared with pdbs and
+split_merge.
+
 References
 ----------
 .. [1] R. O. Duda and P. E. Hart, *Pattern Classification and Scene Analysis*,
@@ -46,16 +49,13 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from scanlines._jit import kernel, scan_kernel
-from scanlines.methods.base import CompiledMethod, as_record, cluster_scan, kernel_tuple
+from scanlines._core import iepf_stack
+from scanlines.methods.base import CompiledMethod, kernel_tuple, kernel_values
 from scanlines.params import Param, number, segment_params, with_default
-from scanlines.steps.assemble import Output, empty_result, finish
+from scanlines.steps.assemble import Output
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, LITERAL_CLUSTERING, RuleSpec
 from scanlines.steps.events import EVENT_PARAMS
-from scanlines.steps.fit import prefix_moments
-from scanlines.steps.returns import valid_returns
-from scanlines.steps.split import REFERENCE_CODES, split_at_farthest
-from scanlines.steps.stack import add_row, new_table
+from scanlines.steps.split import REFERENCE_CODES
 
 
 class SplitMethod(CompiledMethod):
@@ -75,8 +75,9 @@ class SplitMethod(CompiledMethod):
     def kernel_arguments(self) -> tuple[Any, ...]:
         """The settings record, the :class:`~scanlines.steps.breakpoints.RuleSpec` and the
         :class:`~scanlines.steps.assemble.Output`."""
-        rule = kernel_tuple(RuleSpec, self.parameters, self.params)
-        return as_record(self.settings), rule, kernel_tuple(Output, self.parameters, self.params)
+        rule = kernel_tuple(RuleSpec, self.parameters, self.params)._asdict()
+        out = kernel_tuple(Output, self.parameters, self.params)._asdict()
+        return kernel_values(self.settings), kernel_values(rule), kernel_values(out)
 
 
 class Iepf(SplitMethod):
@@ -101,57 +102,3 @@ class Iepf(SplitMethod):
     @staticmethod
     def kernel(*arguments):
         return iepf_stack(*arguments)
-
-
-@kernel
-def iepf_stack(stack, valid, cos, sin, step, full_circle, angle_min, noise, settings, rule, out):
-    """:func:`iepf_scan` of each row of ``stack``, as one flat table."""
-    table = new_table(stack.shape[0])
-    for row in range(stack.shape[0]):
-        result = iepf_scan(
-            stack[row], valid[row], cos, sin, step, full_circle, angle_min, noise, settings,
-            rule, out,
-        )  # fmt: skip
-        table = add_row(table, row, result)
-    return table
-
-
-@scan_kernel
-def iepf_scan(ranges, valid, cos, sin, step, full_circle, angle_min, noise, settings, rule, out):
-    """The whole method on one scan: the result arrays (see :class:`CompiledMethod`)."""
-    s = settings[0]
-    n_beams = ranges.shape[0]
-    none = np.zeros(0, dtype=np.int64)
-    returns = valid_returns(ranges, valid, cos, sin)
-    if returns.index.shape[0] == 0:
-        return empty_result(none, none)
-    returns, moments, runs, clusters = cluster_and_split(
-        returns, n_beams, step, full_circle, rule, (s.split_distance, s.split_reference), noise
-    )
-    return finish(
-        returns, n_beams, full_circle, moments, runs, clusters, none, angle_min, out, noise
-    )
-
-
-@kernel
-def cluster_and_split(returns, n_beams, step, full_circle, rule, split, noise):
-    """Steps 1-2 of the split methods: cluster by the rule (a
-    :class:`~scanlines.steps.breakpoints.RuleSpec`), split every cluster at the point
-    farthest from its chord (or line) while it is farther than ``split_distance``
-    (``split``: ``(split_distance, split_reference)``, not the record: the methods' records
-    differ, and one compiled kernel serves them all).
-
-    Returns the (possibly rotated) returns, their moments, the runs ``(a, b, group)`` and
-    the clustering ``(True, ring, breakpoints)`` as :func:`~scanlines.steps.assemble.finish`
-    takes them.
-    """
-    returns, start, end, breakpoints, ring = cluster_scan(
-        returns, n_beams, step, full_circle, rule, noise
-    )
-    moments = prefix_moments(returns.x, returns.y)
-    clusters = np.arange(start.shape[0])
-    distance, reference = split
-    a, b, group = split_at_farthest(
-        returns.x, returns.y, moments, start, end, clusters, distance, reference
-    )
-    return returns, moments, (a, b, group), (np.bool_(True), ring, breakpoints)

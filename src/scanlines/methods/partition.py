@@ -56,7 +56,7 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 from scanlines._core import partition_stack
-from scanlines.methods.base import CompiledMethod
+from scanlines.methods.base import CompiledMethod, kernel_values
 from scanlines.methods.partition_settings import PARAMETERS, PRESETS
 from scanlines.params import Param
 
@@ -72,7 +72,7 @@ class Partition(CompiledMethod):
     presets: ClassVar[dict[str, dict[str, Any]]] = PRESETS
 
     def kernel_arguments(self) -> tuple[Any, ...]:
-        return ({name: value.item() for name, value in self.settings.items()},)
+        return (kernel_values(self.settings),)
 
     @staticmethod
     def kernel(*arguments):

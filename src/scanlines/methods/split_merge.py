@@ -54,21 +54,13 @@ References
 
 from __future__ import annotations
 
-import math
 from typing import ClassVar
 
-import numpy as np
-
-from scanlines._jit import kernel, scan_kernel
-from scanlines.methods.iepf import SplitMethod, cluster_and_split
+from scanlines._core import split_merge_stack
+from scanlines.methods.iepf import SplitMethod
 from scanlines.params import Param, number, segment_params, with_default
-from scanlines.steps.assemble import drop_small, empty_result, finish
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, LITERAL_CLUSTERING
 from scanlines.steps.events import EVENT_PARAMS
-from scanlines.steps.merge import merge_by_chi_square
-from scanlines.steps.noise import covariance_sigmas
-from scanlines.steps.returns import beam_gaps, valid_returns, without
-from scanlines.steps.stack import add_row, new_table
 
 
 class SplitMerge(SplitMethod):
@@ -108,74 +100,3 @@ class SplitMerge(SplitMethod):
     @staticmethod
     def kernel(*arguments):
         return split_merge_stack(*arguments)
-
-
-@kernel
-def split_merge_stack(
-    stack, valid, cos, sin, step, full_circle, angle_min, noise, settings, rule, out
-):
-    """:func:`split_merge_scan` of each row of ``stack``, as one flat table."""
-    table = new_table(stack.shape[0])
-    for row in range(stack.shape[0]):
-        result = split_merge_scan(
-            stack[row], valid[row], cos, sin, step, full_circle, angle_min, noise, settings,
-            rule, out,
-        )  # fmt: skip
-        table = add_row(table, row, result)
-    return table
-
-
-@scan_kernel
-def split_merge_scan(
-    ranges, valid, cos, sin, step, full_circle, angle_min, noise, settings, rule, out
-):
-    """The whole method on one scan: the result arrays (see :class:`CompiledMethod`)."""
-    s = settings[0]
-    n_beams = ranges.shape[0]
-    returns = valid_returns(ranges, valid, cos, sin)
-    returns, outliers = drop_outliers(returns, s.outlier_distance, s.split_distance)
-    if returns.index.shape[0] == 0:
-        return empty_result(np.zeros(0, dtype=np.int64), outliers)
-    returns, moments, (a, b, group), clusters = cluster_and_split(
-        returns, n_beams, step, full_circle, rule, (s.split_distance, s.split_reference), noise
-    )
-    a, b, group = drop_small(returns.x, returns.y, a, b, group, s.min_points, s.min_length)
-    sigma = covariance_sigmas(s.range_sigma, noise, returns, beam_gaps(returns.index, n_beams))
-    a, b, group = merge_by_chi_square(
-        returns, moments, a, b, group, sigma, s.merge_chi2, np.bool_(False)
-    )
-    return finish(
-        returns, n_beams, full_circle, moments, (a, b, group), clusters, outliers, angle_min,
-        out, noise,
-    )  # fmt: skip
-
-
-@kernel
-def drop_outliers(returns, outlier_distance, line_distance):
-    """Step 1: the returns without isolated ones, and the beams of those dropped.
-
-    A return is isolated when its range differs by more than
-    ``outlier_distance`` from both neighbours' and it lies farther than
-    ``line_distance`` from the line through them (at the ends of the scan, the
-    two neighbours on one side).
-    """
-    index, r, x, y = returns
-    n = index.shape[0]
-    if n < 3:
-        return returns, np.zeros(0, dtype=np.int64)
-    outlier = np.zeros(n, dtype=np.bool_)
-    for p in range(n):
-        one = 1 if p == 0 else p - 1
-        other = 2 if p == 0 else (n - 3 if p == n - 1 else p + 1)
-        apart = abs(r[p] - r[one]) > outlier_distance and abs(r[p] - r[other]) > outlier_distance
-        if not apart:
-            continue
-        dx, dy = x[other] - x[one], y[other] - y[one]
-        px, py = x[p] - x[one], y[p] - y[one]
-        length = math.hypot(dx, dy)
-        off = abs(px * dy - py * dx) / length if length > 0.0 else math.hypot(px, py)
-        outlier[p] = off > line_distance
-    dropped = np.flatnonzero(outlier)
-    if dropped.shape[0] == 0:
-        return returns, dropped
-    return without(returns, outlier), index[dropped]
