@@ -4,10 +4,14 @@
 namespace scanlines::bind {
 void bind_partition(nb::module_& m);
 void bind_split_methods(nb::module_& m);
+void bind_steps(nb::module_& m);
+void bind_numbers(nb::module_& m);
 }
 
 NB_MODULE(_core, m) {
     m.doc() = "The compiled kernels of scanlines (C++17); called by the methods' modules.";
     scanlines::bind::bind_partition(m);
     scanlines::bind::bind_split_methods(m);
+    scanlines::bind::bind_steps(m);
+    scanlines::bind::bind_numbers(m);
 }
