@@ -2,12 +2,14 @@
 #include "arrays.hpp"
 
 namespace scanlines::bind {
+void bind_adaptive(nb::module_& m);
 void bind_partition(nb::module_& m);
 void bind_split_methods(nb::module_& m);
 }
 
 NB_MODULE(_core, m) {
     m.doc() = "The compiled kernels of scanlines (C++17); called by the methods' modules.";
+    scanlines::bind::bind_adaptive(m);
     scanlines::bind::bind_partition(m);
     scanlines::bind::bind_split_methods(m);
 }
