@@ -10,7 +10,6 @@ import sys
 from pathlib import Path
 
 import pytest
-from tools.bench.performance_page import render_markdown
 
 import scanlines
 from scanlines.evaluation import bench
@@ -18,6 +17,7 @@ from scanlines.evaluation.bench_results import SCHEMA
 from scanlines.evaluation.report import microseconds
 from scanlines.methods import REGISTRY
 from scanlines.methods.iepf import Iepf
+from tools.bench.performance_page import render_markdown
 
 pytestmark = pytest.mark.slow  # timing runs
 

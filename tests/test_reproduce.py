@@ -10,8 +10,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from tools.reproduce.experiments import PAPER_SPEED_RATIO, Headline, headline, run_dataset
-from tools.reproduce.results_page import verdict_similarity, verdict_speed
 
 from scanlines import Extraction, Extractor, Scan
 from scanlines.data import sample
@@ -20,6 +18,8 @@ from scanlines.evaluation.metrics import accuracy_rate, environmental_similarity
 from scanlines.evaluation.scores import Tolerances
 from scanlines.evaluation.specs import parse_specs
 from scanlines.io import open_log
+from tools.reproduce.experiments import PAPER_SPEED_RATIO, Headline, headline, run_dataset
+from tools.reproduce.results_page import verdict_similarity, verdict_speed
 
 pytestmark = pytest.mark.slow  # the experiments end to end
 

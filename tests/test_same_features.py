@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
 from tools.benchmarks import same_features
 
 RECORD = Path(__file__).parent / "records" / "features.npz"

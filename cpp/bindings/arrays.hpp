@@ -50,6 +50,50 @@ inline nb::object flags_to_numpy(const std::vector<bool>& flags) {
     return nb::cast(nb::ndarray<nb::numpy, bool>(reinterpret_cast<bool*>(owned->data()), 1, shape, owner));
 }
 
+// One scan's result as Extraction takes it: first, last, n_points, lines (m, 7),
+// covariances (m, 2, 2), breakpoints, corners, outliers, end_kinds (m, 2).
+inline nb::tuple result_to_numpy(ScanResult&& c) {
+    std::size_t m = c.first.size();
+    return nb::make_tuple(
+        to_numpy(std::move(c.first)), to_numpy(std::move(c.last)), to_numpy(std::move(c.n_points)),
+        to_numpy(std::move(c.lines), {m, static_cast<std::size_t>(LINE_COLUMNS)}),
+        to_numpy(std::move(c.covariances), {m, 2, 2}), to_numpy(std::move(c.breakpoints)),
+        to_numpy(std::move(c.corners)), to_numpy(std::move(c.outliers)),
+        to_numpy(std::move(c.end_kinds), {m, 2}));
+}
+
+template <typename T>
+std::vector<T> vector_of(const In<T, nb::ndim<1>>& array) {
+    return std::vector<T>(array.data(), array.data() + array.shape(0));
+}
+
+inline Flags flags_of(const In<bool, nb::ndim<1>>& array) {
+    return Flags(array.data(), array.data() + array.shape(0));
+}
+
+using InReals = In<double, nb::ndim<1>>;
+using InInts = In<Index, nb::ndim<1>>;
+
+// The Returns of the Python side's (index, r, x, y).
+inline Returns returns_of(const InInts& index, const InReals& r, const InReals& x,
+                          const InReals& y) {
+    std::size_t n = index.shape(0);
+    if (r.shape(0) != n || x.shape(0) != n || y.shape(0) != n)
+        throw nb::value_error("index, r, x and y must have one length");
+    return {vector_of(index), vector_of(r), vector_of(x), vector_of(y)};
+}
+
+inline nb::tuple returns_to_numpy(Returns&& returns) {
+    return nb::make_tuple(to_numpy(std::move(returns.index)), to_numpy(std::move(returns.r)),
+                          to_numpy(std::move(returns.x)), to_numpy(std::move(returns.y)));
+}
+
+// Moments viewing the Python side's table (5, n + 1): no copy.
+inline Moments moments_of(const In<double, nb::ndim<2>>& table, double ox, double oy) {
+    if (table.shape(0) != 5) throw nb::value_error("a moments table has 5 rows");
+    return Moments(table.data(), static_cast<Index>(table.shape(1)), ox, oy);
+}
+
 // A stack kernel's table as ExtractionTable.of_flat_table reads it: the nine columns
 // flat, each scan's counts (rows x 4) and their sums.
 inline nb::tuple table_to_numpy(Table&& table) {

@@ -5,6 +5,8 @@ namespace scanlines::bind {
 void bind_adaptive(nb::module_& m);
 void bind_partition(nb::module_& m);
 void bind_split_methods(nb::module_& m);
+void bind_steps(nb::module_& m);
+void bind_numbers(nb::module_& m);
 }
 
 NB_MODULE(_core, m) {
@@ -12,4 +14,6 @@ NB_MODULE(_core, m) {
     scanlines::bind::bind_adaptive(m);
     scanlines::bind::bind_partition(m);
     scanlines::bind::bind_split_methods(m);
+    scanlines::bind::bind_steps(m);
+    scanlines::bind::bind_numbers(m);
 }

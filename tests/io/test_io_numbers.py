@@ -10,7 +10,6 @@ import numpy as np
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-import scanlines.io._number_kernels  # noqa: F401 - loads numba, so number_fields reads
 from scanlines.data import sample
 from scanlines.io import CarmenReader, open_log
 from scanlines.io.numbers import DECIMAL, INTEGER, NOT_A_NUMBER, number_fields

@@ -43,29 +43,28 @@ void hesse(double& alpha, double& rho) {
 
 Moments prefix_moments(const Reals& x, const Reals& y) {
     const Index n = static_cast<Index>(x.size());
-    Moments m;
+    double ox = 0.0, oy = 0.0;
     for (Index i = 0; i < n; ++i) {
-        m.ox += x[i];
-        m.oy += y[i];
+        ox += x[i];
+        oy += y[i];
     }
     if (n) {
-        m.ox /= static_cast<double>(n);
-        m.oy /= static_cast<double>(n);
+        ox /= static_cast<double>(n);
+        oy /= static_cast<double>(n);
     }
-    m.stride = n + 1;
-    m.table.assign(static_cast<std::size_t>(5 * (n + 1)), 0.0);
-    double* t = m.table.data();
-    const Index s = m.stride;
+    const Index s = n + 1;
+    Reals table(static_cast<std::size_t>(5 * s), 0.0);
+    double* t = table.data();
     for (Index i = 0; i < n; ++i) {
-        double u = x[i] - m.ox;
-        double v = y[i] - m.oy;
+        double u = x[i] - ox;
+        double v = y[i] - oy;
         t[i + 1] = t[i] + u;
         t[s + i + 1] = t[s + i] + v;
         t[2 * s + i + 1] = t[2 * s + i] + u * u;
         t[3 * s + i + 1] = t[3 * s + i] + u * v;
         t[4 * s + i + 1] = t[4 * s + i] + v * v;
     }
-    return m;
+    return Moments(std::move(table), s, ox, oy);
 }
 
 Normal tls_normal(const Moments& moments, Index a, Index b) {

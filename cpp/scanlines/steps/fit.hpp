@@ -10,11 +10,46 @@ namespace scanlines {
 enum Fit : Index { TLS = 0, PAPER = 1 };
 
 // Prefix sums of x, y, xx, xy, yy about the mean point (ox, oy); row-major (5, n + 1).
-struct Moments {
-    Reals table;
+// Built by prefix_moments (it owns its table) or a view of a caller's table.
+class Moments {
+public:
     Index stride = 0;  // n + 1
     double ox = 0.0, oy = 0.0;
-    double at(Index row, Index i) const { return table[row * stride + i]; }
+
+    Moments() = default;
+    Moments(Reals table, Index n_plus_one, double x0, double y0)
+        : stride(n_plus_one), ox(x0), oy(y0), storage_(std::move(table)), table_(storage_.data()) {}
+    Moments(const double* table, Index n_plus_one, double x0, double y0)
+        : stride(n_plus_one), ox(x0), oy(y0), table_(table) {}
+    Moments(const Moments& other) { *this = other; }
+    Moments& operator=(const Moments& other) {
+        stride = other.stride;
+        ox = other.ox;
+        oy = other.oy;
+        storage_ = other.storage_;
+        table_ = other.owns() ? storage_.data() : other.table_;
+        return *this;
+    }
+    Moments(Moments&& other) noexcept { *this = std::move(other); }
+    Moments& operator=(Moments&& other) noexcept {
+        bool owned = other.owns();
+        stride = other.stride;
+        ox = other.ox;
+        oy = other.oy;
+        table_ = other.table_;
+        storage_ = std::move(other.storage_);
+        if (owned) table_ = storage_.data();
+        return *this;
+    }
+
+    double at(Index row, Index i) const { return table_[row * stride + i]; }
+    const Reals& storage() const { return storage_; }
+    Reals&& release() { return std::move(storage_); }
+
+private:
+    bool owns() const { return !storage_.empty() && table_ == storage_.data(); }
+    Reals storage_;
+    const double* table_ = nullptr;
 };
 
 struct Line {

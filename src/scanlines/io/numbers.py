@@ -11,21 +11,14 @@ fast path, "How to read floating point numbers accurately", PLDI 1990). Any othe
 (``nan``, ``inf``, ``1_000``, 17 significant digits, text) is reported as not a number,
 and the reader parses that record the slow way, which also names a bad field.
 
-The kernels are in :mod:`scanlines.io._number_kernels`. They are used once numba is
-loaded and compiling (any extraction loads it); until then :func:`number_fields` returns
-``None`` and records are split in Python, so that a command that needs no kernel yet
-(the viewer serving its first scan) does not wait the 0.3-0.5 s numba's import takes,
-and plain Python (``NUMBA_DISABLE_JIT``) keeps the faster split.
+The kernel is C++ (``cpp/scanlines/io/numbers.cpp``).
 """
 
 from __future__ import annotations
 
-import sys
-from types import ModuleType
-
 import numpy as np
 
-from scanlines.interrupts import kernel_calls
+from scanlines._core import read_fields
 from scanlines.io.number_kinds import DECIMAL, INTEGER, NOT_A_NUMBER
 
 __all__ = ["DECIMAL", "INTEGER", "NOT_A_NUMBER", "NumberFields", "number_fields"]
@@ -51,32 +44,10 @@ class NumberFields:
 def number_fields(line: str) -> NumberFields | None:
     """The whitespace-separated tokens of ``line`` (split as ``str.split()`` splits),
     each read as a number where the module docstring's fast path allows; ``None`` for a
-    line that is not ASCII, or before numba is loaded (the caller splits it the slow
-    way)."""
-    kernels = _kernels()
-    if kernels is None:
-        return None
+    line that is not ASCII (the caller splits it the slow way)."""
     try:
         data = line.encode("ascii")
     except UnicodeEncodeError:
         return None
-    with kernel_calls:  # a signal waits for the call (scanlines.interrupts)
-        values, kinds, texts = kernels.read_fields(
-            np.frombuffer(data, dtype=np.uint8), kernels.POWERS_OF_TEN
-        )
-    return NumberFields(values, kinds, texts.tolist())
-
-
-def _kernels() -> ModuleType | None:
-    """:mod:`scanlines.io._number_kernels` once numba is loaded and compiling, else ``None``."""
-    # The import statement, not sys.modules: another thread may be running the module's
-    # body still, and the statement waits for it where sys.modules would give it half done.
-    if "numba" not in sys.modules:
-        return None
-    from scanlines._jit import COMPILED
-
-    if not COMPILED:
-        return None
-    import scanlines.io._number_kernels as kernels
-
-    return kernels
+    values, kinds, texts = read_fields(data)
+    return NumberFields(values, kinds, texts)

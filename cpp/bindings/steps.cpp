@@ -1,0 +1,160 @@
+// The steps the Python side calls on its own: the fits and covariances of the methods
+// whose search is numpy, the clustering and finishing stages around it, the noise
+// estimate of sensor profiles, and assembly for ground truth.
+#include <nanobind/stl/pair.h>
+
+#include "arrays.hpp"
+#include "scanlines/methods/clustered.hpp"
+#include "scanlines/steps/assemble.hpp"
+#include "scanlines/steps/fit.hpp"
+#include "scanlines/steps/merge.hpp"
+#include "scanlines/steps/noise.hpp"
+
+namespace scanlines::bind {
+
+namespace {
+
+using InTable = In<double, nb::ndim<2>>;
+using NoisePair = std::pair<double, double>;
+
+nb::tuple prefix_moments_binding(const InReals& x, const InReals& y) {
+    if (x.shape(0) != y.shape(0)) throw nb::value_error("x and y must have one length");
+    Moments m = prefix_moments(vector_of(x), vector_of(y));
+    std::size_t columns = static_cast<std::size_t>(m.stride);
+    double ox = m.ox, oy = m.oy;
+    return nb::make_tuple(to_numpy(m.release(), {5, columns}), ox, oy);
+}
+
+void check_runs(const InInts& a, const InInts& b, Index n) {
+    if (a.shape(0) != b.shape(0)) throw nb::value_error("a and b must have one length");
+    for (std::size_t k = 0; k < a.shape(0); ++k)
+        if (a.data()[k] < 0 || b.data()[k] >= n || b.data()[k] < a.data()[k] - 1)
+            throw nb::index_error("a run lies outside the points");
+}
+
+nb::tuple fit_many_binding(Index fit, const InTable& table, double ox, double oy, const InInts& a,
+                           const InInts& b) {
+    Moments moments = moments_of(table, ox, oy);
+    check_runs(a, b, moments.stride - 1);
+    Lines lines = fit_many(fit, moments, vector_of(a), vector_of(b));
+    return nb::make_tuple(to_numpy(std::move(lines.rho)), to_numpy(std::move(lines.alpha)),
+                          to_numpy(std::move(lines.sse)));
+}
+
+nb::tuple tls_run_binding(const InTable& table, double ox, double oy, Index a, Index b) {
+    Moments moments = moments_of(table, ox, oy);
+    if (a < 0 || b >= moments.stride - 1) throw nb::index_error("the run lies outside the points");
+    Line line = tls_run(moments, a, b);
+    return nb::make_tuple(line.rho, line.alpha, line.sse);
+}
+
+nb::object run_covariances_binding(const InReals& r, const InReals& x, const InReals& y,
+                                   const InReals& rho, const InReals& alpha, const InInts& a,
+                                   const InInts& b, const InReals& sigma, bool inflate) {
+    check_runs(a, b, static_cast<Index>(x.shape(0)));
+    Returns returns{Ints(x.shape(0)), vector_of(r), vector_of(x), vector_of(y)};
+    Reals out = run_covariances(returns, vector_of(rho), vector_of(alpha), vector_of(a),
+                                vector_of(b), vector_of(sigma), inflate);
+    return to_numpy(std::move(out), {a.shape(0), 2, 2});
+}
+
+nb::object pair_chi_squares_binding(const InReals& rho, const InReals& alpha,
+                                    const In<double, nb::ndim<3>>& covariance,
+                                    const InInts& first, const InInts& second) {
+    Reals out(first.shape(0));
+    const double* cov = covariance.data();
+    for (std::size_t i = 0; i < out.size(); ++i) {
+        Index j = first.data()[i], k = second.data()[i];
+        out[i] = chi_square(rho.data()[j], alpha.data()[j], rho.data()[k], alpha.data()[k],
+                            cov + 4 * j, cov + 4 * k);
+    }
+    return to_numpy(std::move(out));
+}
+
+nb::object covariance_sigmas_binding(double range_sigma, NoisePair noise, const InInts& index,
+                                     const InReals& r, const InReals& x, const InReals& y,
+                                     const InInts& gap) {
+    return to_numpy(covariance_sigmas(range_sigma, {noise.first, noise.second},
+                                      returns_of(index, r, x, y), vector_of(gap)));
+}
+
+nb::tuple local_residuals_binding(const InInts& index, const InReals& r, const InReals& x,
+                                  const InReals& y, const InInts& gap) {
+    auto [sample, at] = local_residuals(returns_of(index, r, x, y), vector_of(gap));
+    return nb::make_tuple(to_numpy(std::move(sample)), to_numpy(std::move(at)));
+}
+
+NoisePair scan_noise_binding(const InInts& index, const InReals& r, const InReals& x,
+                             const InReals& y, const InInts& gap) {
+    NoiseLine noise = scan_noise(returns_of(index, r, x, y), vector_of(gap));
+    return {noise.sigma0, noise.per_metre};
+}
+
+nb::tuple cluster_scan_binding(const InInts& index, const InReals& r, const InReals& x,
+                               const InReals& y, Index n_beams, double step, bool full_circle,
+                               const nb::dict& rule, NoisePair noise) {
+    Returns returns = returns_of(index, r, x, y);
+    RuleSpec spec = rule_spec_of(rule);
+    Clusters c;
+    {
+        nb::gil_scoped_release unlocked;
+        c = cluster_scan(std::move(returns), n_beams, step, full_circle, spec,
+                         {noise.first, noise.second});
+    }
+    return nb::make_tuple(returns_to_numpy(std::move(c.returns)), to_numpy(std::move(c.start)),
+                          to_numpy(std::move(c.end)), to_numpy(std::move(c.breakpoints)), c.ring);
+}
+
+nb::tuple finish_binding(const InInts& index, const InReals& r, const InReals& x,
+                         const InReals& y, Index n_beams, bool full_circle, const InInts& a,
+                         const InInts& b, const InInts& group,
+                         std::pair<bool, bool> clustered_ring, const InInts& breakpoints,
+                         const InInts& outliers, double angle_min, const nb::dict& out,
+                         NoisePair noise) {
+    Returns returns = returns_of(index, r, x, y);
+    check_runs(a, b, returns.size());
+    Output output = output_of(out);
+    Clustering clustering{clustered_ring.first, clustered_ring.second, vector_of(breakpoints)};
+    ScanResult result;
+    {
+        nb::gil_scoped_release unlocked;
+        Moments moments = prefix_moments(returns.x, returns.y);
+        result = finish(returns, n_beams, full_circle, moments, vector_of(a), vector_of(b),
+                        vector_of(group), clustering, vector_of(outliers), angle_min, output,
+                        {noise.first, noise.second});
+    }
+    return result_to_numpy(std::move(result));
+}
+
+nb::tuple assemble_binding(const InInts& index, const InReals& r, const InReals& x,
+                           const InReals& y, Index fit, const InInts& a, const InInts& b,
+                           double angle_min, const InReals& sigma, const InInts& breakpoints,
+                           const InInts& corners, const InInts& outliers, Index n_beams,
+                           bool wrap) {
+    Returns returns = returns_of(index, r, x, y);
+    check_runs(a, b, returns.size());
+    Moments moments = prefix_moments(returns.x, returns.y);
+    ScanResult result = assemble(returns, fit, moments, vector_of(a), vector_of(b), angle_min,
+                                 vector_of(sigma),
+                                 {vector_of(breakpoints), vector_of(corners), vector_of(outliers)},
+                                 n_beams, wrap);
+    return result_to_numpy(std::move(result));
+}
+
+}  // namespace
+
+void bind_steps(nb::module_& m) {
+    m.def("prefix_moments", &prefix_moments_binding);
+    m.def("fit_many", &fit_many_binding);
+    m.def("tls_run", &tls_run_binding);
+    m.def("run_covariances", &run_covariances_binding);
+    m.def("pair_chi_squares", &pair_chi_squares_binding);
+    m.def("covariance_sigmas", &covariance_sigmas_binding);
+    m.def("local_residuals", &local_residuals_binding);
+    m.def("scan_noise", &scan_noise_binding);
+    m.def("cluster_scan", &cluster_scan_binding);
+    m.def("finish", &finish_binding);
+    m.def("assemble", &assemble_binding);
+}
+
+}  // namespace scanlines::bind
