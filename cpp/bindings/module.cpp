@@ -5,6 +5,7 @@
 #include "scanlines/steps/returns.hpp"
 
 namespace scanlines::bind {
+void bind_adaptive(nb::module_& m);
 void bind_partition(nb::module_& m);
 void bind_split_methods(nb::module_& m);
 void bind_steps(nb::module_& m);
@@ -17,6 +18,7 @@ NB_MODULE(_core, m) {
     m.attr("MIN_NOISE_SIGMA") = scanlines::MIN_NOISE_SIGMA;
     m.attr("MAX_BRIDGED_GAP") = scanlines::MAX_BRIDGED_GAP;
     m.attr("CORNER_SIGMAS") = scanlines::CORNER_SIGMAS;
+    scanlines::bind::bind_adaptive(m);
     scanlines::bind::bind_partition(m);
     scanlines::bind::bind_split_methods(m);
     scanlines::bind::bind_steps(m);

@@ -121,6 +121,33 @@ printed; the default neither moves points nor fits ``y = kx + b``.
 Missing beams: one missing beam is bridged, two or more end a cluster; full-circle
 scans join across the seam.
 
+The kernel is C++ (``cpp/scanlines/methods/adaptive.cpp``): one call per stack of scans,
+without the GIL. Per scan, in order:
+
+* with ``fit="paper"`` the points are turned into the sensor frame (``y = kx + b``
+  depends on the frame; the paper fits there);
+* the noise line the thresholds use: the ``noise_sigma`` override, else the sensor
+  profile's or the scan's own (one constant, its value at the median range, with
+  ``noise_model="constant"``); the clustering rule takes it, and the two-return test of
+  the denoising allows ``noise_k sqrt(2)`` sigmas at the median range;
+* denoising (:mod:`scanlines.steps.denoise`), the turn window, clustering;
+* the per-return noise sigmas, computed once for the criterion, the merge, the checks and
+  the covariances; the run cost of the criterion: in noise units for ``"bic"`` (each run's
+  error over its returns' mean noise variance, and incidence), square metres for
+  ``"sse"``;
+* Step 5's score at every position (the turn angle, or eq. 13), the candidates and the
+  threshold sweep (:mod:`scanlines.steps.select`). Under ``"bic"`` the sweep stops where
+  the choice is certain; with an estimated noise a second choice is made with the noise
+  scaled to the lines of the first (the median ``sqrt(cost / (n - 2))`` of their runs of 8
+  points or more); ``"sse"`` and a fixed ``dkth_range`` score every tried threshold;
+* the runs: cut at the chosen corners, each cut moved by one position where that fits
+  better (``corner_split="refine"``), merged by the criterion and by the chi-square test,
+  split where a point leaves the residual bound, and kept when they hold ``min_points``
+  returns and are ``min_length`` long;
+* the corners and jumps between the kept segments (:func:`~scanlines.steps.events.junction_events`;
+  the corner check uses each segment's direction standard deviation, from the noise and
+  its residuals), and the result arrays.
+
 References
 ----------
 .. [1] "An adaptive threshold line segment feature extraction algorithm for laser
@@ -132,59 +159,16 @@ References
 
 from __future__ import annotations
 
-import math
 from typing import Any, ClassVar
 
 import numpy as np
 
-from scanlines._jit import kernel, scan_kernel
+from scanlines._core import adaptive_stack, threshold_grid
 from scanlines.methods.adaptive_settings import PARAMETERS, PRESETS
-from scanlines.methods.base import CompiledMethod, as_record
+from scanlines.methods.base import CompiledMethod, kernel_values
 from scanlines.params import Param
-from scanlines.steps.assemble import assemble, empty_result
-from scanlines.steps.breakpoints import auto_abd_lambda, make_rule
-from scanlines.steps.clusters import cluster_returns
-from scanlines.steps.corners import (
-    DK_SIGNED,
-    TURN,
-    peak_positions,
-    slope_scores,
-    turn_scores,
-    turn_window,
-)
-from scanlines.steps.denoise import denoise
-from scanlines.steps.events import junction_events, sorted_distinct
-from scanlines.steps.fit import (
-    PAPER,
-    TLS,
-    RunCost,
-    fit_many,
-    inverse_square_sums,
-    prefix_moments,
-    run_covariances,
-)
-from scanlines.steps.merge import merge_by_chi_square, merge_by_criterion
-from scanlines.steps.noise import (
-    NoiseLine,
-    noise_at,
-    residual_noise,
-    residual_tolerances,
-    resolve_noise,
-    return_sigmas,
-    variance_sums,
-)
-from scanlines.steps.returns import Returns, beam_gaps, valid_returns
-from scanlines.steps.select import (
-    BIC,
-    best_level,
-    level_corners,
-    start_sweep,
-    sweep_decided,
-    sweep_levels,
-    threshold_grid,
-)
-from scanlines.steps.split import cut_at, refine_cuts, split_by_residual
-from scanlines.steps.stack import add_row, new_table
+
+__all__ = ["Adaptive"]
 
 
 class Adaptive(CompiledMethod):
@@ -193,218 +177,16 @@ class Adaptive(CompiledMethod):
     name = "adaptive"
     parameters: ClassVar[dict[str, Param]] = PARAMETERS
     presets: ClassVar[dict[str, dict[str, Any]]] = PRESETS
-    stages = (
-        *("scan_noise_model", "breakpoint_rule", "denoise", "cluster_returns", "return_sigmas"),
-        *("run_cost_of", "corner_scores", "choose_corners", "segments", "junction_events"),
-        "assemble",
-    )
 
-    def kernel_arguments(self) -> tuple[np.ndarray, np.ndarray]:
-        """The settings record and the thresholds of a fixed ``dkth_range`` (else empty)."""
+    def kernel_arguments(self) -> tuple[dict[str, Any], np.ndarray]:
+        """The settings and the thresholds of a fixed ``dkth_range`` (else empty)."""
         grid = np.zeros(0)
         if self.params["dkth_range"] != "auto":
             low, high = self.params["dkth_range"]
             step, most = self.params["dkth_step"], self.params["max_evaluations"]
-            grid = threshold_grid(low, high, step, most)
-        return as_record(self.settings), grid
+            grid = threshold_grid(float(low), float(high), float(step), int(most))
+        return kernel_values(self.settings), grid
 
     @staticmethod
     def kernel(*arguments):
         return adaptive_stack(*arguments)
-
-
-# --------------------------------------------------------------------------- the kernel
-
-
-@kernel
-def adaptive_stack(stack, valid, cos, sin, step, full_circle, angle_min, noise, settings, grid):
-    """:func:`adaptive_scan` of each row of ``stack``, as one flat table."""
-    table = new_table(stack.shape[0])
-    for row in range(stack.shape[0]):
-        result = adaptive_scan(
-            stack[row], valid[row], cos, sin, step, full_circle, angle_min, noise, settings, grid
-        )
-        table = add_row(table, row, result)
-    return table
-
-
-@scan_kernel
-def adaptive_scan(ranges, valid, cos, sin, step, full_circle, angle_min, noise, settings, grid):
-    """The whole method on one scan: the result arrays (see :class:`CompiledMethod`)."""
-    s = settings[0]
-    n_beams = ranges.shape[0]
-    returns = valid_returns(ranges, valid, cos, sin)
-    none = np.zeros(0, dtype=np.int64)
-    if returns.index.shape[0] == 0:
-        return empty_result(none, none)
-    if s.fit == PAPER:
-        # y = kx + b depends on the frame: fit in the sensor frame, as the paper does.
-        returns = turned(returns, angle_min)
-        angle_min = 0.0
-    gap = beam_gaps(returns.index, n_beams)
-    noise = scan_noise_model(s, noise, returns, gap)
-    typical = noise_at(noise, np.median(returns.r))
-    rule = breakpoint_rule(s, noise, step)
-    margin = s.noise_k * math.sqrt(2.0) * typical
-    returns, outliers, breaks = denoise(
-        returns, n_beams, step, full_circle, rule, s.denoise, s.window, s.min_cluster_points, margin
-    )
-    if returns.index.shape[0] == 0:
-        return empty_result(outliers, outliers)
-    window = s.slope_window
-    if s.auto_slope_window:
-        window = turn_window(returns.x, returns.y, returns.index, typical)
-    returns, start, end, breakpoints, ring = cluster_returns(
-        returns, n_beams, step, full_circle, rule, window, breaks
-    )
-    moments = prefix_moments(returns.x, returns.y)
-    sigma = return_sigmas(returns.r, noise)  # once: the criterion, merge, checks, covariances
-    cost = run_cost_of(s, moments, returns, sigma)
-    scores = corner_scores(returns, n_beams, step, moments, start, end, window, s.corner_score)
-    rescale = s.estimate_noise and s.criterion == BIC
-    corners, scale = choose_corners(cost, start, end, scores, rescale, s, grid)
-    unit = scale * scale if s.criterion == BIC else typical * typical
-    a, b, owner = segments(returns, cost, start, end, corners, unit, s, noise, sigma)
-    check_sigma = scale * typical if s.corner_check else -1.0
-    turn_sigmas = direction_sigmas(returns, moments, a, b, sigma) if s.corner_check else np.zeros(0)
-    corner_beams, jumps = junction_events(
-        returns, s.fit, moments, a, b, owner, s.shared_corner, ring, check_sigma, turn_sigmas
-    )
-    breakpoints = sorted_distinct(np.concatenate((breakpoints, jumps)))
-    if s.range_sigma == s.range_sigma:  # given: it replaces the noise line
-        sigma = np.full(returns.r.shape[0], s.range_sigma)
-    events = (breakpoints, corner_beams, outliers)
-    return assemble(returns, s.fit, moments, a, b, angle_min, sigma, events, (n_beams, full_circle))
-
-
-@kernel
-def direction_sigmas(returns, moments, a, b, sigma):
-    """Standard deviation of each segment's direction, from the noise (``sigma`` per
-    return) and its residuals."""
-    rho, alpha, _ = fit_many(np.int64(TLS), moments, a, b)
-    covariance = run_covariances(returns, rho, alpha, a, b, sigma, np.bool_(True))
-    return np.sqrt(covariance[:, 1, 1])
-
-
-@kernel
-def scan_noise_model(s, noise, returns, gap):
-    """The :class:`~scanlines.steps.noise.NoiseLine` the thresholds use: the
-    ``noise_sigma`` override, else the sensor profile's ``noise`` or the scan's own
-    (one constant, its value at the median range, with ``noise_model="constant"``)."""
-    if not s.estimate_noise:
-        return NoiseLine(s.noise_sigma, 0.0)
-    noise = resolve_noise(noise, returns, gap)
-    if s.constant_noise:
-        return NoiseLine(noise_at(noise, np.median(returns.r)), 0.0)
-    return noise
-
-
-@kernel
-def run_cost_of(s, moments, returns, sigma):
-    """The :class:`~scanlines.steps.fit.RunCost` of the criterion: in noise units for
-    BIC (each run's error over its returns' mean noise variance, ``sigma`` per return,
-    and incidence), square metres for SSE."""
-    if s.criterion != BIC:
-        return RunCost(s.fit, moments, np.zeros(0), np.zeros(0))
-    variances = variance_sums(sigma)
-    return RunCost(s.fit, moments, inverse_square_sums(returns.r), variances)
-
-
-@kernel
-def turned(returns, angle):
-    """The returns with their points rotated by ``angle`` (ranges unchanged)."""
-    index, r, x, y = returns
-    c, si = math.cos(angle), math.sin(angle)
-    return Returns(index, r, c * x - si * y, si * x + c * y)
-
-
-@kernel
-def breakpoint_rule(s, noise, step):
-    """The clustering rule of settings ``s`` with the range noise ``noise``."""
-    lam = auto_abd_lambda(step) if s.auto_abd_lambda else s.abd_lambda
-    return make_rule(
-        s.breakpoints, s.k, s.noise_k, s.line_k, lam, s.pdbs_c0, s.jump_distance, noise
-    )
-
-
-@kernel
-def corner_scores(returns, n_beams, step, moments, start, end, window, kind):
-    """Step 5's score at every position: the turn angle, or eq. 13 (``kind`` a score code)."""
-    if kind == TURN:
-        return turn_scores(returns.x, returns.y, moments, start, end, window)
-    gap = beam_gaps(returns.index, n_beams)
-    return slope_scores(returns.r, gap, step, start, end, kind == DK_SIGNED)
-
-
-@kernel
-def choose_corners(cost, start, end, scores, rescale, s, grid):
-    """Steps 5-7: corner candidates and the threshold sweep; returns the corners and the
-    scale of the noise model (1, or with ``rescale`` the scale the lines of a first
-    choice measure). Under ``"bic"`` the sweep stops where the choice is certain
-    (:func:`~scanlines.steps.select.sweep_decided`)."""
-    candidates = peak_positions(scores, start, end)
-    n_points = int(np.sum(end - start + 1))
-    if s.criterion != BIC or s.use_grid:
-        return chosen_by_full_sweep(cost, start, end, candidates, scores, rescale, s, grid)
-    sweep = start_sweep(
-        cost, start, end, candidates, scores[candidates], grid, s.use_grid, s.max_evaluations
-    )
-    nothing_inserted = np.int64(0)
-    best, done = sweep_decided(
-        sweep, cost, s.shared_corner, nothing_inserted, n_points, 1.0, s.penalty
-    )
-    corners = level_corners(sweep.ranked, sweep.accepted, best)
-    scale = 1.0
-    if rescale:
-        # Second choice with the noise scaled to the lines of the first.
-        a, b, _ = cut_at(start, end, corners, s.shared_corner)
-        scale = max(residual_noise(cost, a, b, scale), 1e-3)
-        best, _ = sweep_decided(sweep, cost, s.shared_corner, done, n_points, scale, s.penalty)
-        corners = level_corners(sweep.ranked, sweep.accepted, best)
-    return corners, scale
-
-
-@kernel
-def chosen_by_full_sweep(cost, start, end, candidates, scores, rescale, s, grid):
-    """:func:`choose_corners` over every tried threshold (the ``"sse"`` criterion, or a
-    fixed ``dkth_range``)."""
-    ranked, accepted, sse, segment_count, _, levels = sweep_levels(
-        cost, start, end, candidates, scores[candidates], grid, s.use_grid,
-        s.max_evaluations, s.shared_corner,
-    )  # fmt: skip
-    n_points = int(np.sum(end - start + 1))
-    scale = 1.0
-    best, _ = best_level(s.criterion, sse, segment_count, levels, n_points, scale, s.penalty)
-    corners = level_corners(ranked, accepted, levels[best])
-    if rescale:
-        a, b, _ = cut_at(start, end, corners, s.shared_corner)
-        scale = max(residual_noise(cost, a, b, scale), 1e-3)
-        best, _ = best_level(s.criterion, sse, segment_count, levels, n_points, scale, s.penalty)
-        corners = level_corners(ranked, accepted, levels[best])
-    return corners, scale
-
-
-@kernel
-def segments(returns, cost, start, end, corners, unit, s, noise, sigma):
-    """Runs ``[a, b]`` (and cluster of each) after cutting, refining, merging and bounding."""
-    x, y = returns.x, returns.y
-    a, b, owner = cut_at(start, end, corners, s.shared_corner)
-    if not s.shared_corner:
-        a, b = refine_cuts(cost, a, b, owner)
-    if s.merge:
-        segment_cost = s.penalty * math.log(max(x.shape[0], 2)) * unit
-        a, b, owner = merge_by_criterion(cost, a, b, owner, segment_cost)
-        if s.merge_chi2 > 0.0 and s.fit != PAPER:
-            a, b, owner = merge_by_chi_square(
-                returns, cost.moments, a, b, owner, sigma, s.merge_chi2, np.bool_(True)
-            )
-    if s.max_residual < math.inf:
-        tolerance = residual_tolerances(returns.r, noise, s.max_residual)
-        a, b, owner = split_by_residual(
-            x, y, s.fit, cost.moments, a, b, owner, tolerance, s.min_points
-        )
-    keep = np.empty(a.shape[0], dtype=np.bool_)
-    for k in range(a.shape[0]):
-        length = math.sqrt((x[b[k]] - x[a[k]]) ** 2 + (y[b[k]] - y[a[k]]) ** 2)
-        keep[k] = b[k] - a[k] + 1 >= s.min_points and length >= s.min_length
-    return a[keep], b[keep], owner[keep]

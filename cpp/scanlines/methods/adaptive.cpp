@@ -1,0 +1,250 @@
+#include "scanlines/methods/adaptive.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <tuple>
+#include <utility>
+
+#include "scanlines/steps/assemble.hpp"
+#include "scanlines/steps/breakpoints.hpp"
+#include "scanlines/steps/clusters.hpp"
+#include "scanlines/steps/corners.hpp"
+#include "scanlines/steps/denoise.hpp"
+#include "scanlines/steps/events.hpp"
+#include "scanlines/steps/fit.hpp"
+#include "scanlines/steps/merge.hpp"
+#include "scanlines/steps/noise.hpp"
+#include "scanlines/steps/returns.hpp"
+#include "scanlines/steps/select.hpp"
+#include "scanlines/steps/split.hpp"
+
+namespace scanlines {
+
+namespace {
+
+constexpr double INF = std::numeric_limits<double>::infinity();
+
+// The returns with their points rotated by angle (ranges unchanged).
+Returns turned(Returns returns, double angle) {
+    const double c = std::cos(angle), si = std::sin(angle);
+    for (Index p = 0; p < returns.size(); ++p) {
+        double x = returns.x[p], y = returns.y[p];
+        returns.x[p] = c * x - si * y;
+        returns.y[p] = si * x + c * y;
+    }
+    return returns;
+}
+
+// The noise line the thresholds use: the noise_sigma override, else the sensor profile's
+// noise or the scan's own (one constant, its value at the median range, with
+// constant_noise).
+NoiseLine scan_noise_model(const AdaptiveSettings& s, NoiseLine noise, const Returns& returns,
+                           const Ints& gap) {
+    if (!s.estimate_noise) return {s.noise_sigma, 0.0};
+    noise = resolve_noise(noise, returns, gap);
+    if (s.constant_noise) return {noise_at(noise, median(returns.r)), 0.0};
+    return noise;
+}
+
+// The clustering rule of the settings with the range noise.
+BreakpointRule breakpoint_rule(const AdaptiveSettings& s, NoiseLine noise, double step) {
+    double lambda = s.auto_abd_lambda ? auto_abd_lambda(step) : s.abd_lambda;
+    return make_rule(s.breakpoints, s.k, s.noise_k, s.line_k, lambda, s.pdbs_c0, s.jump_distance,
+                     noise);
+}
+
+// The run cost of the criterion: in noise units for BIC (each run's error over its
+// returns' mean noise variance, sigma per return, and incidence), square metres for SSE.
+RunCost run_cost_of(const AdaptiveSettings& s, Moments moments, const Returns& returns,
+                    const Reals& sigma) {
+    if (s.criterion != BIC) return {s.fit, std::move(moments), {}, {}};
+    Reals variances = variance_sums(sigma);
+    return {s.fit, std::move(moments), inverse_square_sums(returns.r), std::move(variances)};
+}
+
+// Step 5's score at every position: the turn angle, or eq. 13.
+Reals corner_scores(const Returns& returns, Index n_beams, double step, const Moments& moments,
+                    const Ints& start, const Ints& end, Index window, Index kind) {
+    if (kind == TURN) return turn_scores(returns.x, returns.y, moments, start, end, window);
+    Ints gap = beam_gaps(returns.index, n_beams);
+    return slope_scores(returns.r, gap, step, start, end, kind == DK_SIGNED);
+}
+
+struct Choice {
+    Ints corners;
+    double scale;
+};
+
+Index points_in(const Ints& start, const Ints& end) {
+    Index n = 0;
+    for (std::size_t c = 0; c < start.size(); ++c) n += end[c] - start[c] + 1;
+    return n;
+}
+
+// The noise scale that the lines of a first choice of corners measure.
+double measured_scale(const RunCost& cost, const Ints& start, const Ints& end,
+                      const Ints& corners, bool shared) {
+    Runs runs = cut_at(start, end, corners, shared);
+    return std::max(residual_noise(cost, runs.a, runs.b, 1.0), 1e-3);
+}
+
+// choose_corners over every tried threshold (the "sse" criterion, or a fixed dkth_range).
+Choice chosen_by_full_sweep(const RunCost& cost, const Ints& start, const Ints& end,
+                            const Ints& candidates, const Reals& scores, bool rescale,
+                            const AdaptiveSettings& s, const Reals& grid) {
+    Levels swept = sweep_levels(cost, start, end, candidates, scores, grid, s.use_grid,
+                                s.max_evaluations, s.shared_corner);
+    const Index n_points = points_in(start, end);
+    double scale = 1.0;
+    Index best = best_level(s.criterion, swept.sse, swept.segments, swept.levels, n_points, scale,
+                            s.penalty)
+                     .first;
+    Ints corners = level_corners(swept.ranked, swept.accepted, swept.levels[best]);
+    if (rescale) {
+        scale = measured_scale(cost, start, end, corners, s.shared_corner);
+        best = best_level(s.criterion, swept.sse, swept.segments, swept.levels, n_points, scale,
+                          s.penalty)
+                   .first;
+        corners = level_corners(swept.ranked, swept.accepted, swept.levels[best]);
+    }
+    return {corners, scale};
+}
+
+// Steps 5-7: corner candidates and the threshold sweep; the corners and the scale of the
+// noise model (1, or with rescale the scale the lines of a first choice measure). Under
+// "bic" the sweep stops where the choice is certain.
+Choice choose_corners(const RunCost& cost, const Ints& start, const Ints& end,
+                      const Reals& scores, bool rescale, const AdaptiveSettings& s,
+                      const Reals& grid) {
+    Ints candidates = peak_positions(scores, start, end);
+    Reals candidate_scores(candidates.size());
+    for (std::size_t j = 0; j < candidates.size(); ++j) candidate_scores[j] = scores[candidates[j]];
+    if (s.criterion != BIC || s.use_grid)
+        return chosen_by_full_sweep(cost, start, end, candidates, candidate_scores, rescale, s,
+                                    grid);
+    const Index n_points = points_in(start, end);
+    Sweep sweep = start_sweep(cost, start, end, candidates, candidate_scores, grid, s.use_grid,
+                              s.max_evaluations);
+    auto [best, done] = sweep_decided(sweep, cost, s.shared_corner, 0, n_points, 1.0, s.penalty);
+    Ints corners = level_corners(sweep.ranked, sweep.accepted, best);
+    double scale = 1.0;
+    if (rescale) {
+        // Second choice with the noise scaled to the lines of the first.
+        scale = measured_scale(cost, start, end, corners, s.shared_corner);
+        best = sweep_decided(sweep, cost, s.shared_corner, done, n_points, scale, s.penalty).first;
+        corners = level_corners(sweep.ranked, sweep.accepted, best);
+    }
+    return {corners, scale};
+}
+
+// Runs [a, b] (and the cluster of each) after cutting, refining, merging and bounding.
+Runs segments(const Returns& returns, const RunCost& cost, const Ints& start, const Ints& end,
+              const Ints& corners, double unit, const AdaptiveSettings& s, NoiseLine noise,
+              const Reals& sigma) {
+    const Reals& x = returns.x;
+    const Reals& y = returns.y;
+    Runs runs = cut_at(start, end, corners, s.shared_corner);
+    if (!s.shared_corner) std::tie(runs.a, runs.b) = refine_cuts(cost, runs.a, runs.b, runs.group);
+    if (s.merge) {
+        double segment_cost =
+            s.penalty * std::log(static_cast<double>(std::max<Index>(returns.size(), 2))) * unit;
+        runs = merge_by_criterion(cost, runs.a, runs.b, runs.group, segment_cost);
+        if (s.merge_chi2 > 0.0 && s.fit != PAPER)
+            runs = merge_by_chi_square(returns, cost.moments, runs.a, runs.b, runs.group, sigma,
+                                       s.merge_chi2, true);
+    }
+    if (s.max_residual < INF) {
+        Reals tolerance = residual_tolerances(returns.r, noise, s.max_residual);
+        runs = split_by_residual(x, y, s.fit, cost.moments, runs.a, runs.b, runs.group, tolerance,
+                                 s.min_points);
+    }
+    Runs out;
+    for (std::size_t k = 0; k < runs.a.size(); ++k) {
+        Index a = runs.a[k], b = runs.b[k];
+        double dx = x[b] - x[a], dy = y[b] - y[a];
+        double length = std::sqrt(dx * dx + dy * dy);
+        if (b - a + 1 >= s.min_points && length >= s.min_length) {
+            out.a.push_back(a);
+            out.b.push_back(b);
+            out.group.push_back(runs.group[k]);
+        }
+    }
+    return out;
+}
+
+// Standard deviation of each segment's direction, from the noise (sigma per return) and
+// its residuals.
+Reals direction_sigmas(const Returns& returns, const Moments& moments, const Ints& a,
+                       const Ints& b, const Reals& sigma) {
+    Lines lines = fit_many(TLS, moments, a, b);
+    Reals covariance = run_covariances(returns, lines.rho, lines.alpha, a, b, sigma, true);
+    Reals out(a.size());
+    for (std::size_t k = 0; k < a.size(); ++k) out[k] = std::sqrt(covariance[4 * k + 3]);
+    return out;
+}
+
+}  // namespace
+
+ScanResult adaptive_scan(View<double> ranges, View<bool> valid, const Stack& sensor,
+                         const AdaptiveSettings& s, const Reals& grid) {
+    const Index n_beams = ranges.size;
+    const double step = sensor.step;
+    const bool full_circle = sensor.full_circle;
+    double angle_min = sensor.angle_min;
+    Returns returns = valid_returns(ranges, valid, sensor.cos, sensor.sin);
+    if (returns.size() == 0) return empty_result({}, {});
+    if (s.fit == PAPER) {
+        // y = kx + b depends on the frame: fit in the sensor frame, as the paper does.
+        returns = turned(std::move(returns), angle_min);
+        angle_min = 0.0;
+    }
+    Ints gap = beam_gaps(returns.index, n_beams);
+    NoiseLine noise = scan_noise_model(s, sensor.noise, returns, gap);
+    const double typical = noise_at(noise, median(returns.r));
+    BreakpointRule rule = breakpoint_rule(s, noise, step);
+    const double margin = s.noise_k * std::sqrt(2.0) * typical;
+    Denoised clean = denoise(std::move(returns), n_beams, step, full_circle, rule, s.denoise,
+                             s.window, s.min_cluster_points, margin);
+    if (clean.returns.size() == 0) return empty_result(clean.outliers, clean.outliers);
+    Index window = s.slope_window;
+    if (s.auto_slope_window)
+        window = turn_window(clean.returns.x, clean.returns.y, clean.returns.index, typical);
+    Clusters clusters = cluster_returns(std::move(clean.returns), n_beams, step, full_circle, rule,
+                                        window, std::move(clean.breaks));
+    const Returns& ret = clusters.returns;
+    const Ints& start = clusters.start;
+    const Ints& end = clusters.end;
+    Reals sigma = return_sigmas(ret.r, noise);  // once: the criterion, merge, checks, covariances
+    const RunCost cost = run_cost_of(s, prefix_moments(ret.x, ret.y), ret, sigma);
+    const Moments& moments = cost.moments;
+    Reals scores = corner_scores(ret, n_beams, step, moments, start, end, window, s.corner_score);
+    const bool rescale = s.estimate_noise && s.criterion == BIC;
+    Choice choice = choose_corners(cost, start, end, scores, rescale, s, grid);
+    const double unit =
+        s.criterion == BIC ? choice.scale * choice.scale : typical * typical;
+    Runs runs = segments(ret, cost, start, end, choice.corners, unit, s, noise, sigma);
+    const double check_sigma = s.corner_check ? choice.scale * typical : -1.0;
+    Reals turn_sigmas;
+    if (s.corner_check) turn_sigmas = direction_sigmas(ret, moments, runs.a, runs.b, sigma);
+    auto [corner_beams, jumps] = junction_events(ret, s.fit, moments, runs.a, runs.b, runs.group,
+                                                 s.shared_corner, clusters.ring, check_sigma,
+                                                 turn_sigmas);
+    Ints breakpoints = clusters.breakpoints;
+    breakpoints.insert(breakpoints.end(), jumps.begin(), jumps.end());
+    breakpoints = sorted_distinct(std::move(breakpoints));
+    if (s.range_sigma == s.range_sigma)  // given: it replaces the noise line
+        sigma.assign(ret.r.size(), s.range_sigma);
+    return assemble(ret, s.fit, moments, runs.a, runs.b, angle_min, sigma,
+                    {std::move(breakpoints), std::move(corner_beams), std::move(clean.outliers)},
+                    n_beams, full_circle);
+}
+
+Table adaptive_stack(const Stack& stack, const AdaptiveSettings& s, const Reals& grid) {
+    Table table;
+    for (Index row = 0; row < stack.rows; ++row)
+        table.add(adaptive_scan(stack.row_ranges(row), stack.row_valid(row), stack, s, grid));
+    return table;
+}
+
+}  // namespace scanlines
