@@ -148,10 +148,16 @@ def import_graph(root: Path) -> dict[str, list[str]]:
         is_package = parts[-1] == "__init__"
         name = ".".join(parts[:-1] if is_package else parts)
         modules[name] = (path, name if is_package else name.rpartition(".")[0])
-    return {
-        name: sorted(_module_imports(path, package, modules.keys()) - {name})
+    names = modules.keys() | COMPILED_MODULES
+    graph = {
+        name: sorted(_module_imports(path, package, names) - {name})
         for name, (path, package) in modules.items()
     }
+    return graph | {name: [] for name in COMPILED_MODULES if root.name == "scanlines"}
+
+
+COMPILED_MODULES = {"scanlines._core"}
+"""The package's compiled modules (C++: they import none of its Python modules)."""
 
 
 def import_cycles(graph: dict[str, list[str]]) -> list[list[str]]:

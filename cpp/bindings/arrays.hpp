@@ -6,12 +6,14 @@
 
 #include <array>
 #include <cstring>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
 #include "scanlines/core.hpp"
 #include "scanlines/steps/assemble.hpp"
 #include "scanlines/steps/breakpoints.hpp"
+#include "scanlines/steps/split.hpp"
 #include "scanlines/steps/stack.hpp"
 
 namespace scanlines::bind {
@@ -94,6 +96,38 @@ inline Moments moments_of(const In<double, nb::ndim<2>>& table, double ox, doubl
     return Moments(table.data(), static_cast<Index>(table.shape(1)), ox, oy);
 }
 
+// A BreakpointRule as the Python side's named tuple (kind, k, margin_sigmas,
+// tolerance_sigmas, noise, abd_lambda, pdbs_c0, jump_distance) holds it.
+inline BreakpointRule breakpoint_rule_of(const nb::handle& rule) {
+    auto real = [&](std::size_t i) { return nb::cast<double>(nb::float_(rule[i])); };
+    nb::handle noise = rule[4];
+    return {nb::cast<Index>(nb::int_(rule[0])),
+            real(1),
+            real(2),
+            real(3),
+            {nb::cast<double>(nb::float_(noise[0])), nb::cast<double>(nb::float_(noise[1]))},
+            real(5),
+            real(6),
+            real(7)};
+}
+
+inline nb::tuple breakpoint_rule_to_tuple(const BreakpointRule& rule) {
+    return nb::make_tuple(rule.kind, rule.k, rule.margin_sigmas, rule.tolerance_sigmas,
+                          nb::make_tuple(rule.noise.sigma0, rule.noise.per_metre),
+                          rule.abd_lambda, rule.pdbs_c0, rule.jump_distance);
+}
+
+// A RunCost from the moments' table and the noise sums (both empty: the plain error).
+inline RunCost run_cost_of(Index fit, const In<double, nb::ndim<2>>& table, double ox, double oy,
+                           const InReals& inv_r2, const InReals& variances) {
+    return {fit, moments_of(table, ox, oy), vector_of(inv_r2), vector_of(variances)};
+}
+
+inline nb::tuple runs_to_numpy(Runs&& runs) {
+    return nb::make_tuple(to_numpy(std::move(runs.a)), to_numpy(std::move(runs.b)),
+                          to_numpy(std::move(runs.group)));
+}
+
 // A stack kernel's table as ExtractionTable.of_flat_table reads it: the nine columns
 // flat, each scan's counts (rows x 4) and their sums.
 inline nb::tuple table_to_numpy(Table&& table) {
@@ -126,11 +160,16 @@ inline Stack stack_of(const In<double, nb::ndim<2>>& ranges, const In<bool, nb::
             step, full_circle, angle_min, {noise.first, noise.second}};
 }
 
-// A setting read by name from the settings the method's module passes.
+// A setting read by name from the settings the method's module passes (Python or numpy
+// numbers alike).
 template <typename T>
 T setting(const nb::dict& settings, const char* name) {
     if (!settings.contains(name)) throw nb::key_error(name);
-    return nb::cast<T>(settings[name]);
+    nb::object value = settings[name];
+    if constexpr (std::is_integral_v<T>)
+        return nb::cast<T>(nb::int_(value));
+    else
+        return nb::cast<T>(nb::float_(value));
 }
 
 // A clustering rule's fields (RuleSpec in scanlines/steps/breakpoints.py), by name.

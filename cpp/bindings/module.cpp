@@ -1,5 +1,8 @@
 // scanlines._core: the compiled kernels. Each method's binding lives in its own file.
 #include "arrays.hpp"
+#include "scanlines/steps/events.hpp"
+#include "scanlines/steps/noise.hpp"
+#include "scanlines/steps/returns.hpp"
 
 namespace scanlines::bind {
 void bind_adaptive(nb::module_& m);
@@ -7,13 +10,18 @@ void bind_partition(nb::module_& m);
 void bind_split_methods(nb::module_& m);
 void bind_steps(nb::module_& m);
 void bind_numbers(nb::module_& m);
+void bind_segmentation(nb::module_& m);
 }
 
 NB_MODULE(_core, m) {
     m.doc() = "The compiled kernels of scanlines (C++17); called by the methods' modules.";
+    m.attr("MIN_NOISE_SIGMA") = scanlines::MIN_NOISE_SIGMA;
+    m.attr("MAX_BRIDGED_GAP") = scanlines::MAX_BRIDGED_GAP;
+    m.attr("CORNER_SIGMAS") = scanlines::CORNER_SIGMAS;
     scanlines::bind::bind_adaptive(m);
     scanlines::bind::bind_partition(m);
     scanlines::bind::bind_split_methods(m);
     scanlines::bind::bind_steps(m);
     scanlines::bind::bind_numbers(m);
+    scanlines::bind::bind_segmentation(m);
 }

@@ -2,6 +2,7 @@
 // whose search is numpy, the clustering and finishing stages around it, the noise
 // estimate of sensor profiles, and assembly for ground truth.
 #include <nanobind/stl/pair.h>
+#include <nanobind/stl/tuple.h>
 
 #include "arrays.hpp"
 #include "scanlines/methods/clustered.hpp"
@@ -141,9 +142,44 @@ nb::tuple assemble_binding(const InInts& index, const InReals& r, const InReals&
     return result_to_numpy(std::move(result));
 }
 
+nb::tuple fit_run_binding(Index fit, const InTable& table, double ox, double oy, Index a, Index b) {
+    Moments moments = moments_of(table, ox, oy);
+    if (a < 0 || b >= moments.stride - 1) throw nb::index_error("the run lies outside the points");
+    Line line = fit_run(fit, moments, a, b);
+    return nb::make_tuple(line.rho, line.alpha, line.sse);
+}
+
+nb::tuple offset_power_sums_binding(const InInts& index, Index a, Index b, Index i) {
+    if (a < 0 || b >= static_cast<Index>(index.shape(0)) || i < a || i > b)
+        throw nb::index_error("positions outside the index");
+    PowerSums s = offset_power_sums(index.data(), a, b, i);
+    return nb::make_tuple(s.s0, s.s1, s.s2, s.s3, s.s4);
+}
+
+nb::tuple parabola_at_centre_binding(const InInts& index, const InReals& r, Index a, Index b,
+                                     Index i, std::tuple<double, double, double, double, double> s) {
+    if (a < 0 || b >= static_cast<Index>(index.shape(0)) || r.shape(0) != index.shape(0) || i < a ||
+        i > b)
+        throw nb::index_error("positions outside the index");
+    auto [s0, s1, s2, s3, s4] = s;
+    Parabola p = parabola_at_centre(index.data(), r.data(), a, b, i, {s0, s1, s2, s3, s4});
+    return nb::make_tuple(p.residual, p.leverage, p.slope);
+}
+
 }  // namespace
 
 void bind_steps(nb::module_& m) {
+    m.def("fit_run", &fit_run_binding);
+    m.def("hesse_difference", &hesse_difference);
+    m.def("line_intersection", &line_intersection);
+    m.def("offset_power_sums", &offset_power_sums_binding);
+    m.def("parabola_at_centre", &parabola_at_centre_binding);
+    m.def("return_sigmas", [](const InReals& r, NoisePair noise) {
+        return to_numpy(return_sigmas(vector_of(r), {noise.first, noise.second}));
+    });
+    m.def("residual_tolerances", [](const InReals& r, NoisePair noise, double floor) {
+        return to_numpy(residual_tolerances(vector_of(r), {noise.first, noise.second}, floor));
+    });
     m.def("prefix_moments", &prefix_moments_binding);
     m.def("fit_many", &fit_many_binding);
     m.def("tls_run", &tls_run_binding);

@@ -8,13 +8,6 @@
 
 namespace scanlines {
 
-namespace {
-
-struct PowerSums {
-    double s0, s1, s2, s3, s4;
-};
-
-// Sums of t^0 .. t^4 over the beam offsets t = index[p] - index[i] of positions a..b.
 PowerSums offset_power_sums(const Index* index, Index a, Index b, Index i) {
     PowerSums s{0.0, 0.0, 0.0, 0.0, 0.0};
     for (Index p = a; p <= b; ++p) {
@@ -29,11 +22,6 @@ PowerSums offset_power_sums(const Index* index, Index a, Index b, Index i) {
     return s;
 }
 
-struct Parabola {
-    double residual, leverage, slope;
-};
-
-// Least-squares parabola of r over the beam offsets of positions a..b, at position i.
 Parabola parabola_at_centre(const Index* index, const double* r, Index a, Index b, Index i,
                             const PowerSums& s) {
     double t0 = 0.0, t1 = 0.0, t2 = 0.0;
@@ -55,8 +43,6 @@ Parabola parabola_at_centre(const Index* index, const double* r, Index a, Index 
     double slope = (c01 * t0 + c11 * t1 + c12 * t2) / det;
     return {r[i] - value, c00 / det, slope};
 }
-
-}  // namespace
 
 std::pair<Reals, Reals> local_residuals(const Returns& returns, const Ints& gap) {
     const Index n = returns.size();

@@ -21,6 +21,20 @@ inline double noise_at(NoiseLine noise, double r) {
     return MIN_NOISE_SIGMA > sigma ? MIN_NOISE_SIGMA : sigma;  // Python's max(sigma, floor)
 }
 
+struct PowerSums {
+    double s0, s1, s2, s3, s4;
+};
+// Sums of t^0 .. t^4 over the beam offsets t = index[p] - index[i] of positions a..b.
+PowerSums offset_power_sums(const Index* index, Index a, Index b, Index i);
+
+struct Parabola {
+    double residual, leverage, slope;
+};
+// Least-squares parabola of r over the beam offsets of positions a..b (their power sums
+// s): (r[i] - fit at i, leverage of i, slope at i per beam).
+Parabola parabola_at_centre(const Index* index, const double* r, Index a, Index b, Index i,
+                            const PowerSums& s);
+
 // Range-noise samples of a scan and the range of each.
 std::pair<Reals, Reals> local_residuals(const Returns& returns, const Ints& gap);
 

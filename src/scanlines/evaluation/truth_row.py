@@ -22,7 +22,7 @@ from scanlines import Extraction, Scan
 from scanlines.evaluation.specs import TRUTH
 from scanlines.scan import is_full_circle
 from scanlines.steps.assemble import assemble, to_extraction
-from scanlines.steps.fit import TLS, prefix_moments, run_labels
+from scanlines.steps.fit import TLS, run_labels
 from scanlines.steps.returns import Returns
 from scanlines.truth import Truth
 
@@ -54,7 +54,7 @@ def truth_extraction(scan: Scan, truth: Truth, *, range_sigma: float = 0.0) -> E
     """
     seg, n = truth.segments, truth.n_beams
     spans = (seg.last - seg.first) % n + 1
-    beams, owner = run_labels(seg.first, seg.first + spans - 1, n)
+    beams, owner = run_labels(seg.first, seg.first + spans - 1)
     beams %= n  # a segment across the seam of a full circle
     keep = scan.valid[beams] & truth.true_return[beams] & (truth.edge[beams] == seg.edge[owner])
     beams, owner = beams[keep], owner[keep]
@@ -69,7 +69,6 @@ def truth_extraction(scan: Scan, truth: Truth, *, range_sigma: float = 0.0) -> E
     )
     sigma = np.full(r.size, float(range_sigma))
     arrays = assemble(
-        returns, TLS, prefix_moments(returns.x, returns.y), a.astype(np.int64), b,
-        scan.angle_min, sigma, events, (n, is_full_circle(n, scan.angle_increment)),
+        returns, TLS, a.astype(np.int64), b, scan.angle_min, sigma, events, (n, is_full_circle(n, scan.angle_increment)),
     )  # fmt: skip
     return to_extraction(arrays, TRUTH, {"range_sigma": range_sigma})

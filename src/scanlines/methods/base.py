@@ -7,14 +7,14 @@ resolved, validated parameters; :class:`~scanlines.Extractor` builds it once and
 it per scan.
 
 :class:`CompiledMethod`
-    The whole method is one kernel (adaptive, iepf, pdbs, split_merge, partition). Its
-    parameters become typed settings, the fields each declares
-    (:func:`~scanlines.params.kernel_settings`), passed to the kernel as a one-element
-    numpy record whose fields the kernel reads by name.
+    The whole method is one compiled kernel (adaptive, iepf, pdbs, split_merge,
+    partition; C++ in ``cpp/scanlines/methods/``), called once per stack of scans without
+    the GIL. Its parameters become typed settings, the fields each declares
+    (:func:`~scanlines.params.kernel_settings`), passed to the kernel by name.
 :class:`ClusteredMethod`
     The method's own search is Python over numpy (line tracking, line regression,
     RANSAC, Hough); clustering before it and the events and assembly after it are the
-    shared kernels, so that no step exists twice.
+    shared compiled steps, so that no step exists twice.
 """
 
 from __future__ import annotations
@@ -24,14 +24,12 @@ from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
 
-from scanlines._jit import COMPILED, kernel
+from scanlines import _core
 from scanlines.extraction import Extraction, ExtractionTable
 from scanlines.params import Param, kernel_settings
 from scanlines.scan import is_full_circle
 from scanlines.steps.assemble import Output, empty_result, finish, to_extraction
-from scanlines.steps.breakpoints import NO_RULE, RuleSpec, scan_rule
-from scanlines.steps.clusters import cluster_returns
-from scanlines.steps.fit import prefix_moments
+from scanlines.steps.breakpoints import NO_RULE, RuleSpec
 from scanlines.steps.noise import UNKNOWN_NOISE, NoiseLine
 from scanlines.steps.returns import Returns, beam_gaps, valid_returns, without
 
@@ -40,7 +38,6 @@ __all__ = [
     "ClusteredMethod",
     "CompiledMethod",
     "Method",
-    "as_record",
     "cluster_scan",
     "kernel_tuple",
     "kernel_values",
@@ -48,11 +45,6 @@ __all__ = [
 
 NO_CLUSTERING = "none"
 """The ``breakpoints`` value of a method that works on the whole scan."""
-
-RING_WINDOW = 5
-"""Points fitted on each side of the turn angle that anchors a ring (a full circle
-without any gap is cut at its strongest corner)."""
-
 
 class Method:
     """An extractor configured with resolved parameters (see the module docstring).
@@ -104,33 +96,17 @@ class Method:
         return ExtractionTable.concatenate(rows, self.name, self.params)
 
 
-def as_record(settings: Mapping[str, np.generic]) -> np.ndarray:
-    """Settings (field name -> numpy scalar) as a one-element numpy record array, the form
-    a kernel takes (numba reads its fields by name, and the dispatcher types it as fast
-    as a plain array)."""
-    dtype = np.dtype([(name, value.dtype) for name, value in settings.items()])
-    record = np.zeros(1, dtype=dtype)
-    for name, value in settings.items():
-        record[name] = value
-    # Plain Python (no numba) reads fields as attributes of a recarray's elements; numba
-    # types a recarray more slowly than the plain array it reads the same way.
-    return record if COMPILED else record.view(np.recarray)
-
-
 class CompiledMethod(Method):
     """A method that is one kernel from a stack of scans' arrays to one flat table.
 
     A subclass sets ``kernel(stack, valid, cos, sin, step, full_circle,
-    angle_min, *arguments)`` as a ``staticmethod``: the method's stack kernel, a loop
-    over the rows of its per-scan kernel (:mod:`scanlines.steps.stack`). One scan is a
+    angle_min, noise, *arguments)`` as a ``staticmethod``: the method's compiled stack
+    kernel, a loop over the rows of its per-scan kernel that returns one flat table
+    (:meth:`~scanlines.extraction.ExtractionTable.of_flat_table` reads it). One scan is a
     stack of one. :meth:`kernel_arguments` returns the kernel's last arguments, by
-    default the settings record of :meth:`settings_of` (the fields the parameters
-    declare; a subclass may add constants of its own). ``stages`` may name the kernels
-    of the method's module that its per-scan kernel calls, in order, so that a second
-    core can compile them (:mod:`scanlines.warm`).
+    default the settings of :meth:`settings_of` (the fields the parameters declare, as
+    plain numbers by name; a subclass may add constants of its own).
     """
-
-    stages: ClassVar[tuple[str, ...]] = ()
 
     def __init__(self, params: Mapping[str, Any], noise: NoiseLine | None = None) -> None:
         super().__init__(params, noise)
@@ -143,7 +119,7 @@ class CompiledMethod(Method):
         return kernel_settings(cls.parameters, params)
 
     def kernel_arguments(self) -> tuple[Any, ...]:
-        return (as_record(self.settings),)
+        return (kernel_values(self.settings),)
 
     @staticmethod
     def kernel(*args: Any) -> tuple[np.ndarray, ...]:
@@ -224,7 +200,7 @@ class ClusteredMethod(Method):
         if dropped.size:
             returns, a, b = _without_positions(returns, a, b, dropped)
         arrays = finish(
-            returns, n_beams, full_circle, prefix_moments(returns.x, returns.y), (a, b, group),
+            returns, n_beams, full_circle, (a, b, group),
             (self.rule.breakpoints != NO_RULE, ring, breakpoints), outliers, angle_min, self.output,
             self.noise,
         )  # fmt: skip
@@ -239,21 +215,17 @@ def _without_positions(returns: Returns, a: np.ndarray, b: np.ndarray, drop: np.
     return without(returns, mask), new_position[a], new_position[b]
 
 
-@kernel
 def cluster_scan(returns, n_beams, step, full_circle, spec, noise):
-    """:func:`~scanlines.steps.clusters.cluster_returns` by the rule of the
-    :class:`~scanlines.steps.breakpoints.RuleSpec` ``spec``, its noise from the scan.
+    """The returns clustered by the rule of the
+    :class:`~scanlines.steps.breakpoints.RuleSpec` ``spec``, its noise from the scan:
+    ``(returns, start, end, breakpoints, ring)``
+    (:func:`~scanlines.steps.clusters.cluster_returns`; a ring is anchored by lines of
+    five points on each side).
 
     :data:`~scanlines.steps.breakpoints.NO_RULE` makes one cluster of every return (a
     full circle is still rotated to start after a gap or at its strongest corner).
     """
-    rule = scan_rule(spec, returns, beam_gaps(returns.index, n_beams), noise)
-    no_flags = np.zeros(0, dtype=np.bool_)
-    ring_window = np.int64(RING_WINDOW)  # not a literal: one compiled clustering for all
-    returns, start, end, breakpoints, ring = cluster_returns(
-        returns, n_beams, step, full_circle, rule, ring_window, no_flags
+    rotated, start, end, breakpoints, ring = _core.cluster_scan(
+        *returns, int(n_beams), float(step), bool(full_circle), spec._asdict(), tuple(noise)
     )
-    if spec.breakpoints == NO_RULE:
-        last = returns.index.shape[0] - 1
-        return returns, np.zeros(1, np.int64), np.full(1, last, np.int64), breakpoints[:0], ring
-    return returns, start, end, breakpoints, ring
+    return Returns(*rotated), start, end, breakpoints, ring

@@ -1,8 +1,11 @@
 """The building blocks of every extractor, one implementation each, in the order data flows.
 
-Everything here is a kernel (decorated :func:`scanlines._jit.kernel`): compiled by numba,
-it takes arrays, scalars and the bundles below, trusts them and validates nothing. The
-validated entry points are :class:`~scanlines.Scan` and :class:`~scanlines.Extractor`;
+Each step is implemented once, in C++ (``cpp/scanlines/steps/``, one file per module here,
+compiled at install as :mod:`scanlines._core`). These modules document the steps, declare
+their parameters and constants, and give the Python side (the methods whose search is
+numpy, ground truth, sensor profiles, the tests) the steps as functions over numpy arrays
+and the bundles below; they trust their arguments and validate nothing. The validated
+entry points are :class:`~scanlines.Scan` and :class:`~scanlines.Extractor`;
 ``docs/ARCHITECTURE.md`` gives the conventions.
 
 ``returns``      the valid returns of a scan (:class:`~scanlines.steps.returns.Returns`)
@@ -18,7 +21,6 @@ validated entry points are :class:`~scanlines.Scan` and :class:`~scanlines.Extra
 ``merge``        merging neighbours (by the criterion, by chi-square)
 ``events``       corners and breakpoints between consecutive segments
 ``assemble``     the result arrays of an :class:`~scanlines.Extraction`
-``stack``        a stack of scans' result arrays as one flat table, in one kernel call
 """
 
 __all__ = [
@@ -34,5 +36,4 @@ __all__ = [
     "returns",
     "select",
     "split",
-    "stack",
 ]

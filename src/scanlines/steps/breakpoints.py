@@ -39,15 +39,14 @@ References
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import numpy as np
 
-from scanlines._jit import kernel
+from scanlines import _core
 from scanlines.params import Param, choice, coded, number, radians
-from scanlines.steps.noise import NoiseLine, noise_at, resolve_noise
-from scanlines.steps.returns import MAX_BRIDGED_GAP
+from scanlines.steps.noise import NoiseLine
+from scanlines.steps.returns import Returns
 
 __all__ = [
     "ABD",
@@ -63,10 +62,7 @@ __all__ = [
     "RuleSpec",
     "auto_abd_lambda",
     "break_flags",
-    "make_rule",
-    "neighbour_steps",
     "scan_rule",
-    "seam_break",
     "threshold",
 ]
 
@@ -145,209 +141,59 @@ class RuleSpec(NamedTuple):
 NO_RULE = -1
 """The ``breakpoints`` code of a method that works on the whole scan: cuts at missing beams only."""
 
-ABD_LAMBDA_FLOOR = math.radians(10.0)
-"""Borges and Aldon's ``lambda``: walls up to 80 deg incidence stay one cluster."""
-
-MAX_BRIDGED_SHARE = math.sin(math.radians(1.0)) / math.sin(math.radians(14.0))
+MAX_BRIDGED_SHARE: float = _core.MAX_BRIDGED_SHARE
 """Largest step, as a share of the range, that the incidence bound alone bridges in
-:func:`auto_abd_lambda` (7.2 %: ``lambda`` = 15 deg at 1 deg resolution)."""
-
-MAX_STEP_GROWTH = 2.5
-"""Largest ratio of a step to its neighbours' on a continued line (grazing walls
-grow their spacing smoothly; a jump does not)."""
+:func:`auto_abd_lambda` (``sin 1 deg / sin 14 deg``, 7.2 %: ``lambda`` = 15 deg at 1 deg
+resolution)."""
 
 
-@kernel
-def auto_abd_lambda(step):
+def auto_abd_lambda(step: float) -> float:
     """ABD's ``lambda`` (radians) for beams ``step`` apart.
 
-    10 deg, raised where it would bridge steps of more than :data:`MAX_BRIDGED_SHARE`
-    of the range: on scans coarser than 0.67 deg (15 deg at 1 deg). There, returns on
-    a wall near grazing incidence are many noise sigmas apart, so the line-continuation
-    test keeps such walls whole, while the 10 deg bound would also bridge depth steps
-    of 10 % of the range, which then pass for corners (``docs/decisions/breakpoints.md``).
-    At most 90 deg (scans coarser than 4 deg cannot keep to the share).
+    10 deg (Borges and Aldon's: walls up to 80 deg incidence stay one cluster), raised
+    where it would bridge steps of more than :data:`MAX_BRIDGED_SHARE` of the range: on
+    scans coarser than 0.67 deg (15 deg at 1 deg). There, returns on a wall near grazing
+    incidence are many noise sigmas apart, so the line-continuation test keeps such walls
+    whole, while the 10 deg bound would also bridge depth steps of 10 % of the range,
+    which then pass for corners (``docs/decisions/breakpoints.md``). At most 90 deg
+    (scans coarser than 4 deg cannot keep to the share).
     """
-    step = abs(step)
-    bridged = math.asin(min(math.sin(step) / MAX_BRIDGED_SHARE, 1.0))
-    return min(max(ABD_LAMBDA_FLOOR, step + bridged), 0.5 * math.pi)
+    return _core.auto_abd_lambda(float(step))
 
 
-@kernel
-def make_rule(kind, k, noise_k, line_k, abd_lambda, pdbs_c0, jump_distance, noise):
-    """The :class:`BreakpointRule` with its noise terms in units of the range noise
-    ``noise`` (a :class:`~scanlines.steps.noise.NoiseLine`).
+def threshold(rule: BreakpointRule, r_from: float, r_to: float, gap: int, step: float) -> float:
+    """Largest distance ``D`` between returns ``r_from`` and ``r_to``, ``gap`` beams apart
+    (the rules of the module docstring; the noise margin ``margin_sigmas`` times the
+    noise at ``r_from``)."""
+    return _core.threshold(rule, float(r_from), float(r_to), int(gap), float(step))
 
-    The margin is ``noise_k`` standard deviations of a difference of two ranges
-    (``sqrt(2) sigma``), the line tolerance ``line_k`` standard deviations of an
-    extrapolation from two points (``sqrt(5) sigma``).
+
+def break_flags(returns: Returns, gap: np.ndarray, step: float, rule: BreakpointRule):
+    """For each pair of consecutive positions, True where a cluster ends.
+
+    A pair further apart than :func:`threshold` still continues its cluster where the
+    rule's line tolerance is on and the pair continues the line of the pair before and
+    of the pair after: the next return lies within the tolerance (grown with how far it
+    is extrapolated) of the line through the two before it, and the pair's step is at
+    most 2.5 times the shorter neighbouring step plus the tolerance (grazing walls grow
+    their spacing smoothly; a jump does not). Returns on a wall seen at grazing incidence
+    are far apart but collinear and evenly spaced, so a distance threshold alone cuts the
+    wall; a depth jump or a spike is neither.
     """
-    return BreakpointRule(
-        kind,
-        k,
-        noise_k * math.sqrt(2.0),
-        line_k * math.sqrt(5.0),
-        noise,
-        abd_lambda,
-        pdbs_c0,
-        jump_distance,
+    return _core.break_flags(*returns, _ints(gap), float(step), rule)
+
+
+def scan_rule(spec: RuleSpec, returns: Returns, gap: np.ndarray, noise: NoiseLine):
+    """The :class:`BreakpointRule` of ``spec``, its noise ``noise`` (a sensor profile's, or
+    NaN: measured from the scan, only when the rule uses it); the margin is ``noise_k``
+    standard deviations of a difference of two ranges (``sqrt(2) sigma``), the line
+    tolerance ``line_k`` standard deviations of an extrapolation from two points
+    (``sqrt(5) sigma``). :data:`NO_RULE` gives a rule that cuts at missing beams only."""
+    kind, k, margin, tolerance, line, lam, c0, jump = _core.scan_rule(
+        spec._asdict(), *returns, _ints(gap), tuple(noise)
     )
+    return BreakpointRule(kind, k, margin, tolerance, NoiseLine(*line), lam, c0, jump)
 
 
-@kernel
-def scan_rule(spec, returns, gap, noise):
-    """The rule of the :class:`RuleSpec` ``spec``, its noise ``noise`` (a sensor
-    profile's :class:`~scanlines.steps.noise.NoiseLine`, or NaN: measured from the scan,
-    only when the rule uses it). :data:`NO_RULE` gives a rule that cuts at missing
-    beams only.
-    """
-    if spec.breakpoints == NO_RULE:
-        fixed = np.int64(FIXED)  # not a literal: one compiled make_rule for every caller
-        quiet = NoiseLine(0.0, 0.0)
-        return make_rule(fixed, spec.k, 0.0, 0.0, spec.abd_lambda, spec.pdbs_c0, math.inf, quiet)
-    noisy_rule = spec.breakpoints in (ADAPTIVE, ABD) and spec.noise_k > 0.0
-    if noisy_rule or spec.line_k > 0.0:
-        noise = resolve_noise(noise, returns, gap)
-    else:
-        noise = NoiseLine(0.0, 0.0)
-    return make_rule(
-        spec.breakpoints, spec.k, spec.noise_k, spec.line_k, spec.abd_lambda, spec.pdbs_c0,
-        spec.jump_distance, noise,
-    )  # fmt: skip
-
-
-@kernel
-def neighbour_steps(x, y):
-    """``d_i = |P_{i+1} - P_i|`` for consecutive points (eq. 4 / 19)."""
-    d = np.empty(max(x.shape[0] - 1, 0))
-    for p in range(d.shape[0]):
-        dx, dy = x[p + 1] - x[p], y[p + 1] - y[p]
-        d[p] = math.sqrt(dx * dx + dy * dy)
-    return d
-
-
-@kernel
-def gap_factor(rule, gap, step):
-    """The part of the threshold that depends on the beam gap only (see :func:`threshold`)."""
-    kind = rule.kind
-    dphi = gap * step
-    if kind == ADAPTIVE:
-        return rule.k * dphi
-    if kind == ABD:
-        margin = rule.abd_lambda - dphi
-        return math.sin(dphi) / math.sin(margin) if margin > 0.0 else math.inf
-    if kind == PDBS:
-        return math.sqrt(2.0 * (1.0 - math.cos(dphi)))
-    return 0.0
-
-
-@kernel
-def scaled_threshold(rule, factor, r_from, r_to):
-    """The threshold from :func:`gap_factor` and the two ranges."""
-    kind = rule.kind
-    if kind in (ADAPTIVE, ABD):
-        margin = rule.margin_sigmas * noise_at(rule.noise, r_from) if rule.margin_sigmas else 0.0
-        return factor * r_from + margin
-    if kind == PDBS:
-        return rule.pdbs_c0 + factor * min(r_from, r_to)
-    return rule.jump_distance
-
-
-@kernel
-def threshold(rule, r_from, r_to, gap, step):
-    """Largest distance ``D`` between returns ``r_from`` and ``r_to``, ``gap`` beams apart."""
-    return scaled_threshold(rule, gap_factor(rule, gap, step), r_from, r_to)
-
-
-@kernel
-def distance_to_line(ax, ay, bx, by, px, py):
-    """Distance of ``P`` from the line through ``A`` and ``B`` (inf when ``A == B``)."""
-    ux, uy = bx - ax, by - ay
-    length = math.hypot(ux, uy)
-    if length == 0.0:
-        return math.inf
-    return abs(ux * (py - ay) - uy * (px - ax)) / length
-
-
-@kernel
-def continues_line_at(x, y, gap, d, p, tolerance):
-    """Pair ``(p, p+1)`` continues the line of the pair before and of the pair after.
-
-    ``P_{p+1}`` lies within ``tolerance`` of the line through ``P_{p-1}, P_p``, ``P_p``
-    within ``tolerance`` of the line through ``P_{p+1}, P_{p+2}`` (each tolerance grown
-    by :func:`extrapolation_growth` for the step ``d_p`` beyond), both neighbouring
-    steps are longer than ``tolerance`` (shorter ones give a line direction that is
-    mostly noise), and ``d_p`` is at most :data:`MAX_STEP_GROWTH` times the shorter
-    neighbouring step plus ``tolerance`` (near grazing incidence, range noise moves
-    returns along the wall and makes neighbouring steps unequal). Returns on a wall seen
-    at grazing incidence are far apart but collinear and evenly spaced, so a distance
-    threshold alone cuts the wall; a depth jump or a spike is neither. Where one
-    neighbouring pair does not exist (the scan's ends, two or more missing beams) or is
-    itself a jump (more than :data:`MAX_STEP_GROWTH` times ``d_p``), the other decides
-    alone: the first and last returns of a wall that starts behind an edge or ends in
-    open space.
-    """
-    n = x.shape[0]
-    jump = MAX_STEP_GROWTH * d[p] + tolerance
-    has_before = p >= 1 and gap[p - 1] <= MAX_BRIDGED_GAP and d[p - 1] <= jump
-    has_after = p + 2 < n and gap[p + 1] <= MAX_BRIDGED_GAP and d[p + 1] <= jump
-    if not (has_before or has_after):
-        return False
-    shorter = math.inf
-    if has_before:
-        shorter = d[p - 1]
-    if has_after:
-        shorter = min(shorter, d[p + 1])
-    if not (d[p] <= MAX_STEP_GROWTH * shorter + tolerance and shorter > tolerance):
-        return False
-    if has_before:
-        before = distance_to_line(x[p - 1], y[p - 1], x[p], y[p], x[p + 1], y[p + 1])
-        if not before < tolerance * extrapolation_growth(d[p] / d[p - 1]):
-            return False
-    if has_after:
-        after = distance_to_line(x[p + 2], y[p + 2], x[p + 1], y[p + 1], x[p], y[p])
-        if not after < tolerance * extrapolation_growth(d[p] / d[p + 1]):
-            return False
-    return True
-
-
-@kernel
-def extrapolation_growth(t):
-    """How much farther off a line through two points a third lies by noise alone when it
-    is ``t`` times their distance beyond them, relative to ``t = 1`` (the ``sqrt(5)`` of
-    :func:`make_rule`): ``sqrt((1 + t)^2 + t^2) / sqrt(5)``."""
-    return math.sqrt((1.0 + t) ** 2 + t * t) / math.sqrt(5.0)
-
-
-@kernel
-def break_flags(returns, gap, step, rule):
-    """For each pair of consecutive positions, True where a cluster ends."""
-    _, r, x, y = returns
-    n = x.shape[0]
-    out = np.zeros(max(n - 1, 0), dtype=np.bool_)
-    if n < 2:
-        return out
-    d = neighbour_steps(x, y)
-    line_test = rule.tolerance_sigmas > 0.0
-    factors = np.array([gap_factor(rule, g, step) for g in range(MAX_BRIDGED_GAP + 1)])
-    for p in range(n - 1):
-        if gap[p] > MAX_BRIDGED_GAP:
-            out[p] = True
-        elif not d[p] < scaled_threshold(rule, factors[gap[p]], r[p], r[p + 1]):
-            if line_test:
-                tolerance = rule.tolerance_sigmas * noise_at(rule.noise, r[p])
-                out[p] = not continues_line_at(x, y, gap, d, p, tolerance)
-            else:
-                out[p] = True
-    return out
-
-
-@kernel
-def seam_break(returns, n_beams, step, rule):
-    """The breakpoint test between the last and the first position of a full circle."""
-    index, r, x, y = returns
-    gap = index[0] + n_beams - index[-1]
-    if gap > MAX_BRIDGED_GAP:
-        return True
-    d = math.hypot(x[0] - x[-1], y[0] - y[-1])
-    return not d < threshold(rule, r[-1], r[0], gap, step)
+def _ints(values) -> np.ndarray:
+    return np.ascontiguousarray(values, dtype=np.int64)

@@ -40,25 +40,20 @@ noise of their directions.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from scanlines._jit import kernel
+from scanlines import _core
 from scanlines.extraction import END_KINDS
 from scanlines.params import Param, integer, number, radians
-from scanlines.steps.fit import TLS, fit_many, fit_run, hesse_difference, line_intersection
-from scanlines.steps.returns import MAX_BRIDGED_GAP
-from scanlines.steps.split import line_residual
+from scanlines.steps.fit import Moments
+from scanlines.steps.returns import Returns
 
 __all__ = [
-    "CORNER_REACH",
+    "CORNER_SIGMAS",
     "END_KINDS",
     "EVENT_PARAMS",
-    "end_kinds",
     "junction_events",
     "segment_events",
-    "sorted_distinct",
 ]
 
 EVENT_PARAMS: dict[str, Param] = {
@@ -79,55 +74,15 @@ EVENT_PARAMS: dict[str, Param] = {
 }
 """Parameters of the shared corner/breakpoint rule (:func:`segment_events`)."""
 
-CORNER_REACH = 2.0
-"""A corner's lines meet within this many spacings (plus noise) of the facing ends
-(:func:`junction_events`)."""
+CORNER_SIGMAS: float = _core.CORNER_SIGMAS
+"""Standard deviations of the turn by which two segments' lines must turn to meet at a
+corner (:func:`junction_events`)."""
 
 
-@kernel
-def sorted_distinct(values):
-    """The distinct values of an integer array, ascending."""
-    ordered = np.sort(values)
-    count = min(ordered.shape[0], 1)
-    for i in range(1, ordered.shape[0]):
-        if ordered[i] != ordered[count - 1]:
-            ordered[count] = ordered[i]
-            count += 1
-    return ordered[:count]
-
-
-@kernel
-def nearest_return(x, y, cx, cy, low, end, start, high, reach, widest):
-    """Position nearest ``(cx, cy)`` among ``end - reach .. start + reach`` (within ``low..high``).
-
-    A pair that wraps (the last segment and the first) counts on past the end of
-    the sequence. The candidates run on to ``end + reach + widest``, ``widest``
-    the most positions between the facing ends of any pair of the scan, and those
-    beyond ``high`` count as ``end``. That widening is kept on purpose: it is how
-    the first, vectorised implementation searched, every published figure of the
-    comparison methods was measured with it, and narrowing the search to the pair's
-    own span changes corners (a change of results that belongs with the accuracy
-    work, not with a re-housing).
-    """
-    n = x.shape[0]
-    if start < end:
-        high += n
-    best, best_distance = -1, math.inf
-    for offset in range(-reach, reach + 1 + widest):
-        candidate = end + offset
-        if candidate < low or candidate > high:
-            candidate = end
-        candidate %= n
-        distance = math.hypot(x[candidate] - cx, y[candidate] - cy)
-        if distance != distance:
-            distance = math.inf
-        if best < 0 or distance < best_distance:
-            best, best_distance = candidate, distance
-    return best
-
-
-@kernel
-def segment_events(returns, n_beams, moments, a, b, group, clustered, wrap, bounds):
+def segment_events(
+    returns: Returns, n_beams: int, moments: Moments, a, b, group, clustered: bool,
+    wrap: bool, bounds: tuple[int, float, float],
+):  # fmt: skip
     """Corners and breakpoints between consecutive segments ``[a, b]`` (module docstring).
 
     ``clustered``: only segments of one ``group`` can meet and no breakpoints are
@@ -135,169 +90,43 @@ def segment_events(returns, n_beams, moments, a, b, group, clustered, wrap, boun
     followed by the first, across the seam. ``bounds`` is ``(corner_beams,
     corner_distance, corner_angle)`` in beams, metres and radians.
 
+    A corner is reported at the return nearest the lines' intersection among those from
+    ``corner_beams`` positions before the first segment's last return to as many after
+    the second's first; the candidates run on to the widest span between the facing
+    ends of any pair of the scan (how the first, vectorised implementation searched:
+    every published figure of the comparison methods was measured with it).
+
     Returns ``corners, breakpoints``, sorted distinct beams.
     """
-    index, _, x, y = returns
-    corner_beams, corner_distance, corner_angle = bounds
-    none = np.zeros(0, dtype=np.int64)
-    m = a.shape[0]
-    if m == 0 or (m == 1 and not wrap):
-        return none, none.copy()
-    pairs = m if wrap and m >= 2 else m - 1
-    first = np.empty(pairs, dtype=np.int64)
-    count = widest = 0
-    for k in range(pairs):
-        following = (k + 1) % m
-        if clustered and group[k] != group[following]:
-            continue
-        first[count] = k
-        count += 1
-        span = a[following] - b[k]
-        widest = max(widest, span + x.shape[0] if span < 0 else span)
-    rho, alpha, _ = fit_many(np.int64(TLS), moments, a, b)
-    reach = int(corner_beams)
-    corners = np.empty(count, dtype=np.int64)
-    jumps = np.empty(count, dtype=np.int64)
-    n_corners = n_jumps = 0
-    for c in range(count):
-        i = first[c]
-        j = (i + 1) % m
-        end, start = b[i], a[j]
-        _, turn = hesse_difference(rho[i], alpha[i], rho[j], alpha[j])
-        turns = abs(turn) >= corner_angle
-        cx, cy = line_intersection(rho[i], alpha[i], rho[j], alpha[j])
-        to_end = math.hypot(x[end] - cx, y[end] - cy)
-        to_start = math.hypot(x[start] - cx, y[start] - cy)
-        near = (index[start] - index[end]) % max(n_beams, 1) <= corner_beams
-        if near and turns and to_end <= corner_distance and to_start <= corner_distance:
-            at = nearest_return(x, y, cx, cy, a[i], end, start, b[j], reach, np.int64(widest))
-            corners[n_corners] = index[at]
-            n_corners += 1
-            continue
-        if clustered:
-            continue
-        end_off = line_residual(x, y, end, rho[j], alpha[j])
-        start_off = line_residual(x, y, start, rho[i], alpha[i])
-        if not (near and not turns and end_off <= corner_distance and start_off <= corner_distance):
-            jumps[n_jumps] = index[end]
-            n_jumps += 1
-    return sorted_distinct(corners[:n_corners]), sorted_distinct(jumps[:n_jumps])
+    beams, distance, angle = bounds
+    return _core.segment_events(
+        *returns, int(n_beams), *moments, _ints(a), _ints(b), _ints(group), bool(clustered),
+        bool(wrap), int(beams), float(distance), float(angle),
+    )  # fmt: skip
 
 
-CORNER_SIGMAS = 3.0
-"""Standard deviations of the turn by which two segments' lines must turn to meet at a
-corner (:func:`junction_events`)."""
-
-
-@kernel
-def junction_events(returns, fit, moments, a, b, owner, shared, ring, sigma, turn_sigma):
+def junction_events(
+    returns: Returns, fit: int, moments: Moments, a, b, owner, shared: bool, ring: bool,
+    sigma: float, turn_sigma,
+):  # fmt: skip
     """Beams of the corners where two kept segments of one cluster meet, and of jumps.
 
     A shared corner is its shared point; otherwise the point nearer the two
     lines' intersection among those between the segments. With ``sigma >= 0``,
-    two segments whose lines do not meet near their facing ends (farther than
-    :data:`CORNER_REACH` times the local spacing plus three ``sigma``) are two
-    surfaces at different depths joined by a mixed pixel or a small step: the
-    junction is reported as a breakpoint (the last beam of the first segment).
-    Given ``turn_sigma`` (the standard deviation of each segment's direction; empty:
-    no test), a junction whose lines turn by less than :data:`CORNER_SIGMAS` times the
-    standard deviation of the turn is not a corner: the noise hides it (the rule by
-    which the simulator's truth makes such a turn don't-care).
+    two segments whose lines do not meet near their facing ends (farther than twice
+    the local spacing plus three ``sigma``) are two surfaces at different depths joined
+    by a mixed pixel or a small step: the junction is reported as a breakpoint (the last
+    beam of the first segment). Given ``turn_sigma`` (the standard deviation of each
+    segment's direction; empty: no test), a junction whose lines turn by less than
+    :data:`CORNER_SIGMAS` times the standard deviation of the turn is not a corner: the
+    noise hides it (the rule by which the simulator's truth makes such a turn
+    don't-care).
     """
-    index, _, x, y = returns
-    m = a.shape[0]
-    corners = np.zeros(m, dtype=np.int64)
-    jumps = np.zeros(m, dtype=np.int64)
-    n_corners = n_jumps = 0
-    for k in range(m):
-        right = k + 1
-        if right == m:
-            if not (ring and m >= 2 and a[0] == 0 and b[-1] == x.shape[0] - 1):
-                break
-            right = 0
-        elif owner[k] != owner[right] or a[right] - b[k] > 2:
-            continue
-        end, start = b[k], a[right]
-        if shared:
-            corners[n_corners] = index[start]
-            n_corners += 1
-            continue
-        rho_i, alpha_i, _ = fit_run(fit, moments, a[k], b[k])
-        rho_j, alpha_j, _ = fit_run(fit, moments, a[right], b[right])
-        cx, cy = line_intersection(rho_i, alpha_i, rho_j, alpha_j)
-        before = math.hypot(x[end] - cx, y[end] - cy)
-        after = math.hypot(x[start] - cx, y[start] - cy)
-        pick = start if after < before else end
-        if sigma >= 0.0:
-            reach = CORNER_REACH * math.hypot(x[start] - x[end], y[start] - y[end]) + 3.0 * sigma
-            if not max(before, after) <= reach:  # NaN (parallel lines) is not a corner
-                jumps[n_jumps] = index[end]
-                n_jumps += 1
-                continue
-        if turn_sigma.shape[0] > 0:
-            bound = CORNER_SIGMAS * math.sqrt(turn_sigma[k] ** 2 + turn_sigma[right] ** 2)
-            _, turn = hesse_difference(rho_i, alpha_i, rho_j, alpha_j)
-            if not abs(turn) >= bound:  # the noise hides it (or NaN)
-                continue
-        corners[n_corners] = index[pick]
-        n_corners += 1
-    return corners[:n_corners], jumps[:n_jumps]
+    return _core.junction_events(
+        *returns, int(fit), *moments, _ints(a), _ints(b), _ints(owner), bool(shared),
+        bool(ring), float(sigma), np.ascontiguousarray(turn_sigma, dtype=np.float64),
+    )  # fmt: skip
 
 
-END_CORNER, END_JUMP, END_OCCLUDED, END_GAP, END_EDGE, END_OPEN = (
-    END_KINDS.index(kind) for kind in ("corner", "jump", "occluded", "gap", "edge", "open")
-)
-
-
-@kernel
-def near_corner(corners, beam):
-    """Whether a corner beam lies within one beam of ``beam`` (``corners`` sorted)."""
-    at = np.searchsorted(corners, beam - 1)
-    return at < corners.shape[0] and corners[at] <= beam + 1
-
-
-@kernel
-def is_listed(sorted_beams, beam):
-    at = np.searchsorted(sorted_beams, beam)
-    return at < sorted_beams.shape[0] and sorted_beams[at] == beam
-
-
-@kernel
-def end_kinds(returns, a, b, n_beams, wrap, breakpoints, corners):
-    """What ends each run ``[a, b]`` at its start and at its end: codes of :data:`END_KINDS`.
-
-    ``corner``: a corner within one beam. ``gap``: two or more beams without a return
-    follow. ``edge``: no return follows (the scan's first or last return; never on a
-    closed ring, ``wrap``). ``jump``: a breakpoint, and the return beyond lies farther:
-    this surface really ends here. ``occluded``: a breakpoint, and the return beyond
-    is nearer: the surface may go on behind it. ``open``: none of these (the method
-    stopped the segment on a continuing surface: a curve, clutter, a dropped point).
-    ``breakpoints`` and ``corners`` are sorted beam indices.
-    """
-    index, r = returns.index, returns.r
-    n = index.shape[0]
-    out = np.empty((a.shape[0], 2), dtype=np.int8)
-    for k in range(a.shape[0]):
-        for side in range(2):
-            p = a[k] if side == 0 else b[k]
-            step = -1 if side == 0 else 1
-            q = p + step
-            if wrap:
-                q %= n
-            beam = index[p]
-            if near_corner(corners, beam):
-                out[k, side] = END_CORNER
-            elif q < 0 or q >= n or q == p:
-                out[k, side] = END_EDGE
-            else:
-                apart = (index[q] - beam) * step
-                if apart < 0:
-                    apart += n_beams
-                last_before = beam if side == 1 else index[q]
-                if apart > MAX_BRIDGED_GAP:
-                    out[k, side] = END_GAP
-                elif is_listed(breakpoints, last_before):
-                    out[k, side] = END_OCCLUDED if r[q] < r[p] else END_JUMP
-                else:
-                    out[k, side] = END_OPEN
-    return out
+def _ints(values) -> np.ndarray:
+    return np.ascontiguousarray(values, dtype=np.int64)

@@ -14,7 +14,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from scanlines._jit import kernel
+from scanlines import _core
 
 __all__ = [
     "MAX_BRIDGED_GAP",
@@ -25,7 +25,7 @@ __all__ = [
     "without",
 ]
 
-MAX_BRIDGED_GAP = 2
+MAX_BRIDGED_GAP: int = _core.MAX_BRIDGED_GAP
 """Largest beam gap between consecutive returns that may still be one cluster
 (one missing beam in between)."""
 
@@ -49,51 +49,26 @@ class Returns(NamedTuple):
     y: np.ndarray
 
 
-@kernel
-def valid_returns(ranges, valid, cos, sin):
+def valid_returns(ranges: np.ndarray, valid: np.ndarray, cos: np.ndarray, sin: np.ndarray):
     """:class:`Returns` of the beams marked ``valid``; ``cos, sin`` the bearing tables
     relative to beam 0."""
-    count = 0
-    for i in range(valid.shape[0]):
-        count += valid[i]
-    index = np.empty(count, dtype=np.int64)
-    r = np.empty(count)
-    x = np.empty(count)
-    y = np.empty(count)
-    p = 0
-    for i in range(valid.shape[0]):
-        if valid[i]:
-            index[p], r[p] = i, ranges[i]
-            x[p], y[p] = ranges[i] * cos[i], ranges[i] * sin[i]
-            p += 1
-    return Returns(index, r, x, y)
+    index = np.flatnonzero(valid).astype(np.int64)
+    r = ranges[index]
+    return Returns(index, r, r * cos[index], r * sin[index])
 
 
-@kernel
-def beam_gaps(index, n_beams):
-    """Beams between consecutive positions (1 = adjacent beams; a rotated full
-    circle wraps once)."""
-    gap = np.empty(max(index.shape[0] - 1, 0), dtype=np.int64)
-    for p in range(gap.shape[0]):
-        gap[p] = (index[p + 1] - index[p]) % n_beams
-    return gap
+def beam_gaps(index: np.ndarray, n_beams: int) -> np.ndarray:
+    """Beams between consecutive positions (1 = adjacent beams; a rotated full circle
+    wraps once)."""
+    return np.diff(index) % n_beams
 
 
-@kernel
-def rotated(returns, shift):
+def rotated(returns: Returns, shift: int) -> Returns:
     """``returns`` rotated so that position ``shift`` comes first."""
-    index, r, x, y = returns
-    return Returns(
-        np.concatenate((index[shift:], index[:shift])),
-        np.concatenate((r[shift:], r[:shift])),
-        np.concatenate((x[shift:], x[:shift])),
-        np.concatenate((y[shift:], y[:shift])),
-    )
+    return Returns(*(np.roll(values, -shift) for values in returns))
 
 
-@kernel
-def without(returns, drop):
+def without(returns: Returns, drop: np.ndarray) -> Returns:
     """``returns`` without the positions where the mask ``drop`` is True."""
     keep = np.flatnonzero(~drop)
-    index, r, x, y = returns
-    return Returns(index[keep], r[keep], x[keep], y[keep])
+    return Returns(*(values[keep] for values in returns))
