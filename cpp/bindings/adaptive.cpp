@@ -14,11 +14,9 @@ namespace {
 
 using InFlags = In<bool, nb::ndim<1>>;
 
-// The tuples the steps' Python side builds (scanlines.steps: Returns, BreakpointRule,
-// RunCost with its Moments), taken as they are.
+// The tuples the steps' Python side builds (scanlines.steps: Returns, RunCost with its
+// Moments), taken as they are.
 using ReturnsTuple = std::tuple<InInts, InReals, InReals, InReals>;
-using RuleTuple =
-    std::tuple<Index, double, double, double, std::pair<double, double>, double, double, double>;
 using CostTuple =
     std::tuple<Index, std::tuple<In<double, nb::ndim<2>>, double, double>, InReals, InReals>;
 
@@ -26,16 +24,10 @@ Returns returns_tuple_of(const ReturnsTuple& t) {
     return returns_of(std::get<0>(t), std::get<1>(t), std::get<2>(t), std::get<3>(t));
 }
 
-BreakpointRule rule_of(const RuleTuple& t) {
-    auto [kind, k, margin, tolerance, noise, lambda, c0, jump] = t;
-    return {kind, k, margin, tolerance, {noise.first, noise.second}, lambda, c0, jump};
-}
-
 // A view of the caller's moments: valid while the call's arguments are.
 RunCost cost_of(const CostTuple& t) {
     const auto& [table, ox, oy] = std::get<1>(t);
-    return {std::get<0>(t), moments_of(table, ox, oy), vector_of(std::get<2>(t)),
-            vector_of(std::get<3>(t))};
+    return run_cost_of(std::get<0>(t), table, ox, oy, std::get<2>(t), std::get<3>(t));
 }
 
 template <typename T>
@@ -150,10 +142,10 @@ void bind_denoise(nb::module_& m) {
         "Step 2 as written, on neighbour distances d (length n - 1): a mask of n points.");
     m.def(
         "isolated_noise",
-        [](const ReturnsTuple& returns, const InInts& gap, double step, const RuleTuple& rule,
+        [](const ReturnsTuple& returns, const InInts& gap, double step, nb::handle rule,
            const InFlags& breaks) {
             return flags_to_numpy(isolated_noise(returns_tuple_of(returns), vector_of(gap), step,
-                                                 rule_of(rule), flags_of(breaks)));
+                                                 breakpoint_rule_of(rule), flags_of(breaks)));
         },
         "Points cut off from both neighbours that are themselves continuous (a spike).");
     m.def(

@@ -166,7 +166,9 @@ template <typename T>
 T setting(const nb::dict& settings, const char* name) {
     if (!settings.contains(name)) throw nb::key_error(name);
     nb::object value = settings[name];
-    if constexpr (std::is_integral_v<T>)
+    if constexpr (std::is_same_v<T, bool>)
+        return PyObject_IsTrue(value.ptr()) == 1;
+    else if constexpr (std::is_integral_v<T>)
         return nb::cast<T>(nb::int_(value));
     else
         return nb::cast<T>(nb::float_(value));
