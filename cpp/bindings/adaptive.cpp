@@ -171,6 +171,17 @@ void bind_denoise(nb::module_& m) {
                                                       flags_of(breaks), flags_of(small), margin));
         },
         "Mask of the returns of two-return clusters that lie in depth between their neighbours.");
+    m.def(
+        "denoise",
+        [](const ReturnsTuple& returns, Index n_beams, double step, bool full_circle,
+           nb::handle rule, Index kind, Index window, Index min_cluster_points, double margin) {
+            Denoised out = denoise(returns_tuple_of(returns), n_beams, step, full_circle,
+                                   breakpoint_rule_of(rule), kind, window, min_cluster_points,
+                                   margin);
+            return nb::make_tuple(returns_to_numpy(std::move(out.returns)),
+                                  to_numpy(std::move(out.outliers)), flags_to_numpy(out.breaks));
+        },
+        "Steps 2-3 by kind: (returns, beams dropped as noise, break flags or empty).");
 }
 
 }  // namespace
