@@ -205,6 +205,26 @@ void bind_adaptive(nb::module_& m) {
         },
         "The adaptive method on each row of a stack of scans: one flat table.");
     m.def(
+        "adaptive_stage_seconds",
+        [](const In<double, nb::ndim<2>>& ranges, const In<bool, nb::ndim<2>>& valid,
+           const In<double, nb::ndim<1>>& cos, const In<double, nb::ndim<1>>& sin, double step,
+           bool full_circle, double angle_min, std::pair<double, double> noise,
+           const nb::dict& settings, const InReals& grid) {
+            Stack stack = stack_of(ranges, valid, cos, sin, step, full_circle, angle_min, noise);
+            AdaptiveSettings s = adaptive_settings(settings);
+            Reals thresholds = vector_of(grid);
+            StageSeconds seconds{};
+            {
+                nb::gil_scoped_release unlocked;
+                adaptive_stack(stack, s, thresholds, &seconds);
+            }
+            nb::dict out;
+            for (int k = 0; k < N_ADAPTIVE_STAGES; ++k) out[ADAPTIVE_STAGE_NAMES[k]] = seconds[k];
+            return out;
+        },
+        "adaptive_stack's arguments: the seconds each stage of the method took over the stack, "
+        "by name, in order.");
+    m.def(
         "threshold_grid",
         [](double low, double high, double step, Index max_evaluations) {
             return to_numpy(threshold_grid(low, high, step, max_evaluations));
