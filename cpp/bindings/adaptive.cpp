@@ -72,15 +72,22 @@ AdaptiveSettings adaptive_settings(const nb::dict& d) {
 
 // The sweep and criterion (scanlines/steps/select.py), for the tests of the steps.
 void bind_select(nb::module_& m) {
-    nb::class_<Sweep>(m, "Sweep", "A threshold sweep in progress (scanlines.steps.select).")
-        .def_prop_ro("ranked", [](const Sweep& s) { return copy_to_numpy(s.ranked); })
-        .def_prop_ro("ranked_score", [](const Sweep& s) { return copy_to_numpy(s.ranked_score); })
-        .def_ro("useful", &Sweep::useful)
-        .def_prop_ro("accepted", [](const Sweep& s) { return flags_to_numpy(s.accepted); })
-        .def_prop_ro("parent_a", [](const Sweep& s) { return copy_to_numpy(s.parent_a); })
-        .def_prop_ro("parent_b", [](const Sweep& s) { return copy_to_numpy(s.parent_b); })
-        .def_prop_ro("sse", [](const Sweep& s) { return copy_to_numpy(s.sse); })
-        .def_prop_ro("segments", [](const Sweep& s) { return copy_to_numpy(s.segments); });
+    // A process may import the module twice (two copies of the package side by side,
+    // tools/benchmarks/compare_versions.py): the type is registered once.
+    if (nb::type<Sweep>().is_valid()) {
+        m.attr("Sweep") = nb::type<Sweep>();
+    } else {
+        nb::class_<Sweep>(m, "Sweep", "A threshold sweep in progress (scanlines.steps.select).")
+            .def_prop_ro("ranked", [](const Sweep& s) { return copy_to_numpy(s.ranked); })
+            .def_prop_ro("ranked_score",
+                         [](const Sweep& s) { return copy_to_numpy(s.ranked_score); })
+            .def_ro("useful", &Sweep::useful)
+            .def_prop_ro("accepted", [](const Sweep& s) { return flags_to_numpy(s.accepted); })
+            .def_prop_ro("parent_a", [](const Sweep& s) { return copy_to_numpy(s.parent_a); })
+            .def_prop_ro("parent_b", [](const Sweep& s) { return copy_to_numpy(s.parent_b); })
+            .def_prop_ro("sse", [](const Sweep& s) { return copy_to_numpy(s.sse); })
+            .def_prop_ro("segments", [](const Sweep& s) { return copy_to_numpy(s.segments); });
+    }
     m.def(
         "start_sweep",
         [](const CostTuple& cost, const InInts& start, const InInts& end, const InInts& candidates,
