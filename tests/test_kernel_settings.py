@@ -83,7 +83,8 @@ def test_a_declared_parameter_reaches_method_info_the_file_and_the_record(declar
     assert settings["auto_width"]
     values = kernel_values(settings)
     assert list(values) == list(settings)
-    assert type(values["side"]) is int and type(values["auto_width"]) is bool
+    assert type(values["side"]) is int
+    assert type(values["auto_width"]) is bool
     assert values["turn"] == math.radians(45.0)
 
 

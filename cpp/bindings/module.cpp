@@ -15,6 +15,15 @@ void bind_segmentation(nb::module_& m);
 
 NB_MODULE(_core, m) {
     m.doc() = "The compiled kernels of scanlines (C++17); called by the methods' modules.";
+#if defined(__clang__)
+    m.attr("COMPILER") = "clang " __clang_version__;
+#elif defined(__GNUC__)
+    m.attr("COMPILER") = "gcc " __VERSION__;
+#elif defined(_MSC_VER)
+    m.attr("COMPILER") = "msvc " NB_STRINGIFY(_MSC_VER);
+#else
+    m.attr("COMPILER") = "unknown";
+#endif
     m.attr("MIN_NOISE_SIGMA") = scanlines::MIN_NOISE_SIGMA;
     m.attr("MAX_BRIDGED_GAP") = scanlines::MAX_BRIDGED_GAP;
     m.attr("CORNER_SIGMAS") = scanlines::CORNER_SIGMAS;

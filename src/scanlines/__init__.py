@@ -9,8 +9,8 @@ The public API is small::
     for seg in result.segments: ...
 
 ``import scanlines`` is quick: the names below are imported on first use (PEP 562),
-so the command line can set itself up (Ctrl-C handling) before numba loads. The CLI,
-plots and log readers import their own dependencies when used.
+so the command line can set itself up (Ctrl-C handling) before anything else loads. The
+CLI, plots and log readers import their own dependencies when used.
 """
 
 from __future__ import annotations

@@ -1,8 +1,8 @@
 """The names of the built-in methods, in listing order, known without loading any kernel.
 
-The command line offers them as the choices of ``--method`` before numba is imported,
-so that a command starts (and ``scanlines view`` serves its page) without waiting for
-it. Each name is a module of :mod:`scanlines.methods` whose class registers under that
+The command line offers them as the choices of ``--method`` before the methods are
+imported, so that a command starts (and ``scanlines view`` serves its page) at once.
+Each name is a module of :mod:`scanlines.methods` whose class registers under that
 name; :data:`scanlines.methods.REGISTRY` lists the same names in the same order (tested).
 """
 

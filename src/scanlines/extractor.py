@@ -17,7 +17,6 @@ import numpy as np
 from scanlines.builtin_methods import DEFAULT_METHOD
 from scanlines.errors import ParameterError, ScanError
 from scanlines.extraction import Extraction, ExtractionTable
-from scanlines.interrupts import kernel_calls
 from scanlines.methods import REGISTRY, method_class
 from scanlines.params import resolve
 from scanlines.scan import Scan, as_array, valid_returns
@@ -159,8 +158,7 @@ class Extractor:
         step, angle_min = float32(scan.angle_increment), float32(scan.angle_min)
         valid = valid_returns(ranges, float32(scan.range_min), float32(scan.range_max))
         cos, sin = self._bearings(len(scan), step)
-        with kernel_calls:
-            return self._method.extract(ranges, valid, cos, sin, step, angle_min)
+        return self._method.extract(ranges, valid, cos, sin, step, angle_min)
 
     def warm_up(self) -> None:
         """Compile this extractor's kernels now (or load them from the cache), on a small
@@ -203,8 +201,7 @@ class Extractor:
             raise ParameterError(f"jobs must be an integer >= 1, got {jobs!r}")
         parts = min(jobs, len(stack))
         if parts <= 1:
-            with kernel_calls:
-                return self._method.extract_many(stack, valid, cos, sin, step, angle_min)
+            return self._method.extract_many(stack, valid, cos, sin, step, angle_min)
         bounds = np.linspace(0, len(stack), parts + 1).astype(int)
 
         def part(k: int) -> ExtractionTable:

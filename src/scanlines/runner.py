@@ -16,7 +16,6 @@ from typing import Any
 
 import numpy as np
 
-from scanlines._jit import kernel_seconds
 from scanlines.errors import ParameterError
 from scanlines.extraction import ExtractionTable
 from scanlines.extractor import Extractor
@@ -248,10 +247,8 @@ class RunSummary:
     were dropped: malformed ones (odometry, parameters) and those ignored by design
     (other topics, other message names, by name in ``ignored_records``).
 
-    ``compile_seconds`` is the time spent compiling kernels, or loading them from the
-    cache, on their first use in this process (summed over jobs and the reading thread);
-    ``extract_seconds`` (the time in the extraction kernels, summed over jobs) and
-    ``total_seconds`` (wall time, end to end) leave it out.
+    ``extract_seconds`` is the time in the extraction kernels, summed over jobs;
+    ``total_seconds`` the wall time, end to end.
     """
 
     scans: int = 0
@@ -263,7 +260,6 @@ class RunSummary:
     skipped_other: int = 0
     ignored_records: dict[str, int] = field(default_factory=dict)
     extract_seconds: float = 0.0
-    compile_seconds: float = 0.0
     total_seconds: float = 0.0
     jobs: int = 1
     method: str = ""
@@ -327,7 +323,6 @@ def run_log(
         raise ParameterError(f"jobs must be at least 1, got {jobs}")
     summary = RunSummary(method=extractor.method, params=dict(extractor.params), jobs=jobs)
     started = time.perf_counter()
-    compiled_before, compiled_wall_before = kernel_seconds(), kernel_seconds(wall=True)
     chunks = chunk_scans(select(reader.enumerate(), scans), chunk)
 
     def process(piece: _Chunk) -> _Chunk:
@@ -342,9 +337,7 @@ def run_log(
             for piece in _ordered(pool, process, chunks, ahead=2 * jobs):
                 _write(piece, writer, summary, on_scan)
     _count_skipped(reader, summary)
-    summary.compile_seconds = kernel_seconds() - compiled_before
-    compiled_wall = kernel_seconds(wall=True) - compiled_wall_before
-    summary.total_seconds = time.perf_counter() - started - compiled_wall
+    summary.total_seconds = time.perf_counter() - started
     return summary
 
 
@@ -396,7 +389,7 @@ def extract_chunk(piece: _Chunk, extractor: Extractor) -> _Chunk:
     """Extract a chunk of same-geometry scans (from :func:`chunk_scans`) at once: sets its
     ``table`` and the ``seconds`` it took."""
     first = piece.scans[0]
-    before, compiled_before = time.perf_counter(), kernel_seconds(this_thread=True)
+    before = time.perf_counter()
     piece.table = extractor.batch(
         np.stack([scan.ranges for scan in piece.scans]),
         first.angle_min,
@@ -404,8 +397,7 @@ def extract_chunk(piece: _Chunk, extractor: Extractor) -> _Chunk:
         first.range_min,
         first.range_max,
     )
-    compiled = kernel_seconds(this_thread=True) - compiled_before
-    piece.seconds = time.perf_counter() - before - compiled
+    piece.seconds = time.perf_counter() - before
     return piece
 
 

@@ -38,7 +38,6 @@ from typing import Any
 import numpy as np
 
 from scanlines.errors import ScanlinesError
-from scanlines.interrupts import kernel_calls
 from scanlines.scan import Scan
 from scanlines.sensor_mounting import estimate_mounting
 from scanlines.steps.noise import (
@@ -302,8 +301,7 @@ def estimate_profile(
 def scan_noise_line(scan: Scan) -> NoiseLine:
     """The range noise measured from ``scan`` alone (what an extractor without a sensor
     profile takes for that scan)."""
-    with kernel_calls:
-        return NoiseLine(*(float(v) for v in scan_noise(*_returns_of(scan))))
+    return NoiseLine(*(float(v) for v in scan_noise(*_returns_of(scan))))
 
 
 def _returns_of(scan: Scan):

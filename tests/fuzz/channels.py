@@ -207,7 +207,7 @@ def serve(connection: Connection, memory_limit: int, warm_up: str | None, workdi
     os.dup2(devnull, 1)
     os.dup2(devnull, 2)
     resource.setrlimit(resource.RLIMIT_AS, (memory_limit, memory_limit))
-    if warm_up is not None:  # load the compiled kernels before the first timed channel
+    if warm_up is not None:  # lazy imports done before the first timed channel
         run_channel("run", warm_up, workdir, None)
     connection.send("ready")
     while True:

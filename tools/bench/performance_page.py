@@ -45,9 +45,9 @@ def _machine_lines(result: BenchResult) -> list[str]:
         f"- OS: {m['platform']}",
         f"- Python: {m['python']}",
         f"- numpy: {m['numpy']}" + (f", BLAS: {m['blas']}" if m.get("blas") else ""),
-        f"- numba: {m.get('numba') or 'not installed (kernels run as plain Python)'}; "
-        "adaptive, iepf, pdbs and split_merge run as compiled kernels, line_tracking, "
-        "line_regression, ransac and hough as numpy",
+        f"- Compiled core: C++17 built at install by {m.get('core_compiler', 'unknown')}; "
+        "adaptive, iepf, pdbs, split_merge and partition run as compiled kernels, "
+        "line_tracking, line_regression, ransac and hough as numpy over the compiled steps",
         f"- OPENBLAS environment variables: {openblas}",
         f"- Other thread-count variables (OMP_NUM_THREADS, MKL_NUM_THREADS): {threads}",
         f"- Load average: {load}",

@@ -422,7 +422,7 @@ def _headline_section(result: ReproduceResult) -> str:
             "describing the room better. It needs no ground truth, which is why the matched "
             "scores of Tables 1 and 3 are the stronger evidence. The times compare our "
             "implementations, not the paper's MATLAB code: adaptive, iepf, pdbs and "
-            "split_merge run as compiled kernels (numba), the other methods as numpy (see "
+            "split_merge run as compiled kernels (C++), the other methods as numpy (see "
             "`docs/PERFORMANCE.md`).\n",
             *[_nonfinite_note(r) for r in result.real if _nonfinite_note(r)],
         ]

@@ -5,7 +5,7 @@ library and prints. Errors a user can cause (bad files, records, parameters)
 end with one line on stderr and exit code 2 (see :func:`scanlines.cli.common.guarded`);
 Ctrl-C and SIGTERM end with one line and exit code 130 or 143, at any moment,
 including while the command starts (:func:`main` takes the signals before it imports
-the commands and numba).
+the commands).
 """
 
 from __future__ import annotations
@@ -24,13 +24,12 @@ def main() -> None:
         handle_signals,
         ignore_signals,
         is_interrupt,
-        kernel_calls,
     )
 
     handle_signals()
     try:
-        with kernel_calls:  # a signal waits for the imports (numba, LLVM) to finish
-            from scanlines.cli.commands import app
+        from scanlines.cli.commands import app
+
         app()
     except SystemExit as done:
         ignore_signals()
@@ -53,9 +52,8 @@ INTERRUPTED, TERMINATED = 130, 143
 
 def _leave(code: int) -> None:
     """Exit at once after an interrupt, without the interpreter's finalisation: the
-    command has cleaned up (its writers deleted their temporary files), and finalising
-    after an interrupt that landed inside numba or LLVM has crashed (SIGSEGV) or been
-    reported as a second interrupt."""
+    command has cleaned up (its writers deleted their temporary files); finalising the
+    interpreter could only report the interrupt a second time (a daemon thread's, say)."""
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(code)

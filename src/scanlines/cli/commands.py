@@ -6,7 +6,7 @@ from typing import Annotated
 
 import typer
 
-from scanlines.cli import bench, compile, evaluate, extract, logs, maps, ros2, view
+from scanlines.cli import bench, evaluate, extract, logs, maps, ros2, view
 
 app = typer.Typer(
     name="scanlines",
@@ -45,6 +45,5 @@ logs.register(app)
 maps.register(app)
 evaluate.register(app)
 bench.register(app)
-compile.register(app)
 view.register(app)
 ros2.register(app)

@@ -2,13 +2,10 @@
 
 from __future__ import annotations
 
-import contextlib
 import functools
 import math
 import sys
-import threading
-import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated, Any, Literal, TypeVar
 
@@ -75,21 +72,19 @@ ProfileOption = Annotated[
 ]
 
 
-def guarded(command: F, *, show_compilation: bool = True) -> F:
+def guarded(command: F) -> F:
     """Turn an input error raised by ``command`` into one line on stderr and exit code 2,
     and Ctrl-C or SIGTERM into a one-line note and exit code 130 or 143 (the interrupt's
-    notes, if any, in brackets; outputs being written are deleted on the way out); show
-    kernel compilation on stderr while it runs (:class:`CompileProgress`)."""
+    notes, if any, in brackets; outputs being written are deleted on the way out)."""
 
     @functools.wraps(command)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
         try:
-            with compile_progress() if show_compilation else contextlib.nullcontext():
-                return command(*args, **kwargs)
+            return command(*args, **kwargs)
         except (ScanlinesError, OSError, EOFError) as error:
             print(f"scanlines: error: {error}", file=sys.stderr)
             raise typer.Exit(INPUT_ERROR) from None
-        except (KeyboardInterrupt, Terminated, SystemError) as stop:
+        except (KeyboardInterrupt, Terminated) as stop:
             if not is_interrupt(stop):
                 raise
             terminated = any_terminated(stop)
@@ -99,105 +94,6 @@ def guarded(command: F, *, show_compilation: bool = True) -> F:
             raise typer.Exit(TERMINATED if terminated else INTERRUPTED) from None
 
     return wrapper  # type: ignore[return-value]
-
-
-class CompileProgress:
-    """What the user sees on stderr while kernels compile (first use after an install).
-
-    A command compiles in bursts (the profile's kernels, then the method's, then the
-    writer's). Once a burst has gone on for :attr:`DELAY` seconds: on a terminal, a
-    spinner naming the kernel being compiled and the time so far; elsewhere (logs, CI)
-    one line, the first time only. When the command ends, one line says how many kernels
-    compiled in how long. Cache loads and short compilations say nothing.
-    """
-
-    DELAY = 1.0
-
-    def __init__(self) -> None:
-        self.kernels = 0
-        self.seconds = 0.0
-        self.announced = False
-        self.current = ""
-        self._burst_started: float | None = None
-        self._display: Any = None
-        self._task: Any = None
-        self._timer: threading.Timer | None = None
-        self._lock = threading.Lock()
-
-    def on_compile(self, name: str) -> None:
-        with self._lock:
-            self.kernels += 1
-            self.current = name
-            if self._burst_started is None:
-                self._burst_started = time.perf_counter()
-                self._timer = threading.Timer(self.DELAY, self._show)
-                self._timer.daemon = True
-                self._timer.start()
-            elif self._display is not None:
-                self._display.update(self._task, description=self._text())
-
-    def on_done(self) -> None:
-        """A burst of compilation ended."""
-        with self._lock:
-            if self._timer is not None:
-                self._timer.cancel()
-            if self._display is not None:
-                self._display.stop()
-                self._display = None
-            if self._burst_started is not None:
-                self.seconds += time.perf_counter() - self._burst_started
-                self._burst_started = None
-
-    def finish(self) -> None:
-        """The command ended: say what compiled, if the user was told it would."""
-        self.on_done()
-        if self.announced:
-            print(
-                f"scanlines: compiled {self.kernels} kernels in {self.seconds:.0f} s "
-                "(cached: later runs start at once)",
-                file=sys.stderr,
-            )
-
-    def _text(self) -> str:
-        return f"compiling kernels for first use (once per install): {self.current}"
-
-    def _show(self) -> None:
-        with self._lock:
-            if self._burst_started is None or self._display is not None:
-                return
-            if not sys.stderr.isatty():
-                if not self.announced:
-                    print(
-                        "scanlines: compiling kernels for first use (once per install; "
-                        "`scanlines compile` does it ahead of time)",
-                        file=sys.stderr,
-                        flush=True,
-                    )
-                self.announced = True
-                return
-            self.announced = True
-            from rich.console import Console
-            from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
-
-            columns = (SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn())
-            self._display = Progress(*columns, console=Console(stderr=True), transient=True)
-            self._task = self._display.add_task(self._text(), total=None)
-            self._display.start()
-
-
-@contextlib.contextmanager
-def compile_progress() -> Iterator[CompileProgress]:
-    """A context in which kernel compilation is shown on stderr (:class:`CompileProgress`)."""
-    from scanlines._compile_watch import watch_compilation
-
-    progress = CompileProgress()
-    with watch_compilation(progress.on_compile, progress.on_done):
-        try:
-            yield progress
-        except BaseException:  # an error or an interrupt says its own one line
-            progress.on_done()
-            raise
-    progress.finish()
 
 
 def jobs_option(jobs: int | None) -> int:
@@ -211,7 +107,7 @@ def jobs_option(jobs: int | None) -> int:
     return jobs
 
 
-#: The built-in methods, as choices of ``--method`` (named without importing numba).
+#: The built-in methods, as choices of ``--method`` (named without importing the methods).
 MethodName = Literal[BUILTIN_METHODS]  # type: ignore[valid-type]
 
 #: ``--method`` of a command that takes ``--config``: ``None`` when not given.
@@ -339,21 +235,3 @@ def with_mounting(log: Path, options: ReaderOptions, profile: Any) -> ReaderOpti
     if note:
         typer.echo(note, err=True)
     return options
-
-
-class _Clock:
-    seconds = 0.0
-
-
-@contextlib.contextmanager
-def compiled_for(method: str):
-    """A block that compiles (or loads) ``method``'s kernels, a second core helping
-    (:func:`scanlines.warm.compiling_from_both_ends`); ``.seconds`` says how long the
-    kernels took."""
-    from scanlines._jit import kernel_seconds
-    from scanlines.warm import compiling_from_both_ends
-
-    clock, before = _Clock(), kernel_seconds()
-    with compiling_from_both_ends(method):
-        yield clock
-    clock.seconds = kernel_seconds() - before

@@ -64,7 +64,7 @@ def _one_output_per_log(logs, out, output_format, method, preset, params, option
     """Each log to ``out/NAME.FORMAT``, one after the other, with ``jobs`` threads each."""
     import time
 
-    from scanlines.cli.common import compiled_for, profile_for_run, with_mounting
+    from scanlines.cli.common import profile_for_run, with_mounting
     from scanlines.errors import ScanlinesError
     from scanlines.extractor import Extractor
     from scanlines.fleet import FleetSummary, LogOutcome, expand_inputs, log_names
@@ -77,8 +77,7 @@ def _one_output_per_log(logs, out, output_format, method, preset, params, option
     paths = expand_inputs(logs)
     summary = FleetSummary(engine=f"one log at a time, {jobs} threads")
     started = time.perf_counter()
-    with compiled_for(method):
-        Extractor(method, preset, **params).warm_up()
+    Extractor(method, preset, **params)  # checks the parameters before any log is read
     for name, path in zip(log_names(paths), paths, strict=True):
         outcome = LogOutcome(name, str(path))
         try:

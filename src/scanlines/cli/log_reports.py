@@ -156,7 +156,6 @@ def _print_summary(summary, out, notes=()) -> None:
     table.add_row("corners / scan", f"{summary.per_scan(summary.corners):.2f}")
     table.add_row("extraction, us / scan", f"{summary.microseconds_per_scan:.0f}")
     table.add_row(f"end to end, scans / s ({summary.jobs} jobs)", f"{summary.scans_per_second:.0f}")
-    table.add_row("kernels compiled or loaded, s", f"{summary.compile_seconds:.1f}")
     table.add_row(
         "scan records skipped", _with_breakdown(summary.skipped_scans, summary.skip_reasons)
     )

@@ -25,7 +25,6 @@ from scanlines.cli.common import (
     ProfileOption,
     ScansOption,
     TopicOption,
-    compiled_for,
     guarded,
     jobs_option,
     method_options,
@@ -179,19 +178,16 @@ def run_command(
         fov, angle_convention, topic, angle_min, angle_increment, on_error, max_beams
     )
     jobs = jobs_option(jobs)
-    with compiled_for(method) as compiled:
-        profile = profile_for_run(log, options, selection, sensor_profile)
-        if frame == "world":
-            options = with_mounting(log, options, profile)
-        extractor = Extractor(method, preset, sensor_profile=profile, **params)
-        extractor.warm_up()  # before the progress bar: the displays do not overlap
+    profile = profile_for_run(log, options, selection, sensor_profile)
+    if frame == "world":
+        options = with_mounting(log, options, profile)
+    extractor = Extractor(method, preset, sensor_profile=profile, **params)
     # What is loaded now lives for the whole run: frozen, the collector no longer walks
     # it each time the chunks' records set off a collection.
     gc.freeze()
     with open_log(log, options=options) as reader:
         summary = _run_with_progress(reader, extractor, selection, out, frame, log, jobs, overwrite)
         notes = reader.notes
-    summary.compile_seconds += compiled.seconds
     _print_summary(summary, out, notes)
     if out is None:
         typer.echo(
@@ -353,16 +349,13 @@ def demo_command(
     from scanlines.viz.scans import plot_grid
 
     log = sample("intel")
-    with compiled_for("adaptive") as compiled:
-        extractor = Extractor(sensor_profile=profile_for_run(log, {}, slice(None), None))
-        extractor.warm_up()
+    extractor = Extractor(sensor_profile=profile_for_run(log, {}, slice(None), None))
     output.mkdir(parents=True, exist_ok=True)  # the demo's own folder, replaced each time
     jsonl = output / "intel.jsonl"
     with open_log(log) as reader:
         summary = run_log_to_file(
             reader, extractor, jsonl, input_name=log.name, jobs=default_jobs(), overwrite=True
         )
-        summary.compile_seconds += compiled.seconds
         panels = [
             (s, extractor(s), f"Intel #{i}")
             for i, s in select(reader.enumerate(), slice(0, None, 50))

@@ -134,7 +134,7 @@ def prepare(
     checked before the log is read for the map."""
     from itertools import islice
 
-    from scanlines.cli.common import compiled_for, method_options, profile_for_run
+    from scanlines.cli.common import method_options, profile_for_run
     from scanlines.extractor import Extractor
     from scanlines.io import open_log
     from scanlines.map.fusion import FusionSettings
@@ -148,10 +148,8 @@ def prepare(
     if isinstance(source, RegistrationOdometry):
         typer.echo(f"poses: {log.name} carries none; {source.name}", err=True)
     selection = slice(None) if scans is None else slice(0, scans)
-    with compiled_for(method):
-        profile = profile_for_run(log, options, selection, sensor_profile)
-        extractor = Extractor(method, preset, sensor_profile=profile, **params)
-        extractor.warm_up()
+    profile = profile_for_run(log, options, selection, sensor_profile)
+    extractor = Extractor(method, preset, sensor_profile=profile, **params)
     return {"extractor": extractor, "poses": source, "settings": settings, "profile": profile}
 
 

@@ -135,7 +135,6 @@ def _node(
     method, preset, params = chosen
     profile = None if sensor_profile is None else read_profile(sensor_profile)
     extractor = Extractor(method, preset, sensor_profile=profile, **params)
-    extractor.warm_up()  # compiled before the node subscribes: the first scan is not late
     node = LineNode(
         extractor,
         domain_id=domain_id,

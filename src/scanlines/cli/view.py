@@ -20,7 +20,6 @@ from scanlines.cli.common import (
     PresetOption,
     ProfileOption,
     TopicOption,
-    compiled_for,
     guarded,
     method_options,
     reader_options,
@@ -70,7 +69,7 @@ def view_command(
     method, preset, params = method_options(method, preset, param, config)
     profile = None
     if sensor_profile is not None:
-        from scanlines.sensor_profile import read_profile  # loads numba: only when asked
+        from scanlines.sensor_profile import read_profile
 
         profile = read_profile(sensor_profile)
     options = reader_options(
@@ -82,13 +81,13 @@ def view_command(
         store.close()
         raise LogFormatError(store.error or f"{log}: no scan to show")
     # The page is served (and the first scan's returns drawn) while the configuration is
-    # checked and the kernels load: both need numba, which takes most of a second to import.
+    # checked and the sensor profile measured.
     session = ViewerSession(store, profile, config_later=True)
     server = ViewerServer(session, host, port)
     typer.echo(f"scanlines view: {log.name} on {server.url} (Ctrl-C stops)")
     preparing = _Preparation(session, server, (method, preset, params), not no_browser)
     try:
-        server.run(prepare=False)  # _Preparation prepares, showing what compiles
+        server.run(prepare=False)  # _Preparation prepares
     finally:
         store.close()
     if preparing.error is not None:
@@ -97,9 +96,8 @@ def view_command(
 
 class _Preparation:
     """In the background, while the page is served: check the configuration (a bad one
-    stops the server, and the command fails with it), open the browser, measure the sensor
-    profile and compile (or load) the chosen method's kernels; once the first frame is
-    out, the other methods' too, so that choosing one in the page does not wait for it."""
+    stops the server, and the command fails with it), open the browser and measure the
+    sensor profile."""
 
     def __init__(self, session, server, configuration, open_browser: bool) -> None:
         import threading
@@ -111,8 +109,6 @@ class _Preparation:
 
     def _work(self) -> None:
         from scanlines.config import ExtractionConfig
-        from scanlines.extractor import method_names
-        from scanlines.warm import warm_method
 
         method, preset, params = self._configuration
         try:
@@ -126,12 +122,7 @@ class _Preparation:
         self._session.configure(initial)
         if self._open_browser:
             _open_browser(self._server.url)
-        with compiled_for(method):
-            self._session.prepare()
-        self._session.first_frame.wait(FIRST_SCAN_SECONDS)  # loading kernels blocks others
-        for name in method_names():
-            if name != method:
-                warm_method(name)
+        self._session.prepare()
 
 
 def _open_browser(url: str) -> None:

@@ -1,8 +1,8 @@
 """What a user feels besides one kernel call: ``scanlines bench``'s pipeline section.
 
-* **Cold start**: a fresh process with an empty kernel cache imports scanlines and makes
-  its first extraction (compiling), then a second fresh process does the same with the
-  cache filled (loading). Each is timed inside the child, import and first call apart.
+* **Cold start**: a fresh process imports scanlines and makes its first extraction with
+  the method (the kernels are compiled at install: nothing compiles here), then its first
+  with every other method; timed inside the child, import and first calls apart.
 * **Stages of** ``scanlines run`` **on a log**, per scan: reading and parsing the log,
   extraction of whole chunks (:meth:`~scanlines.Extractor.batch`), the single-call loop
   on the same scans, encoding each text format, and end to end (read, extract, write,
@@ -13,7 +13,7 @@
   load average before and after (the machine may be shared) and the cores other processes
   kept busy during a second of sleep just before (the load average also counts this
   process's own work of the minutes before).
-* **The floor**: one compiled pass over the returns of the same stack (the sum of their
+* **The floor**: one numpy pass over the returns of the same stack (the sum of their
   ``x`` and ``y``), against which the extraction's cost per scan is a ratio.
 
 Every figure of one section is measured in the same process, close in time, so that the
@@ -44,52 +44,41 @@ from scanlines.runner import CHUNK_SCANS
 __all__ = ["ColdStart", "PipelineResult", "cold_start", "measure_pipeline", "one_pass"]
 
 _CHILD = """
-import contextlib, json, sys, time
+import json, sys, time
 t0 = time.perf_counter()
-from scanlines import Extractor
-from scanlines._jit import kernel_seconds
-from scanlines.warm import compiling_from_both_ends
+import numpy as np
+from scanlines import Extractor, Scan, method_names
 t1 = time.perf_counter()
-with compiling_from_both_ends(sys.argv[1]) if sys.argv[2] == "both" else contextlib.nullcontext():
-    Extractor(sys.argv[1]).warm_up()
+bearings = np.radians(np.arange(-90.0, 90.5, 0.5))
+scan = Scan(np.minimum(3.0 / np.abs(np.cos(bearings)), 2.0 / np.abs(np.sin(bearings))),
+            bearings[0], np.radians(0.5), range_max=30.0)
+Extractor(sys.argv[1])(scan)
 t2 = time.perf_counter()
-print(json.dumps({"import_s": t1 - t0, "first_call_s": t2 - t1, "kernel_s": kernel_seconds()}))
+for name in method_names():
+    Extractor(name)(scan)
+t3 = time.perf_counter()
+print(json.dumps({"import_s": t1 - t0, "first_call_s": t2 - t1, "every_method_s": t3 - t2}))
 """
 
 
 @dataclass
 class ColdStart:
-    """Seconds to import scanlines and to make the first extraction of ``method`` in a
-    fresh process: with an empty kernel cache, compiling on one core and with a second
-    core compiling the method's stages (what the commands do), and with the cache filled
-    (loading)."""
+    """Seconds to import scanlines, to make the first extraction of ``method`` (a 361-beam
+    scan) in a fresh process, and then the first of every method."""
 
     method: str
     import_s: float
-    compile_s: float
-    compile_two_cores_s: float
-    cache_load_s: float
+    first_call_s: float
+    every_method_s: float
 
 
 def cold_start(method: str = DEFAULT_METHOD) -> ColdStart:
-    """:class:`ColdStart` of ``method``, measured in three child processes."""
-    with tempfile.TemporaryDirectory(prefix="scanlines-cold-") as cache:
-        one = _child_timings(method, cache, "one")
-    with tempfile.TemporaryDirectory(prefix="scanlines-cold-") as cache:
-        two = _child_timings(method, cache, "both")
-        warm = _child_timings(method, cache, "one")
-    return ColdStart(
-        method, warm["import_s"], one["first_call_s"], two["first_call_s"], warm["first_call_s"]
-    )
-
-
-def _child_timings(method: str, cache: str, cores: str) -> dict[str, float]:
-    env = {**os.environ, "NUMBA_CACHE_DIR": cache}
+    """:class:`ColdStart` of ``method``, measured in a child process."""
     done = subprocess.run(
-        [sys.executable, "-c", _CHILD, method, cores],
-        env=env, capture_output=True, text=True, check=True,
-    )  # fmt: skip
-    return json.loads(done.stdout.strip().splitlines()[-1])
+        [sys.executable, "-c", _CHILD, method], capture_output=True, text=True, check=True
+    )
+    timings = json.loads(done.stdout.strip().splitlines()[-1])
+    return ColdStart(method, **timings)
 
 
 def one_pass(stack, valid, cos, sin):
@@ -166,15 +155,14 @@ class PipelineResult:
             tables.append(
                 TableData(
                     f"cold start of {c.method} in a fresh process",
-                    ("what", "s"),
+                    ("what", "ms"),
                     (
-                        ("import scanlines", f"{c.import_s:.2f}"),
-                        ("first extraction, empty cache, one core", f"{c.compile_s:.1f}"),
+                        ("import scanlines", f"{1e3 * c.import_s:.1f}"),
                         (
-                            "first extraction, empty cache, a second core compiling stages",
-                            f"{c.compile_two_cores_s:.1f}",
+                            f"first extraction ({c.method}, 361 beams)",
+                            f"{1e3 * c.first_call_s:.1f}",
                         ),
-                        ("first extraction, cache filled (loading)", f"{c.cache_load_s:.2f}"),
+                        ("then the first of every method", f"{1e3 * c.every_method_s:.1f}"),
                     ),
                 )
             )
@@ -199,7 +187,6 @@ def measure_pipeline(
 
     log = Path(log)
     extractor = Extractor(method, sensor_profile=log_profile(log, {}))
-    extractor.warm_up()
     with open_log(log) as reader:
         scans = list(itertools.islice(reader, max_scans))
     selection = slice(0, len(scans))

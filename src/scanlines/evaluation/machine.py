@@ -1,6 +1,7 @@
 """The machine a time was measured on, as the pages state it.
 
-:func:`machine_info` describes the processor, cores, Python, numpy, BLAS, numba and the
+:func:`machine_info` describes the processor, cores, Python, numpy, BLAS, the compiler
+of the compiled core and the
 thread-count environment, with the load average before the run; ``bench`` and
 ``reproduce`` print it next to every time they report.
 """
@@ -73,7 +74,7 @@ def machine_info() -> dict[str, Any]:
         "platform": platform.platform(),
         "python": f"{platform.python_implementation()} {platform.python_version()}",
         "numpy": np.__version__,
-        "numba": _numba_version(),
+        "core_compiler": _core_compiler(),
         "blas": _blas(),
         "openblas_env": {k: os.environ[k] for k in thread_vars if k.startswith("OPENBLAS")},
         "thread_env": {k: os.environ[k] for k in thread_vars if not k.startswith("OPENBLAS")},
@@ -106,13 +107,11 @@ def _cpu_from_proc() -> tuple[str | None, int | None]:
     return model, (len(cores) or None)
 
 
-def _numba_version() -> str | None:
-    """The version of numba, which compiles the kernels; ``None`` when it is not installed."""
-    try:
-        import numba
-    except ImportError:
-        return None
-    return numba.__version__
+def _core_compiler() -> str:
+    """The compiler that built the compiled core (:mod:`scanlines._core`) at install."""
+    from scanlines._core import COMPILER
+
+    return COMPILER
 
 
 def _blas() -> str | None:

@@ -68,7 +68,6 @@ def truth_extraction(scan: Scan, truth: Truth, *, range_sigma: float = 0.0) -> E
         np.union1d(truth.outliers, truth.mixed_pixels).astype(np.int64),
     )
     sigma = np.full(r.size, float(range_sigma))
-    arrays = assemble(
-        returns, TLS, a.astype(np.int64), b, scan.angle_min, sigma, events, (n, is_full_circle(n, scan.angle_increment)),
-    )  # fmt: skip
+    shape = (n, is_full_circle(n, scan.angle_increment))
+    arrays = assemble(returns, TLS, a.astype(np.int64), b, scan.angle_min, sigma, events, shape)
     return to_extraction(arrays, TRUTH, {"range_sigma": range_sigma})

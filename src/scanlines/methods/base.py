@@ -46,6 +46,7 @@ __all__ = [
 NO_CLUSTERING = "none"
 """The ``breakpoints`` value of a method that works on the whole scan."""
 
+
 class Method:
     """An extractor configured with resolved parameters (see the module docstring).
 

@@ -110,7 +110,7 @@ def create_app(session: ViewerSession, hosts: frozenset[str] | None = None) -> A
     async def page(request: Request) -> Response:
         return FileResponse(str(STATIC / "index.html"), headers={"Cache-Control": "no-store"})
 
-    # Off the event loop: these wait for the configuration and for numba to load, while
+    # Off the event loop: these wait for the configuration and the sensor profile, while
     # the first frame's returns are served.
     async def log(request: Request) -> Response:
         return JSON(await run_in_threadpool(session.log))

@@ -22,8 +22,8 @@ from scanlines.config import ExtractionConfig
 from scanlines.errors import ParameterError, ScanlinesError, one_line
 from scanlines.viewer.scan_store import ScanStore
 
-if TYPE_CHECKING:  # the extraction modules load numba: imported on first use, so that
-    # the page is served (and the first scan's returns drawn) while they load
+if TYPE_CHECKING:  # the extraction modules: imported on first use, so that the page is
+    # served (and the first scan's returns drawn) while they load
     from scanlines.extractor import Extractor
     from scanlines.scan import Scan
     from scanlines.sensor_profile import SensorProfile
@@ -74,8 +74,7 @@ class ViewerSession:
         The configuration the page opens with (default: the default method).
     config_later:
         The configuration is given later, by :meth:`configure` (``scanlines view`` serves
-        the page while it checks the configuration, which loads numba); what needs it
-        waits for it.
+        the page while it checks the configuration); what needs it waits for it.
     """
 
     def __init__(

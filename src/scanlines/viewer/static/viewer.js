@@ -651,7 +651,7 @@ async function watchLog() {
   $("#world-radio").disabled = !state.log.poses;
   showPoseNote();
   const notes = [`${state.log.format} log`, reading ? "reading…" : `${state.log.scans.toLocaleString()} scans`];
-  if (!state.log.ready) notes.push("preparing the extractor (the first time after an install, compiling its kernels takes a minute or two)");
+  if (!state.log.ready) notes.push("preparing the extractor (measuring the sensor profile)");
   else if (state.log.profile) notes.push(`sensor profile ${state.log.profile}`);
   if (state.log.error) notes.push(`reading stopped: ${state.log.error}`);
   $("#log-state").textContent = notes.join(", ");
