@@ -10,19 +10,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from scanlines import Scan, extract
-from scanlines._core import (
-    best_level,
-    extend_sweep,
-    in_between_clusters,
-    isolated_noise,
-    level_corners,
-    literal_noise,
-    start_sweep,
-    sweep_decided,
-    sweep_levels,
-    threshold_grid,
-    window_means,
-)
 from scanlines.evaluation.scenes import make_scene
 from scanlines.steps.breakpoints import (
     MAX_BRIDGED_SHARE,
@@ -34,6 +21,7 @@ from scanlines.steps.breakpoints import (
 )
 from scanlines.steps.clusters import break_beams, cluster_bounds
 from scanlines.steps.corners import peak_positions, slope_scores, turn_scores
+from scanlines.steps.denoise import in_between_clusters, isolated_noise, literal_noise, window_means
 from scanlines.steps.fit import (
     PAPER,
     TLS,
@@ -50,7 +38,17 @@ from scanlines.steps.noise import (
     scan_noise,
 )
 from scanlines.steps.returns import Returns, beam_gaps
-from scanlines.steps.select import BIC, SSE
+from scanlines.steps.select import (
+    BIC,
+    SSE,
+    best_level,
+    extend_sweep,
+    level_corners,
+    start_sweep,
+    sweep_decided,
+    sweep_levels,
+    threshold_grid,
+)
 from scenes import cast, returns_of, scan_of, square_room
 
 

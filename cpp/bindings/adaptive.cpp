@@ -1,4 +1,7 @@
 #include <nanobind/stl/pair.h>
+#include <nanobind/stl/tuple.h>
+
+#include <tuple>
 
 #include "arrays.hpp"
 #include "scanlines/methods/adaptive.hpp"
@@ -9,40 +12,22 @@ namespace scanlines::bind {
 
 namespace {
 
-Reals reals(const In<double, nb::ndim<1>>& array) {
-    return Reals(array.data(), array.data() + array.shape(0));
+using InFlags = In<bool, nb::ndim<1>>;
+
+// The tuples the steps' Python side builds (scanlines.steps: Returns, RunCost with its
+// Moments), taken as they are.
+using ReturnsTuple = std::tuple<InInts, InReals, InReals, InReals>;
+using CostTuple =
+    std::tuple<Index, std::tuple<In<double, nb::ndim<2>>, double, double>, InReals, InReals>;
+
+Returns returns_tuple_of(const ReturnsTuple& t) {
+    return returns_of(std::get<0>(t), std::get<1>(t), std::get<2>(t), std::get<3>(t));
 }
 
-// A one-dimensional array of any sequence numpy takes, copied.
-template <typename T>
-std::vector<T> values_of(nb::handle sequence) {
-    auto array = nb::cast<In<T, nb::ndim<1>>>(sequence);
-    return std::vector<T>(array.data(), array.data() + array.shape(0));
-}
-
-// The tuples the steps' tests build in Python (scanlines.steps: Returns, BreakpointRule,
-// RunCost), read by position.
-Returns returns_of(nb::handle t) {
-    return {values_of<Index>(t[0]), values_of<double>(t[1]), values_of<double>(t[2]),
-            values_of<double>(t[3])};
-}
-
-BreakpointRule rule_of(nb::handle t) {
-    nb::handle noise = t[4];
-    return {nb::cast<Index>(t[0]),          nb::cast<double>(t[1]),
-            nb::cast<double>(t[2]),         nb::cast<double>(t[3]),
-            {nb::cast<double>(noise[0]), nb::cast<double>(noise[1])},
-            nb::cast<double>(t[5]),         nb::cast<double>(t[6]),
-            nb::cast<double>(t[7])};
-}
-
-RunCost cost_of(nb::handle t) {
-    nb::handle moments = t[1];
-    auto table = nb::cast<In<double, nb::ndim<2>>>(moments[0]);
-    Moments m{Reals(table.data(), table.data() + table.shape(0) * table.shape(1)),
-              static_cast<Index>(table.shape(1)), nb::cast<double>(moments[1]),
-              nb::cast<double>(moments[2])};
-    return {nb::cast<Index>(t[0]), std::move(m), values_of<double>(t[2]), values_of<double>(t[3])};
+// A view of the caller's moments: valid while the call's arguments are.
+RunCost cost_of(const CostTuple& t) {
+    const auto& [table, ox, oy] = std::get<1>(t);
+    return run_cost_of(std::get<0>(t), table, ox, oy, std::get<2>(t), std::get<3>(t));
 }
 
 template <typename T>
@@ -87,45 +72,51 @@ AdaptiveSettings adaptive_settings(const nb::dict& d) {
 
 // The sweep and criterion (scanlines/steps/select.py), for the tests of the steps.
 void bind_select(nb::module_& m) {
-    nb::class_<Sweep>(m, "Sweep", "A threshold sweep in progress (scanlines.steps.select).")
-        .def_prop_ro("ranked", [](const Sweep& s) { return copy_to_numpy(s.ranked); })
-        .def_prop_ro("ranked_score", [](const Sweep& s) { return copy_to_numpy(s.ranked_score); })
-        .def_ro("useful", &Sweep::useful)
-        .def_prop_ro("accepted", [](const Sweep& s) { return flags_to_numpy(s.accepted); })
-        .def_prop_ro("parent_a", [](const Sweep& s) { return copy_to_numpy(s.parent_a); })
-        .def_prop_ro("parent_b", [](const Sweep& s) { return copy_to_numpy(s.parent_b); })
-        .def_prop_ro("sse", [](const Sweep& s) { return copy_to_numpy(s.sse); })
-        .def_prop_ro("segments", [](const Sweep& s) { return copy_to_numpy(s.segments); });
+    // A process may import the module twice (two copies of the package side by side,
+    // tools/benchmarks/compare_versions.py): the type is registered once.
+    if (nb::type<Sweep>().is_valid()) {
+        m.attr("Sweep") = nb::type<Sweep>();
+    } else {
+        nb::class_<Sweep>(m, "Sweep", "A threshold sweep in progress (scanlines.steps.select).")
+            .def_prop_ro("ranked", [](const Sweep& s) { return copy_to_numpy(s.ranked); })
+            .def_prop_ro("ranked_score",
+                         [](const Sweep& s) { return copy_to_numpy(s.ranked_score); })
+            .def_ro("useful", &Sweep::useful)
+            .def_prop_ro("accepted", [](const Sweep& s) { return flags_to_numpy(s.accepted); })
+            .def_prop_ro("parent_a", [](const Sweep& s) { return copy_to_numpy(s.parent_a); })
+            .def_prop_ro("parent_b", [](const Sweep& s) { return copy_to_numpy(s.parent_b); })
+            .def_prop_ro("sse", [](const Sweep& s) { return copy_to_numpy(s.sse); })
+            .def_prop_ro("segments", [](const Sweep& s) { return copy_to_numpy(s.segments); });
+    }
     m.def(
         "start_sweep",
-        [](nb::handle cost, nb::handle start, nb::handle end, nb::handle candidates,
-           nb::handle scores, nb::handle grid, bool use_grid, Index max_evaluations) {
-            return start_sweep(cost_of(cost), values_of<Index>(start), values_of<Index>(end),
-                               values_of<Index>(candidates), values_of<double>(scores),
-                               values_of<double>(grid), use_grid, max_evaluations);
+        [](const CostTuple& cost, const InInts& start, const InInts& end, const InInts& candidates,
+           const InReals& scores, const InReals& grid, bool use_grid, Index max_evaluations) {
+            return start_sweep(cost_of(cost), vector_of(start), vector_of(end),
+                               vector_of(candidates), vector_of(scores), vector_of(grid), use_grid,
+                               max_evaluations);
         },
         "A sweep of the clusters [start, end] with no candidate inserted yet.");
     m.def(
         "extend_sweep",
-        [](Sweep& sweep, nb::handle cost, bool shared, Index done, Index upto) {
+        [](Sweep& sweep, const CostTuple& cost, bool shared, Index done, Index upto) {
             return extend_sweep(sweep, cost_of(cost), shared, done, upto);
         },
         "Insert candidates done .. upto - 1 of the sweep (in place); returns upto.");
     m.def(
         "sweep_decided",
-        [](Sweep& sweep, nb::handle cost, bool shared, Index done, Index n_points, double sigma,
-           double penalty) {
+        [](Sweep& sweep, const CostTuple& cost, bool shared, Index done, Index n_points,
+           double sigma, double penalty) {
             return sweep_decided(sweep, cost_of(cost), shared, done, n_points, sigma, penalty);
         },
         "Extend the sweep until the bic choice is certain: (best level, inserted).");
     m.def(
         "sweep_levels",
-        [](nb::handle cost, nb::handle start, nb::handle end, nb::handle candidates,
-           nb::handle scores, nb::handle grid, bool use_grid, Index max_evaluations,
+        [](const CostTuple& cost, const InInts& start, const InInts& end, const InInts& candidates,
+           const InReals& scores, const InReals& grid, bool use_grid, Index max_evaluations,
            bool shared) {
-            Levels out = sweep_levels(cost_of(cost), values_of<Index>(start),
-                                      values_of<Index>(end), values_of<Index>(candidates),
-                                      values_of<double>(scores), values_of<double>(grid),
+            Levels out = sweep_levels(cost_of(cost), vector_of(start), vector_of(end),
+                                      vector_of(candidates), vector_of(scores), vector_of(grid),
                                       use_grid, max_evaluations, shared);
             return nb::make_tuple(to_numpy(std::move(out.ranked)), flags_to_numpy(out.accepted),
                                   to_numpy(std::move(out.sse)), to_numpy(std::move(out.segments)),
@@ -135,65 +126,69 @@ void bind_select(nb::module_& m) {
         "Every cut a threshold makes: (ranked, accepted, sse, segments, thresholds, levels).");
     m.def(
         "best_level",
-        [](Index criterion, nb::handle sse, nb::handle segments, nb::handle levels,
+        [](Index criterion, const InReals& sse, const InInts& segments, const InInts& levels,
            Index n_points, double sigma, double penalty) {
-            auto [best, values] =
-                best_level(criterion, values_of<double>(sse), values_of<Index>(segments),
-                           values_of<Index>(levels), n_points, sigma, penalty);
+            auto [best, values] = best_level(criterion, vector_of(sse), vector_of(segments),
+                                             vector_of(levels), n_points, sigma, penalty);
             return nb::make_tuple(best, to_numpy(std::move(values)));
         },
         "Index of the best tried threshold (the first on a tie) and every criterion value.");
     m.def(
         "level_corners",
-        [](nb::handle ranked, nb::handle accepted, Index level) {
-            Flags flags;
-            for (bool f : values_of<bool>(accepted)) flags.push_back(f);
-            return to_numpy(level_corners(values_of<Index>(ranked), flags, level));
+        [](const InInts& ranked, const InFlags& accepted, Index level) {
+            return to_numpy(level_corners(vector_of(ranked), flags_of(accepted), level));
         },
         "Sorted positions of the accepted candidates among the level best.");
 }
 
 // Denoising (scanlines/steps/denoise.py), for the tests of the steps.
 void bind_denoise(nb::module_& m) {
-    auto flags = [](nb::handle h) {
-        Flags out;
-        for (bool f : values_of<bool>(h)) out.push_back(f);
-        return out;
-    };
     m.def(
         "literal_noise",
-        [](nb::handle d) { return flags_to_numpy(literal_noise(values_of<double>(d))); },
+        [](const InReals& d) { return flags_to_numpy(literal_noise(vector_of(d))); },
         "Step 2 as written, on neighbour distances d (length n - 1): a mask of n points.");
     m.def(
         "isolated_noise",
-        [flags](nb::handle returns, nb::handle gap, double step, nb::handle rule,
-                nb::handle breaks) {
-            return flags_to_numpy(isolated_noise(returns_of(returns), values_of<Index>(gap), step,
-                                                 rule_of(rule), flags(breaks)));
+        [](const ReturnsTuple& returns, const InInts& gap, double step, nb::handle rule,
+           const InFlags& breaks) {
+            return flags_to_numpy(isolated_noise(returns_tuple_of(returns), vector_of(gap), step,
+                                                 breakpoint_rule_of(rule), flags_of(breaks)));
         },
         "Points cut off from both neighbours that are themselves continuous (a spike).");
     m.def(
         "window_means",
-        [flags](nb::handle x, nb::handle y, nb::handle noise, Index window, nb::handle breaks) {
-            auto [mx, my] = window_means(values_of<double>(x), values_of<double>(y), flags(noise),
-                                         window, flags(breaks));
+        [](const InReals& x, const InReals& y, const InFlags& noise, Index window,
+           const InFlags& breaks) {
+            auto [mx, my] =
+                window_means(vector_of(x), vector_of(y), flags_of(noise), window, flags_of(breaks));
             return nb::make_tuple(to_numpy(std::move(mx)), to_numpy(std::move(my)));
         },
         "Step 3: noise point i and its neighbours become the mean of window points.");
     m.def(
         "small_clusters",
-        [flags](nb::handle breaks, Index min_points, bool seam_joined) {
-            return flags_to_numpy(small_clusters(flags(breaks), min_points, seam_joined));
+        [](const InFlags& breaks, Index min_points, bool seam_joined) {
+            return flags_to_numpy(small_clusters(flags_of(breaks), min_points, seam_joined));
         },
         "Mask of the points of clusters with fewer than min_points returns.");
     m.def(
         "in_between_clusters",
-        [flags](nb::handle r, nb::handle gap, nb::handle breaks, nb::handle small,
-                double margin) {
-            return flags_to_numpy(in_between_clusters(values_of<double>(r), values_of<Index>(gap),
-                                                      flags(breaks), flags(small), margin));
+        [](const InReals& r, const InInts& gap, const InFlags& breaks, const InFlags& small,
+           double margin) {
+            return flags_to_numpy(in_between_clusters(vector_of(r), vector_of(gap),
+                                                      flags_of(breaks), flags_of(small), margin));
         },
         "Mask of the returns of two-return clusters that lie in depth between their neighbours.");
+    m.def(
+        "denoise",
+        [](const ReturnsTuple& returns, Index n_beams, double step, bool full_circle,
+           nb::handle rule, Index kind, Index window, Index min_cluster_points, double margin) {
+            Denoised out = denoise(returns_tuple_of(returns), n_beams, step, full_circle,
+                                   breakpoint_rule_of(rule), kind, window, min_cluster_points,
+                                   margin);
+            return nb::make_tuple(returns_to_numpy(std::move(out.returns)),
+                                  to_numpy(std::move(out.outliers)), flags_to_numpy(out.breaks));
+        },
+        "Steps 2-3 by kind: (returns, beams dropped as noise, break flags or empty).");
 }
 
 }  // namespace
@@ -204,10 +199,10 @@ void bind_adaptive(nb::module_& m) {
         [](const In<double, nb::ndim<2>>& ranges, const In<bool, nb::ndim<2>>& valid,
            const In<double, nb::ndim<1>>& cos, const In<double, nb::ndim<1>>& sin, double step,
            bool full_circle, double angle_min, std::pair<double, double> noise,
-           const nb::dict& settings, const In<double, nb::ndim<1>>& grid) {
+           const nb::dict& settings, const InReals& grid) {
             Stack stack = stack_of(ranges, valid, cos, sin, step, full_circle, angle_min, noise);
             AdaptiveSettings s = adaptive_settings(settings);
-            Reals thresholds = reals(grid);
+            Reals thresholds = vector_of(grid);
             Table table;
             {
                 nb::gil_scoped_release unlocked;
@@ -216,6 +211,26 @@ void bind_adaptive(nb::module_& m) {
             return table_to_numpy(std::move(table));
         },
         "The adaptive method on each row of a stack of scans: one flat table.");
+    m.def(
+        "adaptive_stage_seconds",
+        [](const In<double, nb::ndim<2>>& ranges, const In<bool, nb::ndim<2>>& valid,
+           const In<double, nb::ndim<1>>& cos, const In<double, nb::ndim<1>>& sin, double step,
+           bool full_circle, double angle_min, std::pair<double, double> noise,
+           const nb::dict& settings, const InReals& grid) {
+            Stack stack = stack_of(ranges, valid, cos, sin, step, full_circle, angle_min, noise);
+            AdaptiveSettings s = adaptive_settings(settings);
+            Reals thresholds = vector_of(grid);
+            StageSeconds seconds{};
+            {
+                nb::gil_scoped_release unlocked;
+                adaptive_stack(stack, s, thresholds, &seconds);
+            }
+            nb::dict out;
+            for (int k = 0; k < N_ADAPTIVE_STAGES; ++k) out[ADAPTIVE_STAGE_NAMES[k]] = seconds[k];
+            return out;
+        },
+        "adaptive_stack's arguments: the seconds each stage of the method took over the stack, "
+        "by name, in order.");
     m.def(
         "threshold_grid",
         [](double low, double high, double step, Index max_evaluations) {

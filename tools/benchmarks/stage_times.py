@@ -1,35 +1,30 @@
-"""Where the adaptive kernel spends its time: each stage timed on its own, one simulated scan.
+"""Where the adaptive kernel spends its time: each stage timed inside it, one simulated scan.
 
     python tools/benchmarks/stage_times.py [--sensor tim571] [--seed 3] [--repeats 300]
 
-Each stage is called from Python with the inputs the full kernel would give it, so every line
-includes about 1 us of call overhead and the boxing of its outputs; the stages add up to a
-little more than the kernel. Times are taken by the package's one timing rule
-(:func:`scanlines.evaluation.timing.time_calls`): the median of ``repeats`` samples per stage,
-passes interleaved between stages. Speed is measured here, never asserted in tests.
+The kernel is C++ (``cpp/scanlines/methods/adaptive.cpp``): its stages are not callable on
+their own, so ``scanlines._core.adaptive_stage_seconds`` runs the whole kernel and times
+each stage inside it with a steady clock (about 50 ns of clock reads per stage). The stages
+add up to the kernel without its call overhead (the conversion of the arguments and the
+boxing of the table). The whole call and the whole kernel are timed from Python by the
+package's one timing rule (:func:`scanlines.evaluation.timing.time_calls`); every row is the
+median of ``repeats`` samples, passes interleaved. Speed is measured here, never asserted in
+tests.
 """
 
 from __future__ import annotations
 
 import argparse
-import math
 
 import numpy as np
 
-from scanlines import Extractor
+from scanlines import Extractor, _core
 from scanlines.evaluation.timing import time_calls
-from scanlines.methods import adaptive as ad
-from scanlines.methods.base import as_record
+from scanlines.scan import is_full_circle
 from scanlines.sim import random_scene
-from scanlines.steps import fit
-from scanlines.steps.assemble import assemble
-from scanlines.steps.clusters import cluster_returns
-from scanlines.steps.corners import turn_window
-from scanlines.steps.denoise import denoise
-from scanlines.steps.events import junction_events
-from scanlines.steps.noise import UNKNOWN_NOISE, noise_at, return_sigmas, scan_noise
-from scanlines.steps.returns import beam_gaps, valid_returns
-from scanlines.steps.split import cut_at, refine_cuts
+
+WHOLE = "whole kernel"
+STAGES = "stages"
 
 
 def main() -> None:
@@ -40,90 +35,43 @@ def main() -> None:
     args = parser.parse_args()
     scan = random_scene(args.seed, args.sensor).scan(args.seed).scan
     extractor = Extractor()
-    settings = ad.Adaptive.settings_of(extractor.params)
-    record, grid = as_record(settings), np.zeros(0)
-    s = record[0]
+    method = extractor._method
+    step = abs(scan.angle_increment)
     local = scan.angle_increment * np.arange(len(scan))
-    cos, sin = np.cos(local), np.sin(local)
-    step, n_beams = abs(scan.angle_increment), len(scan)
-    returns = valid_returns(scan.ranges, scan.valid, cos, sin)
-    gap = beam_gaps(returns.index, n_beams)
-    noise = scan_noise(returns, gap)
-    sigma = noise_at(noise, np.median(returns.r))
-    rule = ad.breakpoint_rule(s, noise, step)
-    margin = settings["noise_k"] * math.sqrt(2.0) * sigma
-    window = turn_window(returns.x, returns.y, returns.index, sigma)
-    no_breaks = np.zeros(0, np.bool_)
-    clustered = cluster_returns(returns, n_beams, step, False, rule, window, no_breaks)
-    start, end, breakpoints = clustered[1], clustered[2], clustered[3]
-    moments = fit.prefix_moments(returns.x, returns.y)
-    sigmas = return_sigmas(returns.r, noise)
-    cost = ad.run_cost_of(s, moments, returns, sigmas)
-    scores = ad.corner_scores(
-        returns, n_beams, step, moments, start, end, window, settings["corner_score"]
+    arguments = (
+        np.ascontiguousarray(scan.ranges, dtype=np.float64)[np.newaxis],
+        np.ascontiguousarray(scan.valid, dtype=np.bool_)[np.newaxis],
+        np.cos(local),
+        np.sin(local),
+        step,
+        is_full_circle(len(scan), scan.angle_increment),
+        scan.angle_min,
+        tuple(method.noise),
+        *method.arguments,
     )
-    corners, scale = ad.choose_corners(cost, start, end, scores, True, s, grid)
-    a, b, owner = ad.segments(returns, cost, start, end, corners, scale * scale, s, noise, sigmas)
-    turn_sigmas = ad.direction_sigmas(returns, moments, a, b, sigmas)
-    events, scan_shape = (breakpoints, corners, breakpoints), (n_beams, False)
-    cut = cut_at(start, end, corners, False)
+    stage_seconds: list[dict[str, float]] = []
+
+    def stages() -> None:
+        stage_seconds.append(_core.adaptive_stage_seconds(*arguments))
+
     rows = {
         "whole call (Extractor)": lambda: extractor(scan),
-        "whole kernel": lambda: ad.adaptive_scan(
-            scan.ranges,
-            scan.valid,
-            cos,
-            sin,
-            step,
-            False,
-            scan.angle_min,
-            UNKNOWN_NOISE,
-            record,
-            grid,
-        ),
-        "noise estimate": lambda: scan_noise(returns, gap),
-        "denoise (2 break passes)": lambda: denoise(
-            returns,
-            n_beams,
-            step,
-            False,
-            rule,
-            settings["denoise"],
-            settings["window"],
-            settings["min_cluster_points"],
-            margin,
-        ),
-        "turn window (median)": lambda: turn_window(returns.x, returns.y, returns.index, sigma),
-        "clustering": lambda: cluster_returns(
-            returns, n_beams, step, False, rule, window, no_breaks
-        ),
-        "running sums": lambda: fit.prefix_moments(returns.x, returns.y),
-        "turn-angle scores": lambda: ad.corner_scores(
-            returns, n_beams, step, moments, start, end, window, settings["corner_score"]
-        ),
-        "candidates + sweep + choice": lambda: ad.choose_corners(
-            cost, start, end, scores, True, s, grid
-        ),
-        "cut, refine, merge, split": lambda: ad.segments(
-            returns, cost, start, end, corners, scale * scale, s, noise, sigmas
-        ),
-        "  of which: refine cuts": lambda: refine_cuts(cost, *cut),
-        "corner beams": lambda: junction_events(
-            returns, settings["fit"], moments, a, b, owner, False, False, scale * sigma, turn_sigmas
-        ),
-        "assembly (fits, covariances)": lambda: assemble(
-            returns, settings["fit"], moments, a, b, 0.0, sigmas, events, scan_shape
-        ),
+        WHOLE: lambda: _core.adaptive_stack(*arguments),
+        STAGES: stages,
     }
     timed = time_calls(
         {name: (lambda _, call=call: call()) for name, call in rows.items()}, [None], args.repeats
     )
+    segments = len(extractor(scan))
     print(
-        f"{args.sensor}, seed {args.seed}: {returns.r.size} returns, {len(start)} clusters, "
-        f"{len(a)} segments; median of {args.repeats} calls"
+        f"{args.sensor}, seed {args.seed}: {int(np.count_nonzero(scan.valid))} returns, "
+        f"{segments} segments; median of {args.repeats} calls"
     )
-    for name, result in timed.items():
-        print(f"{name:32s} {np.median(result.samples_ns) / 1000:8.1f} us")
+    for name in (n for n in rows if n != STAGES):
+        print(f"{name:32s} {np.median(timed[name].samples_ns) / 1000:8.1f} us")
+    for name in stage_seconds[0]:
+        median = np.median([seconds[name] for seconds in stage_seconds])
+        print(f"  {name:30s} {median * 1e6:8.1f} us")
 
 
 if __name__ == "__main__":

@@ -1,6 +1,7 @@
 #include "scanlines/methods/adaptive.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <tuple>
@@ -20,6 +21,19 @@
 #include "scanlines/steps/split.hpp"
 
 namespace scanlines {
+
+const std::array<const char*, N_ADAPTIVE_STAGES> ADAPTIVE_STAGE_NAMES = {
+    "returns, noise, rule",
+    "denoise",
+    "turn window",
+    "clustering",
+    "sigmas, running sums, costs",
+    "corner scores",
+    "candidates + sweep + choice",
+    "cut, refine, merge, split",
+    "corner beams",
+    "assembly (fits, covariances)",
+};
 
 namespace {
 
@@ -184,10 +198,30 @@ Reals direction_sigmas(const Returns& returns, const Moments& moments, const Int
     return out;
 }
 
+// The time since the last lap added to a stage's seconds (nothing without seconds).
+class Laps {
+public:
+    explicit Laps(StageSeconds* seconds) : seconds_(seconds) {
+        if (seconds_) last_ = Clock::now();
+    }
+    void end(AdaptiveStage stage) {
+        if (!seconds_) return;
+        Clock::time_point now = Clock::now();
+        (*seconds_)[stage] += std::chrono::duration<double>(now - last_).count();
+        last_ = now;
+    }
+
+private:
+    using Clock = std::chrono::steady_clock;
+    StageSeconds* seconds_;
+    Clock::time_point last_;
+};
+
 }  // namespace
 
 ScanResult adaptive_scan(View<double> ranges, View<bool> valid, const Stack& sensor,
-                         const AdaptiveSettings& s, const Reals& grid) {
+                         const AdaptiveSettings& s, const Reals& grid, StageSeconds* seconds) {
+    Laps laps(seconds);
     const Index n_beams = ranges.size;
     const double step = sensor.step;
     const bool full_circle = sensor.full_circle;
@@ -204,26 +238,34 @@ ScanResult adaptive_scan(View<double> ranges, View<bool> valid, const Stack& sen
     const double typical = noise_at(noise, median(returns.r));
     BreakpointRule rule = breakpoint_rule(s, noise, step);
     const double margin = s.noise_k * std::sqrt(2.0) * typical;
+    laps.end(STAGE_NOISE);
     Denoised clean = denoise(std::move(returns), n_beams, step, full_circle, rule, s.denoise,
                              s.window, s.min_cluster_points, margin);
+    laps.end(STAGE_DENOISE);
     if (clean.returns.size() == 0) return empty_result(clean.outliers, clean.outliers);
     Index window = s.slope_window;
     if (s.auto_slope_window)
         window = turn_window(clean.returns.x, clean.returns.y, clean.returns.index, typical);
+    laps.end(STAGE_TURN_WINDOW);
     Clusters clusters = cluster_returns(std::move(clean.returns), n_beams, step, full_circle, rule,
                                         window, std::move(clean.breaks));
+    laps.end(STAGE_CLUSTERS);
     const Returns& ret = clusters.returns;
     const Ints& start = clusters.start;
     const Ints& end = clusters.end;
     Reals sigma = return_sigmas(ret.r, noise);  // once: the criterion, merge, checks, covariances
     const RunCost cost = run_cost_of(s, prefix_moments(ret.x, ret.y), ret, sigma);
     const Moments& moments = cost.moments;
+    laps.end(STAGE_COSTS);
     Reals scores = corner_scores(ret, n_beams, step, moments, start, end, window, s.corner_score);
+    laps.end(STAGE_SCORES);
     const bool rescale = s.estimate_noise && s.criterion == BIC;
     Choice choice = choose_corners(cost, start, end, scores, rescale, s, grid);
+    laps.end(STAGE_CHOICE);
     const double unit =
         s.criterion == BIC ? choice.scale * choice.scale : typical * typical;
     Runs runs = segments(ret, cost, start, end, choice.corners, unit, s, noise, sigma);
+    laps.end(STAGE_SEGMENTS);
     const double check_sigma = s.corner_check ? choice.scale * typical : -1.0;
     Reals turn_sigmas;
     if (s.corner_check) turn_sigmas = direction_sigmas(ret, moments, runs.a, runs.b, sigma);
@@ -233,17 +275,23 @@ ScanResult adaptive_scan(View<double> ranges, View<bool> valid, const Stack& sen
     Ints breakpoints = clusters.breakpoints;
     breakpoints.insert(breakpoints.end(), jumps.begin(), jumps.end());
     breakpoints = sorted_distinct(std::move(breakpoints));
+    laps.end(STAGE_EVENTS);
     if (s.range_sigma == s.range_sigma)  // given: it replaces the noise line
         sigma.assign(ret.r.size(), s.range_sigma);
-    return assemble(ret, s.fit, moments, runs.a, runs.b, angle_min, sigma,
-                    {std::move(breakpoints), std::move(corner_beams), std::move(clean.outliers)},
-                    n_beams, full_circle);
+    ScanResult result =
+        assemble(ret, s.fit, moments, runs.a, runs.b, angle_min, sigma,
+                 {std::move(breakpoints), std::move(corner_beams), std::move(clean.outliers)},
+                 n_beams, full_circle);
+    laps.end(STAGE_ASSEMBLY);
+    return result;
 }
 
-Table adaptive_stack(const Stack& stack, const AdaptiveSettings& s, const Reals& grid) {
+Table adaptive_stack(const Stack& stack, const AdaptiveSettings& s, const Reals& grid,
+                     StageSeconds* seconds) {
     Table table;
     for (Index row = 0; row < stack.rows; ++row)
-        table.add(adaptive_scan(stack.row_ranges(row), stack.row_valid(row), stack, s, grid));
+        table.add(
+            adaptive_scan(stack.row_ranges(row), stack.row_valid(row), stack, s, grid, seconds));
     return table;
 }
 

@@ -2,6 +2,8 @@
 // (scanlines/methods/adaptive.py has the method's description and its deviations).
 #pragma once
 
+#include <array>
+
 #include "scanlines/core.hpp"
 #include "scanlines/steps/stack.hpp"
 
@@ -35,10 +37,30 @@ struct AdaptiveSettings {
     bool constant_noise;
 };
 
-// The whole method on one scan; grid: the thresholds of a fixed dkth_range (else empty).
-ScanResult adaptive_scan(View<double> ranges, View<bool> valid, const Stack& sensor,
-                         const AdaptiveSettings& s, const Reals& grid);
+// The stages of adaptive_scan, in order, for timing them (tools/benchmarks/stage_times.py).
+enum AdaptiveStage : int {
+    STAGE_NOISE,
+    STAGE_DENOISE,
+    STAGE_TURN_WINDOW,
+    STAGE_CLUSTERS,
+    STAGE_COSTS,
+    STAGE_SCORES,
+    STAGE_CHOICE,
+    STAGE_SEGMENTS,
+    STAGE_EVENTS,
+    STAGE_ASSEMBLY,
+    N_ADAPTIVE_STAGES
+};
+extern const std::array<const char*, N_ADAPTIVE_STAGES> ADAPTIVE_STAGE_NAMES;
+using StageSeconds = std::array<double, N_ADAPTIVE_STAGES>;
 
-Table adaptive_stack(const Stack& stack, const AdaptiveSettings& s, const Reals& grid);
+// The whole method on one scan; grid: the thresholds of a fixed dkth_range (else empty).
+// With seconds, the time of each stage is added to it.
+ScanResult adaptive_scan(View<double> ranges, View<bool> valid, const Stack& sensor,
+                         const AdaptiveSettings& s, const Reals& grid,
+                         StageSeconds* seconds = nullptr);
+
+Table adaptive_stack(const Stack& stack, const AdaptiveSettings& s, const Reals& grid,
+                     StageSeconds* seconds = nullptr);
 
 }  // namespace scanlines

@@ -163,10 +163,11 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from scanlines._core import adaptive_stack, threshold_grid
+from scanlines._core import adaptive_stack
 from scanlines.methods.adaptive_settings import PARAMETERS, PRESETS
 from scanlines.methods.base import CompiledMethod, kernel_values
 from scanlines.params import Param
+from scanlines.steps.select import threshold_grid
 
 __all__ = ["Adaptive"]
 
@@ -184,7 +185,7 @@ class Adaptive(CompiledMethod):
         if self.params["dkth_range"] != "auto":
             low, high = self.params["dkth_range"]
             step, most = self.params["dkth_step"], self.params["max_evaluations"]
-            grid = threshold_grid(float(low), float(high), float(step), int(most))
+            grid = threshold_grid(low, high, step, most)
         return kernel_values(self.settings), grid
 
     @staticmethod

@@ -5,7 +5,7 @@ part is fitted and the sum of squared fitting errors is recorded; the cut with
 the best criterion is kept. Thresholds are nested (a lower threshold keeps every
 corner of a higher one), so the sweep inserts candidates in decreasing score
 order and scores every threshold from running sums. Under ``"bic"`` the sweep stops as
-soon as no lower threshold can win (below): each segment charges the
+soon as no lower threshold can win (:func:`sweep_decided`): each segment charges the
 criterion ``penalty ln(n)``, the charge only grows as thresholds fall, and once it alone
 reaches the best value found, the choice is made; the result is the full sweep's.
 
@@ -19,31 +19,8 @@ Criteria
            extra segment must explain more than ``penalty * ln(n)`` units of
            noise variance.
 
-The sweep
----------
-The candidates are ranked by ``|score|``, largest first (equal scores in position
-order). Without a fixed range every distinct cut is tried (the candidates' own scores as
-thresholds, at most ``max_evaluations``); a fixed ``dkth_range`` tries the thresholds
-``low, low + step, ...`` up to ``high`` (at most ``max_evaluations``), and only candidates
-scoring above the lowest of them can change a cut. Inserting the ``m``-th candidate cuts
-the run that holds it, unless a part it would create is too short (Step 5: a corner needs
-at least two points on each side of it): a cut at ``c`` splits ``[a, b]`` into ``[a, c]``
-and ``[c + 1, b]``, or with the shared corner point of the paper into ``[a, c]`` and
-``[c, b]``. ``sse[m]`` and ``segments[m]`` describe the cut with the ``m`` best
-candidates, each from the one before and the costs of the two new runs (a
-:class:`~scanlines.steps.fit.RunCost`: eq. 14, or in noise units). A tried threshold
-``t`` selects the cut of the candidates scoring above it; the best criterion wins, the
-first (highest threshold) on a tie, and a NaN SSE counts as infinite.
-
-The stopping rule: the value of the cut with ``m`` candidates is at least
-``penalty ln(n) segments[m]`` (its SSE term is not negative) and ``segments`` never
-falls, so once that charge reaches the best value so far no later cut can win; the sweep
-inserts :data:`SWEEP_CHUNK` candidates between two checks of that bound.
-
 The kernels are C++ (``cpp/scanlines/steps/select.cpp``), called by the adaptive
-method's kernel; ``scanlines._core`` binds them for the tests (``threshold_grid``,
-``start_sweep``, ``extend_sweep``, ``sweep_decided``, ``sweep_levels``, ``best_level``,
-``level_corners``).
+method's kernel; the functions here call their bindings.
 
 References
 ----------
@@ -54,10 +31,132 @@ References
 
 from __future__ import annotations
 
-__all__ = ["BIC", "CRITERIA", "CRITERION_CODES", "SSE", "SWEEP_CHUNK"]
+import numpy as np
+
+from scanlines import _core
+from scanlines.steps.fit import RunCost
+
+__all__ = [
+    "BIC",
+    "CRITERIA",
+    "CRITERION_CODES",
+    "SSE",
+    "SWEEP_CHUNK",
+    "Sweep",
+    "best_level",
+    "extend_sweep",
+    "level_corners",
+    "start_sweep",
+    "sweep_decided",
+    "sweep_levels",
+    "threshold_grid",
+]
 
 CRITERIA = ("bic", "sse")
 CRITERION_CODES = {"bic": 0, "sse": 1}
 BIC, SSE = 0, 1
-#: Candidates the ``"bic"`` sweep inserts between two checks of its bound.
+#: Candidates :func:`sweep_decided` inserts between two checks of its bound.
 SWEEP_CHUNK = 8
+
+Sweep = _core.Sweep
+"""A threshold sweep in progress (:func:`start_sweep`, :func:`extend_sweep`).
+
+``ranked`` are the candidates best first (``ranked_score`` their ``|score|``), of which
+the first ``useful`` can change a cut; ``sse[m]`` and ``segments[m]`` describe the cut
+with the ``m`` best, filled for ``m`` up to the candidates inserted so far
+(``accepted[j]`` False: candidate ``j`` does not cut, ``parent_a/b[j]`` the run it cut).
+Its arrays are copies, read-only views of the sweep's state."""
+
+
+def threshold_grid(low: float, high: float, step: float, max_evaluations: int) -> np.ndarray:
+    """``low, low + step, ...`` up to ``high``, at most ``max_evaluations`` values."""
+    return _core.threshold_grid(float(low), float(high), float(step), int(max_evaluations))
+
+
+def level_corners(ranked, accepted, level: int) -> np.ndarray:
+    """Sorted positions of the accepted candidates among the ``level`` best."""
+    return _core.level_corners(_ints(ranked), _flags(accepted), int(level))
+
+
+def best_level(criterion: int, sse, segments, levels, n_points: int, sigma: float, penalty: float):
+    """Index of the best tried threshold (the first on a tie) and every criterion value.
+
+    The criterion of one segmentation: the SSE (``"sse"``), or ``SSE / sigma^2 + penalty
+    ln(max(n_points, 2)) segments`` (``"bic"``); a NaN SSE counts as inf."""
+    return _core.best_level(
+        int(criterion), _reals(sse), _ints(segments), _ints(levels), int(n_points),
+        float(sigma), float(penalty),
+    )  # fmt: skip
+
+
+def start_sweep(cost: RunCost, start, end, candidates, scores, grid, use_grid: bool,
+                max_evaluations: int) -> Sweep:  # fmt: skip
+    """A :class:`Sweep` of the clusters ``[start, end]`` with no candidate inserted yet.
+
+    ``use_grid`` tries the thresholds ``grid``; otherwise the candidates' own scores
+    (every distinct segmentation, best first, at most ``max_evaluations``). Equal scores
+    rank in position order.
+    """
+    return _core.start_sweep(
+        cost, _ints(start), _ints(end), _ints(candidates), _reals(scores), _reals(grid),
+        bool(use_grid), int(max_evaluations),
+    )  # fmt: skip
+
+
+def extend_sweep(sweep: Sweep, cost: RunCost, shared: bool, done: int, upto: int) -> int:
+    """Insert candidates ``done .. upto - 1`` of ``sweep`` (in place) and score each cut.
+
+    A candidate is dropped when a part it would create is too short (Step 5: a corner
+    needs at least two points on each side of it). ``shared`` cuts a run ``[a, b]`` at
+    ``c`` into ``[a, c]`` and ``[c, b]`` (the corner point ends one segment and starts the
+    next, as in the paper); otherwise into ``[a, c]`` and ``[c + 1, b]``. Returns
+    ``upto``, the count inserted.
+    """
+    return _core.extend_sweep(sweep, cost, bool(shared), int(done), int(upto))
+
+
+def sweep_decided(sweep: Sweep, cost: RunCost, shared: bool, done: int, n_points: int,
+                  sigma: float, penalty: float) -> tuple[int, int]:  # fmt: skip
+    """Extend ``sweep`` (from ``done`` inserted) until the ``"bic"`` choice with noise
+    ``sigma`` is certain; returns ``(best level, inserted)``.
+
+    The value of the cut with ``m`` candidates is at least ``penalty ln(n) segments[m]``
+    (its SSE term is not negative) and ``segments`` never falls, so once that charge
+    reaches the best value so far no later cut can win (ties go to the first): the level
+    is the full sweep's, found without inserting the rest.
+    """
+    return _core.sweep_decided(
+        sweep, cost, bool(shared), int(done), int(n_points), float(sigma), float(penalty)
+    )
+
+
+def sweep_levels(cost: RunCost, start, end, candidates, scores, grid, use_grid: bool,
+                 max_evaluations: int, shared: bool):  # fmt: skip
+    """Score every cut of the clusters ``[start, end]`` at ``candidates`` that a threshold makes.
+
+    Thresholds are nested (a lower one keeps every corner of a higher one), so the
+    candidates are inserted in decreasing ``|score|`` order and each cut is scored
+    from the one before (``cost``, a :class:`~scanlines.steps.fit.RunCost`: eq. 14,
+    or in noise units); see :func:`start_sweep` and :func:`extend_sweep`.
+
+    Returns ``ranked, accepted, sse, segments, thresholds, levels``: ``sse[m]`` and
+    ``segments[m]`` describe the cut with the ``m`` best ``ranked`` candidates (those
+    ``accepted`` is False for do not cut); ``levels[t]`` is the cut each tried
+    threshold ``thresholds[t]`` gives.
+    """
+    return _core.sweep_levels(
+        cost, _ints(start), _ints(end), _ints(candidates), _reals(scores), _reals(grid),
+        bool(use_grid), int(max_evaluations), bool(shared),
+    )  # fmt: skip
+
+
+def _ints(values) -> np.ndarray:
+    return np.ascontiguousarray(values, dtype=np.int64)
+
+
+def _reals(values) -> np.ndarray:
+    return np.ascontiguousarray(values, dtype=np.float64)
+
+
+def _flags(values) -> np.ndarray:
+    return np.ascontiguousarray(values, dtype=np.bool_)
