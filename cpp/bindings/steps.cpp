@@ -52,10 +52,13 @@ nb::tuple tls_run_binding(const InTable& table, double ox, double oy, Index a, I
 nb::object run_covariances_binding(const InReals& r, const InReals& x, const InReals& y,
                                    const InReals& rho, const InReals& alpha, const InInts& a,
                                    const InInts& b, const InReals& sigma, bool inflate) {
-    check_runs(a, b, static_cast<Index>(x.shape(0)));
-    Returns returns{Ints(x.shape(0)), vector_of(r), vector_of(x), vector_of(y)};
-    Reals out = run_covariances(returns, vector_of(rho), vector_of(alpha), vector_of(a),
-                                vector_of(b), vector_of(sigma), inflate);
+    const Index n = static_cast<Index>(x.shape(0));
+    if (static_cast<Index>(r.shape(0)) != n || static_cast<Index>(y.shape(0)) != n ||
+        static_cast<Index>(sigma.shape(0)) != n)
+        throw nb::value_error("r, x, y and sigma must have one length");
+    check_runs(a, b, n);
+    Reals out = run_covariances(view(r), view(x), view(y), vector_of(rho), vector_of(alpha),
+                                vector_of(a), vector_of(b), view(sigma), inflate);
     return to_numpy(std::move(out), {a.shape(0), 2, 2});
 }
 

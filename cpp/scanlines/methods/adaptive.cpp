@@ -192,7 +192,7 @@ Runs segments(const Returns& returns, const RunCost& cost, const Ints& start, co
 Reals direction_sigmas(const Returns& returns, const Moments& moments, const Ints& a,
                        const Ints& b, const Reals& sigma) {
     Lines lines = fit_many(TLS, moments, a, b);
-    Reals covariance = run_covariances(returns, lines.rho, lines.alpha, a, b, sigma, true);
+    Reals covariance = run_covariances(returns.r, returns.x, returns.y, lines.rho, lines.alpha, a, b, sigma, true);
     Reals out(a.size());
     for (std::size_t k = 0; k < a.size(); ++k) out[k] = std::sqrt(covariance[4 * k + 3]);
     return out;

@@ -19,7 +19,8 @@ ScanResult assemble(const Returns& returns, Index fit, const Moments& moments, c
     std::sort(events.corners.begin(), events.corners.end());
     std::sort(events.outliers.begin(), events.outliers.end());
     Lines fitted = fit_many(fit, moments, a, b);
-    Reals covariance = run_covariances(returns, fitted.rho, fitted.alpha, a, b, sigma, true);
+    Reals covariance = run_covariances(returns.r, returns.x, returns.y, fitted.rho, fitted.alpha, a, b, sigma,
+                                       true);
     const std::size_t m = a.size();
     Reals lines(LINE_COLUMNS * m);
     const double cos_t = std::cos(angle_min), sin_t = std::sin(angle_min);

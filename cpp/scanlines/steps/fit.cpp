@@ -181,11 +181,9 @@ std::pair<double, double> line_intersection(double rho_i, double alpha_i, double
     return {x, y};
 }
 
-Reals run_covariances(const Returns& returns, const Reals& rho, const Reals& alpha, const Ints& a,
-                      const Ints& b, const Reals& sigma, bool inflate) {
-    const Reals& r = returns.r;
-    const Reals& x = returns.x;
-    const Reals& y = returns.y;
+Reals run_covariances(View<double> r, View<double> x, View<double> y, const Reals& rho,
+                      const Reals& alpha, const Ints& a, const Ints& b, View<double> sigma,
+                      bool inflate) {
     const std::size_t runs = rho.size();
     Reals cos_a(runs), sin_a(runs), count(runs, 0.0), along_sum(runs, 0.0), t0(runs);
     for (std::size_t k = 0; k < runs; ++k) {

@@ -121,7 +121,9 @@ struct Axis {
 Axis tls_axis(const Moments& m, Index a, Index b);
 
 // Covariance of (rho, alpha) of each run's line, 4 values (row-major 2 x 2) per run.
-Reals run_covariances(const Returns& returns, const Reals& rho, const Reals& alpha, const Ints& a,
-                      const Ints& b, const Reals& sigma, bool inflate);
+// r, x, y: the returns' ranges and points (views: the caller's arrays are not copied).
+Reals run_covariances(View<double> r, View<double> x, View<double> y, const Reals& rho,
+                      const Reals& alpha, const Ints& a, const Ints& b, View<double> sigma,
+                      bool inflate);
 
 }  // namespace scanlines

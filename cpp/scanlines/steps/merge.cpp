@@ -72,7 +72,7 @@ Runs merge_by_chi_square(const Returns& returns, const Moments& moments, const I
     Lines lines = fit_many(TLS, moments, a, b);
     Reals& rho = lines.rho;
     Reals& alpha = lines.alpha;
-    Reals covariance = run_covariances(returns, rho, alpha, a, b, sigma, inflate);
+    Reals covariance = run_covariances(returns.r, returns.x, returns.y, rho, alpha, a, b, sigma, inflate);
     while (m >= 2) {
         Index best = -1;
         double best_value = INF;
@@ -100,8 +100,8 @@ Runs merge_by_chi_square(const Returns& returns, const Moments& moments, const I
         Line line = tls_run(moments, a[best], b[best]);
         rho[best] = line.rho;
         alpha[best] = line.alpha;
-        Reals one = run_covariances(returns, {rho[best]}, {alpha[best]}, {a[best]}, {b[best]},
-                                    sigma, inflate);
+        Reals one = run_covariances(returns.r, returns.x, returns.y, {rho[best]}, {alpha[best]},
+                                    {a[best]}, {b[best]}, sigma, inflate);
         std::copy(one.begin(), one.end(), &covariance[4 * best]);
     }
     a.resize(m);
