@@ -43,10 +43,8 @@ nb::object to_numpy(std::vector<T>&& values) {
 }
 
 // bool flags as a numpy bool array.
-inline nb::object flags_to_numpy(const std::vector<bool>& flags) {
-    std::vector<bool> copy = flags;
-    std::vector<std::uint8_t> bytes(copy.begin(), copy.end());
-    auto* owned = new std::vector<std::uint8_t>(std::move(bytes));
+inline nb::object flags_to_numpy(const Flags& flags) {
+    auto* owned = new std::vector<std::uint8_t>(flags);
     nb::capsule owner(owned, [](void* p) noexcept { delete static_cast<std::vector<std::uint8_t>*>(p); });
     std::size_t shape[1] = {owned->size()};
     return nb::cast(nb::ndarray<nb::numpy, bool>(reinterpret_cast<bool*>(owned->data()), 1, shape, owner));

@@ -13,7 +13,7 @@ namespace scanlines {
 using Index = std::int64_t;
 using Ints = std::vector<Index>;
 using Reals = std::vector<double>;
-using Flags = std::vector<bool>;
+using Flags = std::vector<std::uint8_t>;  // bytes, as numpy bools: no bit packing in hot loops
 
 // A read-only view of a contiguous array.
 template <typename T>
