@@ -14,6 +14,7 @@ __all__ = [
     "prepare",
     "ros_topic",
     "sensor_data_qos",
+    "take_serialized",
     "wait_for_match",
 ]
 
@@ -75,6 +76,22 @@ def default_qos(depth: int = 10) -> Any:
         Policy.Durability.Volatile,
         Policy.History.KeepLast(depth),
     )
+
+
+def take_serialized(reader: Any, count: int) -> list[tuple[bytes, Any]]:
+    """Up to ``count`` samples off ``reader`` as Cyclone holds them: each sample's CDR bytes
+    (encapsulation header first) with its ``SampleInfo``, not decoded. ``DataReader.take``
+    decodes every sample it takes, so one that does not decode (a ``frame_id`` that is not
+    UTF-8) raises out of the take and loses the others taken with it; decoded one by one,
+    each sample fails alone. (The binding's own take, without the decoding step.)"""
+    from cyclonedds._clayer import ddspy_take
+    from cyclonedds.core import DDSException, InstanceState, SampleState, ViewState
+
+    mask = SampleState.Any | ViewState.Any | InstanceState.Any
+    taken = ddspy_take(reader._ref, mask, count)
+    if isinstance(taken, int):
+        raise DDSException(taken, f"Occurred while taking data in {reader!r}")
+    return taken
 
 
 def wait_for_match(entity: Any, timeout: float) -> bool:
