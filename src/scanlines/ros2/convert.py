@@ -19,6 +19,7 @@ __all__ = [
     "markers",
     "scan_of",
     "stamp_of",
+    "stamp_problem",
 ]
 
 _COLORS = {
@@ -31,10 +32,19 @@ _SCALES = {"segments": 0.03, "breakpoints": 0.08, "corners": 0.12}
 MAX_STAMP_SECONDS = 2**31 - 1
 
 
+def stamp_problem(seconds: float) -> str | None:
+    """Why ``seconds`` cannot be a ROS 2 time (``builtin_interfaces/Time``: an int32 of
+    seconds, from 0 on), or ``None``."""
+    if not math.isfinite(seconds) or not 0 <= seconds <= MAX_STAMP_SECONDS:
+        return f"{seconds!r} s is not a ROS 2 time (0 .. 2**31 - 1 s)"
+    return None
+
+
 def stamp_of(seconds: float) -> msg.Time:
     """A ROS time of ``seconds`` (0 for none), nanoseconds rounded."""
-    if not math.isfinite(seconds) or not 0 <= seconds <= MAX_STAMP_SECONDS:
-        raise ScanError(f"timestamp {seconds!r} s is not a ROS 2 time (0 .. 2**31 - 1 s)")
+    problem = stamp_problem(seconds)
+    if problem is not None:
+        raise ScanError(f"timestamp {problem}")
     sec, nanosec = divmod(round(seconds * 1e9), 1_000_000_000)
     return msg.Time(sec=int(sec), nanosec=int(nanosec))
 
