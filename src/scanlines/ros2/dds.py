@@ -9,7 +9,9 @@ from scanlines.errors import ParameterError
 
 __all__ = [
     "LOOPBACK_CONFIG",
+    "RECEIVE_BUFFER",
     "default_qos",
+    "loopback_config",
     "participant",
     "prepare",
     "ros_topic",
@@ -18,13 +20,30 @@ __all__ = [
     "wait_for_match",
 ]
 
-#: Cyclone DDS confined to the loopback interface: unicast discovery to 127.0.0.1 (``lo``
-#: has no multicast), so nothing leaves the machine.
-LOOPBACK_CONFIG = """<CycloneDDS><Domain id="any"><General>
+#: The socket receive buffer the loopback configuration asks for (Linux grants at most
+#: ``net.core.rmem_max``). Cyclone's own request, 1 MiB, overflows on the burst of
+#: fragments of a 4 MB scan (a million beams), which best effort then loses whole.
+RECEIVE_BUFFER = "8MB"
+
+
+def loopback_config(receive_buffer: str | None = RECEIVE_BUFFER) -> str:
+    """Cyclone DDS confined to the loopback interface: unicast discovery to 127.0.0.1
+    (``lo`` has no multicast), so nothing leaves the machine; asking for a socket receive
+    buffer of ``receive_buffer`` (``None``: Cyclone's default)."""
+    internal = (
+        ""
+        if receive_buffer is None
+        else f'<Internal><SocketReceiveBufferSize max="{receive_buffer}"/></Internal>'
+    )
+    return f"""<CycloneDDS><Domain id="any"><General>
 <Interfaces><NetworkInterface address="127.0.0.1"/></Interfaces>
 <AllowMulticast>false</AllowMulticast></General>
 <Discovery><ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>30</MaxAutoParticipantIndex>
-<Peers><Peer address="127.0.0.1"/></Peers></Discovery></Domain></CycloneDDS>"""
+<Peers><Peer address="127.0.0.1"/></Peers></Discovery>{internal}</Domain></CycloneDDS>"""
+
+
+#: The configuration of ``--loopback`` (:func:`loopback_config`).
+LOOPBACK_CONFIG = loopback_config()
 
 _DOMAINS: dict[int, Any] = {}
 
