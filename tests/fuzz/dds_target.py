@@ -51,6 +51,9 @@ from collections import Counter
 from collections.abc import Callable
 from pathlib import Path
 
+from scanlines.ros2.dds import wait_for_match
+from scanlines.ros2.player import SETTLE
+
 from .channels import CLEAN_ERROR, DEFECT, SUCCESS, Case, Outcome, first_line
 
 CHANNEL, EXIT_CHANNEL = "dds node", "node exit"
@@ -237,6 +240,8 @@ class Campaign:
             if not self.node.wait_ready(START):
                 raise RuntimeError(f"the node did not start: {self.node.last_words()}")
             self.sender.ports = udp_ports(self.node.process.pid)
+            wait_for_match(self.sender.raw_writer, PROBE_WAIT)
+            time.sleep(SETTLE)  # the node's side accepts the writers a moment later
             if not self.probe():
                 raise RuntimeError("the node did not handle a good scan after starting")
         return self.node
