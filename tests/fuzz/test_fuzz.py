@@ -73,6 +73,18 @@ def test_long_mutation_run(request: pytest.FixtureRequest, tmp_path: Path) -> No
     fail_on_defects(cases)
 
 
+DDS_CORPUS = Path(__file__).parent / "corpus_dds"
+
+
+def test_dds_corpus_samples_are_handled_cleanly() -> None:
+    """Samples that once failed the node (``corpus_dds/README.md``), sent to a running one."""
+    samples = sorted(DDS_CORPUS.glob("*.cdr"))
+    assert len(samples) >= 2
+    cases = replay(samples, domain=DDS_DOMAIN + 1)
+    assert len(cases) == len(samples)
+    fail_on_defects(cases)
+
+
 def test_dds_short_run(tmp_path: Path) -> None:
     """Mutated LaserScan samples sent to one ROS 2 node over loopback DDS: it survives
     each (a good scan is still published after), and exits on SIGTERM with its summary.
