@@ -7,6 +7,8 @@ import pytest
 
 pytest.importorskip("cyclonedds")
 
+pytestmark = pytest.mark.slow  # a ROS 2 process over DDS per test
+
 STAMPS = [1.0, -5.0, 2.0, 3e9, 3.0]
 
 
