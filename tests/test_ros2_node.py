@@ -1,6 +1,8 @@
 """The ROS 2 node end to end, over real DDS on the loopback interface, in real processes."""
 
+import io
 import json
+import pickle
 import signal
 import subprocess
 import sys
@@ -210,3 +212,92 @@ def test_signals_stop_the_node_with_one_line(sig, code, word):
     assert len(stop_lines) == 1, err  # the summary rides on it once the node spins
     assert stop_lines[0].startswith(f"scanlines: {word}")
     assert "Traceback" not in err
+
+
+#: A second participant, in a process of its own: writes the CDR bytes it reads (a pickled
+#: list) from stdin as they are, through a LaserScan writer (Cyclone sends a frame_id that is
+#: not UTF-8: its writer checks the CDR's layout, not the text).
+RAW_WRITER = """
+import pickle, sys, time
+from cyclonedds._clayer import ddspy_write
+from cyclonedds.pub import DataWriter
+from cyclonedds.topic import Topic
+from scanlines.ros2 import messages as msg
+from scanlines.ros2.dds import participant, ros_topic, sensor_data_qos, wait_for_match
+payloads = pickle.load(sys.stdin.buffer)
+dp = participant(int(sys.argv[1]), loopback=True)
+writer = DataWriter(dp, Topic(dp, ros_topic("/scan"), msg.LaserScan), sensor_data_qos())
+assert wait_for_match(writer, 30), "no subscriber"
+time.sleep(0.5)  # the node's side accepts this writer a moment later
+for payload in payloads:
+    assert ddspy_write(writer._ref, payload) == 0
+time.sleep(0.5)
+"""
+
+
+def write_raw(domain, payloads):
+    done = subprocess.run(
+        [sys.executable, "-c", RAW_WRITER, str(domain)],
+        input=pickle.dumps(payloads),
+        capture_output=True,
+        timeout=120,
+    )
+    assert done.returncode == 0, done.stderr.decode()
+
+
+def test_a_sample_that_does_not_decode_is_counted_and_the_others_of_its_take_go_on():
+    """A frame_id that is not UTF-8 used to raise out of DataReader.take (a traceback, exit
+    1), losing the good scan taken with it; and a malformed scan's line quoted its whole
+    frame_id."""
+    from scanlines.extractor import Extractor
+    from scanlines.ros2 import LineNode
+
+    domain = 65
+    extractor = Extractor()
+    extractor.warm_up()
+    log = io.StringIO()
+    node = LineNode(extractor, domain_id=domain, loopback=True, features_topic="/features", log=log)
+    features = reader_of(domain, "/features", msg.ScanFeatures)
+    header = msg.Header(stamp=convert.stamp_of(5.0), frame_id="laser")
+    ranges = [2.0] * 181
+    good = msg.LaserScan(header, -1.5, 1.5, 3.0 / 180, range_max=30.0, ranges=ranges).serialize()
+    at = good.index(b"laser")
+    not_utf8 = good[:at] + b"\xff\xfe\xfd\xfc\xfb" + good[at + 5 :]
+    long_frame = msg.Header(stamp=convert.stamp_of(6.0), frame_id="f" * 100_000)
+    malformed = msg.LaserScan(long_frame, -1.5, 1.5, 3.0 / 180, ranges=ranges[:100]).serialize()
+    write_raw(domain, [not_utf8, good, malformed])  # all three wait on the node's reader
+    stats = node.spin(max_scans=3, duration=60)  # so one take has them all
+    lines = log.getvalue().splitlines()
+    assert (stats.published, stats.undecodable, stats.skipped, stats.failed) == (1, 1, 1, 0), lines
+    got = take_all(features, 1, 30)
+    assert [m.header.frame_id for m in got] == ["laser"]
+    assert len(got[0].segments) > 0
+    assert len(lines) == 2, lines
+    undecodable, skipped = lines
+    assert undecodable.startswith("scanlines ros2: skipped a sample that does not decode as ")
+    assert f"({len(not_utf8):,} bytes): UnicodeDecodeError: " in undecodable
+    assert skipped.startswith("scanlines ros2: skipped malformed scan (stamp 6.000000000, frame ")
+    assert "... (100,000 chars)): ranges has 100 values" in skipped
+    assert len(skipped) < 300
+    assert "1 scans published, 1 malformed skipped, 1 undecodable skipped" in stats.summary()
+
+
+def test_million_beam_scans_arrive_over_best_effort_loopback():
+    """A million-beam scan (4 MB, some 3,000 fragments in one burst) overflowed Cyclone's
+    default 1 MiB socket receive buffer: 2 of 20 arrived. ``--loopback`` asks for 8 MB, which
+    needs ``net.core.rmem_max`` of 4 MiB or more (Linux grants no more than it); 4 of 5 must
+    arrive (all 40 did in the measurements)."""
+    from pathlib import Path
+
+    if int(Path("/proc/sys/net/core/rmem_max").read_text()) < 4 * 2**20:
+        pytest.skip("net.core.rmem_max is below 4 MiB: no socket gets the buffer it asks for")
+    tool = Path(__file__).parents[1] / "tools" / "benchmarks" / "ros2_sizes.py"
+    done = subprocess.run(
+        [sys.executable, str(tool), "--beams", "1000000", "--count", "5", "--rate", "5",
+         "--domain-id", "69"],
+        capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr[-2000:]
+    row = done.stdout.splitlines()[-1]
+    arrived = int(row.split("):", 1)[1].split(" of ")[0])
+    assert arrived >= 4, row

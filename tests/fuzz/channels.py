@@ -44,7 +44,7 @@ import os
 import resource
 import shutil
 import warnings
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from multiprocessing.connection import Connection
 from pathlib import Path
 from typing import Any
@@ -312,3 +312,26 @@ class Worker:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+@dataclass
+class Case:
+    """One mutated input and what the channels made of it."""
+
+    index: int
+    seed_name: str
+    plan: str
+    path: Path
+    outcomes: list[Outcome] = field(default_factory=list)
+    saved: Path | None = None
+
+    @property
+    def defects(self) -> list[Outcome]:
+        return [o for o in self.outcomes if o.kind == DEFECT]
+
+    def saved_name(self, seed: int) -> str:
+        """``format--mutator--seedS-index`` plus the seed's suffixes."""
+        suffix = "".join(self.path.suffixes)
+        return (
+            f"{self.seed_name}--{self.plan.replace('/', '-')}--seed{seed}-{self.index:05d}{suffix}"
+        )

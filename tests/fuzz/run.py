@@ -1,15 +1,20 @@
-"""Fuzz the log readers: mutate the seeds, read each input through every channel, report.
+"""Fuzz the log readers and the ROS 2 node: mutate the seeds, try each input, report.
 
 Usage, from the repository root::
 
-    python -m tests.fuzz.run --count 5000 --seed 1 [--jobs 2] [--save-failures DIR]
+    python -m tests.fuzz.run --count 5000 --seed 1 [--jobs 2] [--targets logs dds]
+                             [--save-failures DIR]
 
-Input ``i`` is seed ``i mod S`` (round robin over the seed formats) mutated by
-the next plan of that seed (round robin over its mutators), with a generator
-seeded by ``(seed, i)``: the same ``--seed`` always gives the same inputs, and
-the first ``n`` inputs of a longer run are those of a run of ``n``. Prints a
-table of outcomes by format and channel and every defect; exits 1 if there is
-any defect.
+Two targets. ``logs`` (the default): input ``i`` is seed ``i mod S`` (round robin over
+the seed formats) mutated by the next plan of that seed (round robin over its mutators),
+read through every channel of ``channels.py``. ``dds``: input ``i`` is a LaserScan
+sample mutated by plan ``i mod P`` of ``mutate_cdr.py``, sent to one running ROS 2 node
+(``dds_target.py``). With both, ``--count`` is shared: input ``k`` of the campaign goes to
+target ``k mod 2``. Each target's generator is seeded by ``(seed, i)``: the same
+``--seed`` always gives the same inputs, and the first ``n`` inputs of a target in a longer
+run are those of a run of ``n``. Prints a table of outcomes by format and channel and
+every defect; exits 1 if there is any defect. ``--replay`` takes saved inputs (``.cdr``
+ones go to the node).
 """
 
 from __future__ import annotations
@@ -23,7 +28,6 @@ import threading
 import time
 from collections import Counter, defaultdict
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -37,34 +41,15 @@ from .channels import (
     DEFECT,
     EXTRA_CHANNELS,
     SUCCESS,
+    Case,
     Outcome,
     Worker,
 )
 from .plans import make_input, plans_for
 from .seeds import SEED_FILES, build_seeds
 
-
-@dataclass
-class Case:
-    """One mutated input and what the channels made of it."""
-
-    index: int
-    seed_name: str
-    plan: str
-    path: Path
-    outcomes: list[Outcome] = field(default_factory=list)
-    saved: Path | None = None
-
-    @property
-    def defects(self) -> list[Outcome]:
-        return [o for o in self.outcomes if o.kind == DEFECT]
-
-    def saved_name(self, seed: int) -> str:
-        """``format--mutator--seedS-index`` plus the seed's suffixes."""
-        suffix = "".join(self.path.suffixes)
-        return (
-            f"{self.seed_name}--{self.plan.replace('/', '-')}--seed{seed}-{self.index:05d}{suffix}"
-        )
+#: What inputs go to: the log readers (``channels.py``), a ROS 2 node (``dds_target.py``).
+TARGETS = ("logs", "dds")
 
 
 def make_case(index: int, seed: int, seeds: dict[str, Path], folder: Path) -> Case:
@@ -154,34 +139,99 @@ def run_cases(
     return sorted(cases, key=lambda c: c.index)
 
 
-def fuzz(count: int, seed: int = 1, *, workdir: Path | None = None, **options: Any) -> list[Case]:
-    """Generate ``count`` inputs from ``seed`` and read each through every channel.
+def fuzz(
+    count: int,
+    seed: int = 1,
+    *,
+    targets: tuple[str, ...] = ("logs",),
+    workdir: Path | None = None,
+    **options: Any,
+) -> list[Case]:
+    """Generate ``count`` inputs from ``seed``, shared round robin between ``targets``
+    (``logs``: read through every channel; ``dds``: sent to a ROS 2 node).
 
     ``options`` are those of :func:`run_cases` (``jobs``, ``save_failures``, ...).
     """
+    unknown = set(targets) - set(TARGETS)
+    if unknown or not targets:
+        raise ValueError(f"targets are {', '.join(TARGETS)}, got {', '.join(targets)}")
+    counts = {target: len(range(k, count, len(targets))) for k, target in enumerate(targets)}
     with tempfile.TemporaryDirectory(prefix="scanlines-fuzz-") as scratch:
         workdir = Path(scratch) if workdir is None else workdir
-        seeds = build_seeds(workdir / "seeds")
-        inputs = workdir / "inputs"
-        shutil.rmtree(inputs, ignore_errors=True)
-        inputs.mkdir(parents=True)
+        cases = []
+        if counts.get("logs"):
+            logs_options = {k: v for k, v in options.items() if k != "domain"}
+            cases += fuzz_logs(counts["logs"], seed, workdir, **logs_options)
+        if counts.get("dds"):
+            cases += fuzz_dds(counts["dds"], seed, workdir, **options)
+        return cases
 
-        def make(index: int) -> Case:
-            return make_case(index, seed, seeds, inputs)
 
-        return run_cases(make, count, workdir=workdir, seed=seed, remove_inputs=True, **options)
+def fuzz_logs(count: int, seed: int, workdir: Path, **options: Any) -> list[Case]:
+    seeds = build_seeds(workdir / "seeds")
+    inputs = workdir / "inputs"
+    shutil.rmtree(inputs, ignore_errors=True)
+    inputs.mkdir(parents=True)
+
+    def make(index: int) -> Case:
+        return make_case(index, seed, seeds, inputs)
+
+    return run_cases(make, count, workdir=workdir, seed=seed, remove_inputs=True, **options)
+
+
+def fuzz_dds(count: int, seed: int, workdir: Path, **options: Any) -> list[Case]:
+    """``count`` mutations of a LaserScan sample sent to one ROS 2 node (``dds_target``)."""
+    from .mutate_cdr import plans, seed_sample
+
+    sample, mutators = seed_sample(), plans()
+
+    def make(index: int) -> tuple[str, bytes]:
+        name, mutator = mutators[index % len(mutators)]
+        return name, mutator(random.Random(f"dds:{seed}:{index}"), sample)
+
+    return _dds_cases(make, count, workdir, sample, seed, **options)
+
+
+def _dds_cases(make, count, workdir, sample, seed=0, **options: Any) -> list[Case]:
+    """:func:`dds_target.run_dds` (on ``options["domain"]``, default 97); defective inputs
+    saved (``save_failures``), the others removed."""
+    from .dds_target import DEFAULT_DOMAIN, run_dds
+
+    domain = options.get("domain", DEFAULT_DOMAIN)
+    progress = options.get("progress", False)
+    cases = run_dds(make, count, workdir=workdir, seed=sample, domain=domain, progress=progress)
+    for case in cases:
+        if case.defects and options.get("save_failures") is not None:
+            case.saved = save_input(case, seed, options["save_failures"])
+        remove(case.path)
+    return cases
 
 
 def replay(paths: list[Path], *, workdir: Path | None = None, **options: Any) -> list[Case]:
-    """Read saved inputs (files or bag directories) through every channel and ``run mcap``."""
+    """Read saved inputs (files or bag directories) through every channel and ``run mcap``;
+    send saved DDS samples (``.cdr``) to a ROS 2 node."""
+    samples = [p for p in paths if p.suffix == ".cdr"]
+    paths = [p for p in paths if p.suffix != ".cdr"]
     with tempfile.TemporaryDirectory(prefix="scanlines-replay-") as scratch:
         workdir = Path(scratch) if workdir is None else workdir
+        cases = []
+        if paths:
 
-        def make(index: int) -> Case:
-            return Case(index, paths[index].name, "replay", paths[index])
+            def make(index: int) -> Case:
+                return Case(index, paths[index].name, "replay", paths[index])
 
-        options.setdefault("channels", CHANNELS + EXTRA_CHANNELS)
-        return run_cases(make, len(paths), workdir=workdir, **options)
+            logs_options = {k: v for k, v in options.items() if k != "domain"}
+            logs_options.setdefault("channels", CHANNELS + EXTRA_CHANNELS)
+            cases += run_cases(make, len(paths), workdir=workdir, **logs_options)
+        if samples:
+            from .mutate_cdr import seed_sample
+
+            def make_sample(index: int) -> tuple[str, bytes]:
+                return f"replay {samples[index].name}", samples[index].read_bytes()
+
+            options.pop("save_failures", None)  # they are saved already
+            cases += _dds_cases(make_sample, len(samples), workdir, seed_sample(), **options)
+        return cases
 
 
 # -- reports -------------------------------------------------------------------------------
@@ -241,8 +291,14 @@ def defect_kinds(cases: list[Case]) -> list[str]:
 
 
 def report(cases: list[Case], seconds: float | None = None, *, kinds: bool = True) -> str:
-    """The outcome table, then every defect and (``kinds``) the defects grouped by kind."""
-    parts = [outcome_table(cases)]
+    """The outcome tables (the logs'; the DDS node's, by mutator), then every defect and
+    (``kinds``) the defects grouped by kind."""
+    from .dds_target import SEED_NAME, outcomes_by_plan
+
+    samples = [case for case in cases if case.seed_name == SEED_NAME]
+    logs = [case for case in cases if case.seed_name != SEED_NAME]
+    parts = [outcome_table(logs)] if logs else []
+    parts += [outcomes_by_plan(samples)] if samples else []
     if seconds is not None:
         parts.append(f"{len(cases)} inputs in {seconds:.0f} s")
     defects = defect_lines(cases)
@@ -280,6 +336,14 @@ def main(argv: list[str] | None = None) -> int:
         help="instead of fuzzing, read these inputs (or the inputs in these "
         "folders, e.g. tests/fuzz/corpus) through every channel",
     )
+    parser.add_argument("--domain-id", type=int, default=97, help="dds: the DDS domain (97)")
+    parser.add_argument(
+        "--targets",
+        nargs="+",
+        choices=TARGETS,
+        default=["logs"],
+        help="what the inputs go to: log readers, a ROS 2 node over DDS (logs)",
+    )
     args = parser.parse_args(argv)
     options: dict[str, Any] = {
         "jobs": args.jobs,
@@ -288,12 +352,13 @@ def main(argv: list[str] | None = None) -> int:
         "timeout": args.timeout,
         "memory_limit": int(args.memory_gb * 2**30),
         "progress": True,
+        "domain": args.domain_id,
     }
     started = time.perf_counter()
     if args.replay:
         cases = replay(replay_inputs(args.replay), **options)
     else:
-        cases = fuzz(args.count, args.seed, **options)
+        cases = fuzz(args.count, args.seed, targets=tuple(args.targets), **options)
     print(report(cases, time.perf_counter() - started))
     return 1 if any(case.defects for case in cases) else 0
 

@@ -1,15 +1,18 @@
-"""Fuzzing the log readers: past failures stay fixed, and seeded mutations find no defect.
+"""Fuzzing the log readers and the ROS 2 node: past failures stay fixed, and seeded
+mutations find no defect.
 
 Every input is read through the library (fail and skip modes) and the
 ``info`` and ``run`` commands, in worker processes with a timeout and a memory
-limit (see ``channels.py``). A failure lists each defect as ``format |
-mutator | channel | error | message | input``. ``pytest --long`` runs the long
-mutation campaign instead of the short one.
+limit (see ``channels.py``); every DDS sample is sent to one running ROS 2 node
+(``dds_target.py``). A failure lists each defect as ``format | mutator | channel |
+error | message | input``. ``pytest --long`` runs the long mutation campaign instead
+of the short one.
 """
 
 from __future__ import annotations
 
 import os
+from collections import Counter
 from pathlib import Path
 
 import pytest
@@ -20,6 +23,8 @@ from .run import Case, fuzz, replay, report
 pytestmark = pytest.mark.slow  # thousands of damaged inputs
 
 SHORT_RUN = 300
+DDS_SHORT_RUN = 200
+DDS_DOMAIN = 98  # not the campaign's 97: a campaign may run meanwhile
 LONG_RUN = 5000
 SEED = 1
 JOBS = max(1, min(2, len(os.sched_getaffinity(0))))
@@ -66,3 +71,30 @@ def test_long_mutation_run(request: pytest.FixtureRequest, tmp_path: Path) -> No
     cases = fuzz(LONG_RUN, SEED, jobs=jobs, save_failures=tmp_path / "failures")
     assert len(cases) == LONG_RUN
     fail_on_defects(cases)
+
+
+DDS_CORPUS = Path(__file__).parent / "corpus_dds"
+
+
+def test_dds_corpus_samples_are_handled_cleanly() -> None:
+    """Samples that once failed the node (``corpus_dds/README.md``), sent to a running one."""
+    samples = sorted(DDS_CORPUS.glob("*.cdr"))
+    assert len(samples) >= 2
+    cases = replay(samples, domain=DDS_DOMAIN + 1)
+    assert len(cases) == len(samples)
+    fail_on_defects(cases)
+
+
+def test_dds_short_run(tmp_path: Path) -> None:
+    """Mutated LaserScan samples sent to one ROS 2 node over loopback DDS: it survives
+    each (a good scan is still published after), and exits on SIGTERM with its summary.
+    Reproduce with ``python -m tests.fuzz.run --count 200 --seed 1 --targets dds``."""
+    failures = tmp_path / "failures"
+    cases = fuzz(DDS_SHORT_RUN, SEED, targets=("dds",), save_failures=failures, domain=DDS_DOMAIN)
+    assert len(cases) == DDS_SHORT_RUN
+    fail_on_defects(cases)
+    outcomes = [outcome for case in cases for outcome in case.outcomes]
+    assert [o.summary for o in outcomes if o.channel == "node exit"] == ["exit 143"]
+    seen = Counter(o.error for o in outcomes)
+    for kind in ("published", "malformed scan", "undecodable", "dropped by DDS"):
+        assert seen[kind] > 0, seen

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import sys
+from collections import Counter
 from pathlib import Path
 from typing import Annotated
 
@@ -12,6 +13,7 @@ import typer
 from scanlines.cli.common import (
     ConfigMethodOption,
     ConfigOption,
+    OnErrorOption,
     ParamOption,
     PresetOption,
     ProfileOption,
@@ -50,6 +52,7 @@ def ros2_command(
         typer.Option(help="--play: scans per second (default: the recorded rate).", min=0.01),
     ] = None,
     scans: ScansOption = None,
+    on_error: OnErrorOption = "fail",
     topic: Annotated[str, typer.Option(help="The LaserScan topic.")] = "/scan",
     markers_topic: Annotated[str, typer.Option(help="MarkerArray topic.")] = "/line_markers",
     segments_topic: Annotated[
@@ -86,7 +89,7 @@ def ros2_command(
             'scanlines ros2 needs Cyclone DDS: pip install "scanlines[ros2]"'
         ) from None
     if play is not None:
-        _play(play, rate, scans, topic, frame_id, domain_id, loopback, wait)
+        _play(play, rate, scans, on_error, topic, frame_id, domain_id, loopback, wait)
         return
     _node(
         method_options(method, preset, param, config),
@@ -102,18 +105,49 @@ def ros2_command(
     )
 
 
-def _play(log, rate, scans, topic, frame_id, domain_id, loopback, wait) -> None:
+def _play(log, rate, scans, on_error, topic, frame_id, domain_id, loopback, wait) -> None:
+    from scanlines.cli.common import reader_options
+    from scanlines.cli.log_reports import _with_breakdown
+    from scanlines.errors import ParameterError
     from scanlines.io import open_log
     from scanlines.ros2 import Player
     from scanlines.runner import parse_slice, select
 
+    if on_error not in ("fail", "skip"):
+        raise ParameterError(f"--on-error must be fail or skip, got {on_error!r}")
     selection = parse_slice(scans)
     player = Player(domain_id=domain_id, loopback=loopback, topic=topic, frame_id=frame_id)
     if not player.wait_for_subscriber(wait):
         typer.echo(f"scanlines ros2: no subscriber on {topic} after {wait:g} s; playing", err=True)
-    with open_log(log) as reader:
-        count = player.play((scan for _, scan in select(reader.enumerate(), selection)), rate=rate)
-    typer.echo(f"scanlines ros2: published {count} scans of {log.name} on {topic}", err=True)
+    skipped: Counter[str] = Counter()
+    with open_log(log, options=reader_options(on_error=on_error)) as reader:
+        pairs = select(reader.enumerate(), selection)
+        count = player.play(_playable(pairs, log, on_error, skipped), rate=rate)
+        skipped.update(reader.skip_reasons)
+    text = f"scanlines ros2: published {count} scans of {log.name} on {topic}"
+    if on_error == "skip":
+        text += f"; scan records skipped: {_with_breakdown(sum(skipped.values()), skipped)}"
+    typer.echo(text, err=True)
+
+
+def _playable(pairs, log: Path, on_error: str, skipped: Counter[str]):
+    """The scans of ``pairs`` (index, scan) that a LaserScan can carry. A timestamp that is
+    no ROS 2 time (before 1970, or past 2**31 - 1 s) stops the play with an error naming the
+    log, the scan and the field, or with ``--on-error skip`` is counted in ``skipped``."""
+    from scanlines.errors import LogFormatError
+    from scanlines.ros2.convert import stamp_problem
+
+    for index, scan in pairs:
+        problem = stamp_problem(scan.timestamp or 0.0)
+        if problem is None:
+            yield scan
+        elif on_error == "skip":
+            skipped["timestamp"] += 1
+        else:
+            reason = f"{problem}; --on-error skip skips such scans"
+            raise LogFormatError(
+                reason, path=log, record=index, field="timestamp", unit="scan index"
+            )
 
 
 def _node(

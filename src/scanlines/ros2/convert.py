@@ -19,6 +19,7 @@ __all__ = [
     "markers",
     "scan_of",
     "stamp_of",
+    "stamp_problem",
 ]
 
 _COLORS = {
@@ -31,10 +32,27 @@ _SCALES = {"segments": 0.03, "breakpoints": 0.08, "corners": 0.12}
 MAX_STAMP_SECONDS = 2**31 - 1
 
 
+def _float32(values: np.ndarray) -> np.ndarray:
+    """``values`` as the float32 a message carries: one beyond float32's range is an
+    infinity (a covariance of 1e39 from ranges near float32's largest, say), as the cast
+    makes it, without numpy's overflow warning on the node's stderr."""
+    with np.errstate(over="ignore"):
+        return values.astype(np.float32)
+
+
+def stamp_problem(seconds: float) -> str | None:
+    """Why ``seconds`` cannot be a ROS 2 time (``builtin_interfaces/Time``: an int32 of
+    seconds, from 0 on), or ``None``."""
+    if not math.isfinite(seconds) or not 0 <= seconds <= MAX_STAMP_SECONDS:
+        return f"{seconds!r} s is not a ROS 2 time (0 .. 2**31 - 1 s)"
+    return None
+
+
 def stamp_of(seconds: float) -> msg.Time:
     """A ROS time of ``seconds`` (0 for none), nanoseconds rounded."""
-    if not math.isfinite(seconds) or not 0 <= seconds <= MAX_STAMP_SECONDS:
-        raise ScanError(f"timestamp {seconds!r} s is not a ROS 2 time (0 .. 2**31 - 1 s)")
+    problem = stamp_problem(seconds)
+    if problem is not None:
+        raise ScanError(f"timestamp {problem}")
     sec, nanosec = divmod(round(seconds * 1e9), 1_000_000_000)
     return msg.Time(sec=int(sec), nanosec=int(nanosec))
 
@@ -42,7 +60,7 @@ def stamp_of(seconds: float) -> msg.Time:
 def laser_scan(scan: Scan, frame_id: str, scan_time: float = 0.0) -> msg.LaserScan:
     """``scan`` as a LaserScan in frame ``frame_id``, stamped with its timestamp."""
     n = len(scan)
-    intensities = [] if scan.intensities is None else scan.intensities.astype(np.float32).tolist()
+    intensities = [] if scan.intensities is None else _float32(scan.intensities).tolist()
     return msg.LaserScan(
         header=msg.Header(stamp=stamp_of(scan.timestamp or 0.0), frame_id=frame_id),
         angle_min=scan.angle_min,
@@ -51,7 +69,7 @@ def laser_scan(scan: Scan, frame_id: str, scan_time: float = 0.0) -> msg.LaserSc
         scan_time=scan_time,
         range_min=scan.range_min,
         range_max=min(scan.range_max, float(np.finfo(np.float32).max)),
-        ranges=scan.ranges.astype(np.float32).tolist(),
+        ranges=_float32(scan.ranges).tolist(),
         intensities=intensities,
     )
 
@@ -81,8 +99,8 @@ def scan_of(message: msg.LaserScan) -> Scan:
 
 def line_segments(extraction: Extraction, header: msg.Header) -> msg.LineSegmentList:
     """laser_line_extraction's message of the segments (radius, angle, covariance, ends)."""
-    lines = extraction.lines.astype(np.float32)
-    covariances = extraction.covariances.astype(np.float32).reshape(-1, 4).tolist()
+    lines = _float32(extraction.lines)
+    covariances = _float32(extraction.covariances).reshape(-1, 4).tolist()
     return msg.LineSegmentList(
         header=header,
         line_segments=[
@@ -101,8 +119,8 @@ def line_segments(extraction: Extraction, header: msg.Header) -> msg.LineSegment
 def features(extraction: Extraction, scan: Scan, header: msg.Header) -> msg.ScanFeatures:
     """The full result as the project's ``scanlines/msg/ScanFeatures`` (the breakpoints'
     and corners' returns as points of ``scan``)."""
-    lines = extraction.lines.astype(np.float32).tolist()
-    covariances = extraction.covariances.astype(np.float32).reshape(-1, 4).tolist()
+    lines = _float32(extraction.lines).tolist()
+    covariances = _float32(extraction.covariances).reshape(-1, 4).tolist()
     segments = [
         msg.Segment(
             first=int(a),

@@ -9,21 +9,41 @@ from scanlines.errors import ParameterError
 
 __all__ = [
     "LOOPBACK_CONFIG",
+    "RECEIVE_BUFFER",
     "default_qos",
+    "loopback_config",
     "participant",
     "prepare",
     "ros_topic",
     "sensor_data_qos",
+    "take_serialized",
     "wait_for_match",
 ]
 
-#: Cyclone DDS confined to the loopback interface: unicast discovery to 127.0.0.1 (``lo``
-#: has no multicast), so nothing leaves the machine.
-LOOPBACK_CONFIG = """<CycloneDDS><Domain id="any"><General>
+#: The socket receive buffer the loopback configuration asks for (Linux grants at most
+#: ``net.core.rmem_max``). Cyclone's own request, 1 MiB, overflows on the burst of
+#: fragments of a 4 MB scan (a million beams), which best effort then loses whole.
+RECEIVE_BUFFER = "8MB"
+
+
+def loopback_config(receive_buffer: str | None = RECEIVE_BUFFER) -> str:
+    """Cyclone DDS confined to the loopback interface: unicast discovery to 127.0.0.1
+    (``lo`` has no multicast), so nothing leaves the machine; asking for a socket receive
+    buffer of ``receive_buffer`` (``None``: Cyclone's default)."""
+    internal = (
+        ""
+        if receive_buffer is None
+        else f'<Internal><SocketReceiveBufferSize max="{receive_buffer}"/></Internal>'
+    )
+    return f"""<CycloneDDS><Domain id="any"><General>
 <Interfaces><NetworkInterface address="127.0.0.1"/></Interfaces>
 <AllowMulticast>false</AllowMulticast></General>
 <Discovery><ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>30</MaxAutoParticipantIndex>
-<Peers><Peer address="127.0.0.1"/></Peers></Discovery></Domain></CycloneDDS>"""
+<Peers><Peer address="127.0.0.1"/></Peers></Discovery>{internal}</Domain></CycloneDDS>"""
+
+
+#: The configuration of ``--loopback`` (:func:`loopback_config`).
+LOOPBACK_CONFIG = loopback_config()
 
 _DOMAINS: dict[int, Any] = {}
 
@@ -75,6 +95,22 @@ def default_qos(depth: int = 10) -> Any:
         Policy.Durability.Volatile,
         Policy.History.KeepLast(depth),
     )
+
+
+def take_serialized(reader: Any, count: int) -> list[tuple[bytes, Any]]:
+    """Up to ``count`` samples off ``reader`` as Cyclone holds them: each sample's CDR bytes
+    (encapsulation header first) with its ``SampleInfo``, not decoded. ``DataReader.take``
+    decodes every sample it takes, so one that does not decode (a ``frame_id`` that is not
+    UTF-8) raises out of the take and loses the others taken with it; decoded one by one,
+    each sample fails alone. (The binding's own take, without the decoding step.)"""
+    from cyclonedds._clayer import ddspy_take
+    from cyclonedds.core import DDSException, InstanceState, SampleState, ViewState
+
+    mask = SampleState.Any | ViewState.Any | InstanceState.Any
+    taken = ddspy_take(reader._ref, mask, count)
+    if isinstance(taken, int):
+        raise DDSException(taken, f"Occurred while taking data in {reader!r}")
+    return taken
 
 
 def wait_for_match(entity: Any, timeout: float) -> bool:

@@ -15,7 +15,14 @@ from scanlines.errors import ScanError
 from scanlines.extractor import Extractor
 from scanlines.ros2 import convert
 from scanlines.ros2 import messages as msg
-from scanlines.ros2.dds import default_qos, participant, prepare, ros_topic, sensor_data_qos
+from scanlines.ros2.dds import (
+    default_qos,
+    participant,
+    prepare,
+    ros_topic,
+    sensor_data_qos,
+    take_serialized,
+)
 
 __all__ = ["LineNode", "NodeStats"]
 
@@ -23,21 +30,39 @@ __all__ = ["LineNode", "NodeStats"]
 SCAN_DEPTH = 5
 #: Latencies kept for the summary (the most recent ones).
 MAX_LATENCIES = 100_000
+#: Characters of a received ``frame_id`` a log line quotes at most.
+MAX_ECHO = 80
+#: Characters of an exception's text a log line quotes at most.
+MAX_REASON = 200
 
 
 @dataclass
 class NodeStats:
-    """What the node did: scans published, malformed scans skipped, and the latency from
-    taking each scan off the reader to its last message written, in seconds."""
+    """What the node did with the samples it took: scans published, malformed scans skipped
+    (they decode but are no scan), samples skipped that do not decode as a LaserScan, scans
+    that failed (extraction or publishing raised), what Cyclone's SAMPLE_LOST and
+    SAMPLE_REJECTED statuses counted, and the latency from taking each scan off the reader
+    to its last message written, in seconds."""
 
     published: int = 0
     skipped: int = 0
+    undecodable: int = 0
+    failed: int = 0
     full_takes: int = 0
+    dds_lost: int = 0
+    dds_rejected: int = 0
     latencies: deque = field(default_factory=lambda: deque(maxlen=MAX_LATENCIES))
 
     def summary(self) -> str:
         """One line: counts and the latency's median and 99th percentile."""
-        text = f"{self.published} scans published, {self.skipped} malformed skipped"
+        text = (
+            f"{self.published} scans published, {self.skipped} malformed skipped, "
+            f"{self.undecodable} undecodable skipped"
+        )
+        if self.failed:
+            text += f", {self.failed} failed"
+        if self.dds_lost or self.dds_rejected:
+            text += f", DDS reported {self.dds_lost} lost and {self.dds_rejected} rejected"
         if self.full_takes:
             text += f", reader full {self.full_takes} times (older scans dropped by DDS)"
         if self.latencies:
@@ -47,6 +72,22 @@ class NodeStats:
                 f"p99 {np.percentile(ms, 99):.2f} ms"
             )
         return text
+
+
+def clip(text: str, limit: int = MAX_ECHO) -> str:
+    """``text`` quoted for a log line (escapes, no line breaks), its first ``limit``
+    characters only: a 1 MB ``frame_id`` from the wire is not echoed whole."""
+    if len(text) <= limit:
+        return repr(text)
+    return f"{text[:limit]!r}... ({len(text):,} chars)"
+
+
+def _reason(error: BaseException) -> str:
+    """An exception as a short one-line reason: its type and the start of its text."""
+    words = " ".join(str(error).split())
+    if len(words) > MAX_REASON:
+        words = words[:MAX_REASON] + "..."
+    return f"{type(error).__name__}: {words}" if words else type(error).__name__
 
 
 class LineNode:
@@ -100,38 +141,66 @@ class LineNode:
         return dict(self._writers)
 
     def spin(self, *, max_scans: int | None = None, duration: float | None = None) -> NodeStats:
-        """Handle scans until ``max_scans`` were handled or ``duration`` seconds passed
-        (``None``: until interrupted)."""
+        """Handle samples until ``max_scans`` were handled or ``duration`` seconds passed
+        (``None``: until interrupted). Every sample taken counts, decoded or not."""
         deadline = math.inf if duration is None else time.monotonic() + duration
         handled = 0
-        while time.monotonic() < deadline and (max_scans is None or handled < max_scans):
-            self._waitset.wait(100_000_000)  # 0.1 s: signals and the deadline are seen
-            samples = self._reader.take(N=SCAN_DEPTH)
-            received = time.perf_counter()
-            if len(samples) == SCAN_DEPTH:
-                self.stats.full_takes += 1
-            for sample in samples:
-                if isinstance(sample, msg.LaserScan):  # not a publisher's coming or going
-                    self.handle(sample, received)
+        try:
+            while time.monotonic() < deadline and (max_scans is None or handled < max_scans):
+                self._waitset.wait(100_000_000)  # 0.1 s: signals and the deadline are seen
+                samples = take_serialized(self._reader, SCAN_DEPTH)
+                received = time.perf_counter()
+                if len(samples) == SCAN_DEPTH:
+                    self.stats.full_takes += 1
+                for data, info in samples:
+                    if not info.valid_data:  # a publisher's coming or going
+                        continue
                     handled += 1
+                    message = self.decode(data)
+                    if message is not None:
+                        self.handle(message, received)
+        finally:
+            self.read_dds_status()
         return self.stats
 
+    def decode(self, data: bytes) -> msg.LaserScan | None:
+        """The LaserScan of one sample's CDR bytes; one that does not decode (a
+        ``frame_id`` that is not UTF-8, say) is counted, logged on one line, skipped."""
+        try:
+            return msg.LaserScan.deserialize(data)
+        except Exception as error:  # whatever the bytes make the decoder raise
+            self.stats.undecodable += 1
+            self._say(
+                f"skipped a sample that does not decode as sensor_msgs/LaserScan "
+                f"({len(data):,} bytes): {_reason(error)}"
+            )
+            return None
+
     def handle(self, message: msg.LaserScan, received: float) -> bool:
-        """Extract one scan and publish it; a malformed one is counted, logged, skipped."""
+        """Extract one scan and publish it; a malformed one is counted, logged, skipped,
+        and one whose extraction or publishing raises is counted and logged as failed."""
+        header = message.header
+        where = (
+            f"stamp {header.stamp.sec}.{header.stamp.nanosec:09d}, frame {clip(header.frame_id)}"
+        )
         try:
             scan = convert.scan_of(message)
         except ScanError as error:
             self.stats.skipped += 1
-            stamp = message.header.stamp
-            print(
-                f"scanlines ros2: skipped malformed scan (stamp {stamp.sec}.{stamp.nanosec:09d}, "
-                f"frame {message.header.frame_id!r}): {error}",
-                file=self.log,
-                flush=True,
-            )
+            self._say(f"skipped malformed scan ({where}): {error}")
             return False
+        try:
+            self._publish(scan, header)
+        except Exception as error:  # no scan ends the node; the count and line show it
+            self.stats.failed += 1
+            self._say(f"failed on a scan ({where}): {_reason(error)}")
+            return False
+        self.stats.latencies.append(time.perf_counter() - received)
+        self.stats.published += 1
+        return True
+
+    def _publish(self, scan, header: msg.Header) -> None:
         extraction = self.extractor(scan)
-        header = message.header
         writers = self._writers
         if "segments" in writers:
             writers["segments"].write(convert.line_segments(extraction, header))
@@ -139,6 +208,13 @@ class LineNode:
             writers["markers"].write(convert.markers(extraction, scan, header))
         if "features" in writers:
             writers["features"].write(convert.features(extraction, scan, header))
-        self.stats.latencies.append(time.perf_counter() - received)
-        self.stats.published += 1
-        return True
+
+    def read_dds_status(self) -> None:
+        """Copy what Cyclone's SAMPLE_LOST and SAMPLE_REJECTED statuses counted on the scan
+        reader into the stats. (Cyclone counts neither a sample it could not deserialise nor
+        a fragmented one that lost a fragment: README, "What DDS drops".)"""
+        self.stats.dds_lost = self._reader.get_sample_lost_status().total_count
+        self.stats.dds_rejected = self._reader.get_sample_rejected_status().total_count
+
+    def _say(self, text: str) -> None:
+        print(f"scanlines ros2: {text}", file=self.log, flush=True)
