@@ -27,7 +27,8 @@ import scanlines
 imported = time.perf_counter()
 import numpy as np
 bearings = np.radians(np.arange(-90.0, 90.5, 0.5))
-ranges = np.minimum(3.0 / np.abs(np.cos(bearings)), 2.0 / np.maximum(np.abs(np.sin(bearings)), 1e-9))
+across = np.maximum(np.abs(np.sin(bearings)), 1e-9)
+ranges = np.minimum(3.0 / np.abs(np.cos(bearings)), 2.0 / across)
 scan = scanlines.Scan(ranges, bearings[0], np.radians(0.5), range_max=30.0)
 calls = {}
 for name in scanlines.method_names():
