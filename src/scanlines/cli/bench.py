@@ -83,7 +83,7 @@ def bench_command(
         bool | None,
         typer.Option(
             "--cold-start/--no-cold-start",
-            help="Time a first run with an empty kernel cache (default: on, off with --quick).",
+            help="Time the first results of a fresh process (default: on, off with --quick).",
         ),
     ] = None,
     profile: Annotated[
