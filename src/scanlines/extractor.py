@@ -161,9 +161,9 @@ class Extractor:
         return self._method.extract(ranges, valid, cos, sin, step, angle_min)
 
     def warm_up(self) -> None:
-        """Compile this extractor's kernels now (or load them from the cache), on a small
-        synthetic scan, rather than on the first real one: a long first call is then
-        not part of any timing, and no progress display is interrupted."""
+        """Extract a small synthetic scan once, so that the lazy imports are done before the
+        first real scan. The kernels are compiled when the package is installed, so this
+        takes milliseconds; it is kept for code written when they compiled on first use."""
         self(_warm_up_scan())
 
     def batch(
