@@ -109,32 +109,45 @@ Runs optimal_runs(const Sums& sums, const Flags& opens, double penalty, double c
     Ints start(n + 1), candidates(n + 1), expires(n + 1, n + 1);
     best[0] = 0.0;
     Index count = 0;
+    const double* prefix = sums.v.data();
     for (Index t = 1; t <= n; ++t) {
         if (opens[t - 1]) count = 0;
         candidates[count++] = t - 1;
-        best[t] = best[t - 1] + clutter_cost;
-        start[t] = -1;
+        // The prefix sums up to t, read once (the same arithmetic as scatter(sums, s, t - 1)).
+        double end[7];
+        std::copy(prefix + 7 * t, prefix + 7 * t + 7, end);
+        double best_t = best[t - 1] + clutter_cost;
+        Index start_t = -1;
         Index kept = 0;
         for (Index c = 0; c < count; ++c) {
-            Index s = candidates[c];
+            const Index s = candidates[c];
             if (expires[s] <= t || t - s > LOOK_BACK) continue;
             candidates[kept] = s;
-            cost[kept] = INF;
-            double held = sums.at(t, 6) - sums.at(s, 6);
+            double value = INF;
+            const double* from = prefix + 7 * s;
+            const double held = end[6] - from[6];
             if (held >= static_cast<double>(min_points)) {
-                Scatter sc = scatter(sums, s, t - 1);
-                cost[kept] = best[s] + 0.5 * eigenvalues(sc.sxx, sc.sxy, sc.syy).first;
-                cost[kept] += clutter_cost * (static_cast<double>(t - s) - held);
-                if (cost[kept] + penalty < best[t]) {
-                    best[t] = cost[kept] + penalty;
-                    start[t] = s;
+                const double w = end[0] - from[0];
+                const double mx = (end[1] - from[1]) / w;
+                const double my = (end[2] - from[2]) / w;
+                const double sxx = end[3] - from[3] - w * mx * mx;
+                const double sxy = end[4] - from[4] - w * mx * my;
+                const double syy = end[5] - from[5] - w * my * my;
+                value = best[s] + 0.5 * eigenvalues(sxx, sxy, syy).first;
+                value += clutter_cost * (static_cast<double>(t - s) - held);
+                if (value + penalty < best_t) {
+                    best_t = value + penalty;
+                    start_t = s;
                 }
             }
+            cost[kept] = value;
             ++kept;
         }
+        best[t] = best_t;
+        start[t] = start_t;
         count = kept;
-        for (Index c = 0; c < count; ++c)
-            if (cost[c] >= best[t] && cost[c] < INF && expires[candidates[c]] > n)
+        for (Index c = 0; c < count; ++c)  // prune the starts that t dominates (PELT)
+            if (cost[c] >= best_t && cost[c] < INF && expires[candidates[c]] > n)
                 expires[candidates[c]] = t + min_points;
     }
     Runs out;
