@@ -5,7 +5,7 @@
 For a change that must not be slower: install the other version into a virtual environment
 of its own (``python -m venv /tmp/old && /tmp/old/bin/pip install .`` in a checkout of it)
 and pass that environment's ``python``. Each round runs one child process per version, the
-other version first, alternating; a child loads the scans, extracts each once (the other
+other version first in even rounds and last in odd ones; a child loads the scans, extracts each once (the other
 version's kernels compile or load from its cache there, lazy imports happen), then times
 ``PASSES`` passes over each dataset and reports the median time per scan. Printed per
 method and dataset: the median over rounds of each version's time and the median of the
@@ -107,9 +107,13 @@ def main() -> None:
     print(f"{'method/data':26s} {'other us':>9s} {'this us':>9s} {'paired ratio':>13s}")
     for method in methods:
         old, new = [], []
-        for _ in range(args.rounds):
-            old.append(child(args.other, method))
-            new.append(child(sys.executable, method))
+        for round_ in range(args.rounds):  # ABBA: a drift of the machine's load cancels
+            if round_ % 2 == 0:
+                old.append(child(args.other, method))
+                new.append(child(sys.executable, method))
+            else:
+                new.append(child(sys.executable, method))
+                old.append(child(args.other, method))
         for data in old[0]:
             ratio = statistics.median(b[data] / a[data] for a, b in zip(old, new, strict=True))
             print(
