@@ -9,7 +9,13 @@ from typing import Annotated
 
 import typer
 
-from scanlines.cli.common import ConfigOption, guarded, method_options
+from scanlines.cli.common import (
+    ConfigOption,
+    OverwriteOption,
+    guarded,
+    method_options,
+    writable,
+)
 from scanlines.errors import LogFormatError
 
 FILE_HELP = "One scan: CSV (one row of ranges) or NPZ (ranges, angle_min, angle_increment)."
@@ -42,6 +48,7 @@ def extract_command(
         float | None, typer.Option("--range-max", help="CSV: largest valid range, metres.")
     ] = None,
     plot: Annotated[Path | None, typer.Option(help="Write a figure (PNG, PDF, SVG).")] = None,
+    overwrite: OverwriteOption = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of tables.")] = False,
     sensor_profile: Annotated[
         Path | None,
@@ -55,6 +62,7 @@ def extract_command(
 
     method, preset, params = method_options(method, preset, param, config)
     extractor = Extractor(method, preset, sensor_profile=sensor_profile, **params)
+    writable(plot, overwrite)  # a missing folder or a taken figure, before any work
     scan = load_one_scan(file, angle_min, angle_increment, range_max)
     result = extractor(scan)
     if plot is not None:
