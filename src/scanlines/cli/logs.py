@@ -9,6 +9,7 @@ from typing import Annotated, Literal
 import typer
 
 from scanlines.cli.common import (
+    NPZ_HELP,
     AngleMinOption,
     AngleStepOption,
     ConfigMethodOption,
@@ -90,8 +91,7 @@ def run_command(
     logs: Annotated[
         list[Path],
         typer.Argument(
-            help="Logs (CARMEN, ROS bag, .dat, .csv, .npz with a range_max key), folders "
-            "of logs, or globs.",
+            help="Logs (CARMEN, ROS bag, .dat, .csv, .npz), folders of logs, or globs. " + NPZ_HELP,
             metavar="LOG...",
         ),
     ],

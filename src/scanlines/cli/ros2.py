@@ -10,6 +10,7 @@ from typing import Annotated
 import typer
 
 from scanlines.cli.common import (
+    NPZ_HELP,
     ConfigMethodOption,
     ConfigOption,
     ParamOption,
@@ -43,7 +44,7 @@ def ros2_command(
     sensor_profile: ProfileOption = None,
     play: Annotated[
         Path | None,
-        typer.Option("--play", metavar="LOG", help="Publish this log's scans instead."),
+        typer.Option("--play", metavar="LOG", help=f"Publish this log's scans instead. {NPZ_HELP}"),
     ] = None,
     rate: Annotated[
         float | None,

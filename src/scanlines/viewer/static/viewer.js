@@ -654,6 +654,7 @@ async function watchLog() {
   if (!state.log.ready) notes.push("preparing the extractor (the first time after an install, compiling its kernels takes a minute or two)");
   else if (state.log.profile) notes.push(`sensor profile ${state.log.profile}`);
   if (state.log.error) notes.push(`reading stopped: ${state.log.error}`);
+  for (const note of (state.log.reader && state.log.reader.notes) || []) notes.push(note);
   $("#log-state").textContent = notes.join(", ");
   if (state.log.error) showError(`reading stopped: ${state.log.error}`);
   if (reading || !state.log.ready) setTimeout(watchLog, 300);
