@@ -227,11 +227,11 @@ def calibrate_command(
 
     if max_scans < 1:
         raise ParameterError(f"--max-scans must be at least 1, got {max_scans}")
-    out = out or log.with_name(log.name.split(".")[0] + ".profile.json")
-    writable(out, overwrite)
-    writable(plot, overwrite)
     options = reader_options(fov, angle_convention, topic, angle_min, angle_increment)
-    with open_log(log, options=options) as reader:
+    with open_log(log, options=options) as reader:  # a missing log before its profile's folder
+        out = out or log.with_name(log.name.split(".")[0] + ".profile.json")
+        writable(out, overwrite)
+        writable(plot, overwrite)
         profile = measure_profile(reader, parse_slice(scans), max_scans=max_scans, source=log.name)
     profile.save(out)
     table = Table(title=f"sensor profile of {log.name}", show_header=False)

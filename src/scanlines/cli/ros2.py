@@ -109,11 +109,13 @@ def _play(log, rate, scans, topic, frame_id, domain_id, loopback, wait) -> None:
     from scanlines.runner import parse_slice, select
 
     selection = parse_slice(scans)
-    player = Player(domain_id=domain_id, loopback=loopback, topic=topic, frame_id=frame_id)
-    if not player.wait_for_subscriber(wait):
-        typer.echo(f"scanlines ros2: no subscriber on {topic} after {wait:g} s; playing", err=True)
-    with open_log(log) as reader:
-        count = player.play((scan for _, scan in select(reader.enumerate(), selection)), rate=rate)
+    with open_log(log) as reader:  # a missing or unreadable log before waiting for anyone
+        player = Player(domain_id=domain_id, loopback=loopback, topic=topic, frame_id=frame_id)
+        if not player.wait_for_subscriber(wait):
+            note = f"scanlines ros2: no subscriber on {topic} after {wait:g} s; playing"
+            typer.echo(note, err=True)
+        scans_chosen = (scan for _, scan in select(reader.enumerate(), selection))
+        count = player.play(scans_chosen, rate=rate)
     typer.echo(f"scanlines ros2: published {count} scans of {log.name} on {topic}", err=True)
 
 

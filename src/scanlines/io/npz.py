@@ -49,7 +49,7 @@ from typing import IO, Any
 
 import numpy as np
 
-from scanlines.errors import LogFormatError, describe
+from scanlines.errors import NO_SUCH_FILE, LogFormatError, describe
 from scanlines.io.base import (
     DEFAULT_MAX_BEAMS,
     DEFAULT_MAX_RECORD_BYTES,
@@ -182,7 +182,7 @@ class NpzReader(LogReader):
         try:
             return zipfile.ZipFile(self.path)
         except FileNotFoundError:
-            raise LogFormatError("file not found", path=self.path) from None
+            raise LogFormatError(NO_SUCH_FILE, path=self.path) from None
         except Exception as exc:  # zipfile raises several types on a damaged directory
             raise LogFormatError(
                 f"not a readable .npz archive ({describe(exc)})", path=self.path
