@@ -691,7 +691,9 @@ async function start() {
   });
   for (const radio of document.querySelectorAll("input[name=view]")) {
     radio.addEventListener("change", (event) => {
-      state.view = event.target.value; state.transform = null; showPoseNote(); refresh(event);
+      state.view = event.target.value; state.transform = null;
+      state.selected = null;   // a segment of the scan view is not one of the world's
+      showSelection(); showPoseNote(); refresh(event);
     });
   }
   for (const box of document.querySelectorAll("#layers input")) {
