@@ -168,26 +168,6 @@ def test_two_configurations_mark_their_differences(page, intel_profile):
     page.screenshot(path=ARTIFACTS / "viewer-compare-side-by-side.png")
 
 
-def click_first_segment(page) -> dict:
-    """Click the middle of the first segment of configuration A; that segment."""
-    segment = page.evaluate("window.viewer.state.frame.results[0].segments[0]")
-    transform = page.evaluate("window.viewer.state.transform")
-    box = page.locator("#view-0 canvas").bounding_box()
-    middle = (np.array(segment["start"]) + np.array(segment["end"])) / 2
-    x = box["x"] + transform["x"] + middle[0] * transform["scale"]
-    y = box["y"] + transform["y"] - middle[1] * transform["scale"]
-    page.mouse.click(x, y)
-    return segment
-
-
-def test_clicking_a_segment_shows_its_numbers(page):
-    segment = click_first_segment(page)
-    details = page.locator("#selection").inner_text()
-    assert f"{segment['rho']:.4f} m" in details
-    assert f"{segment['first']}..{segment['last']}" in details
-    assert "var alpha" in details
-
-
 def world_view_of_the_last_300(page) -> dict:
     """Go to scan 299 and switch to the world view of the 300 scans up to it; what was drawn."""
     page.locator("#world-span").fill("300")
@@ -197,24 +177,6 @@ def world_view_of_the_last_300(page) -> dict:
     before = frames(page)
     page.locator("#world-radio").check()
     return redrawn(page, before)
-
-
-def test_switching_to_the_world_view_clears_the_selected_segment(page):
-    """A segment picked in the scan view is not one of the world view's: the selection
-    goes, and does not come back with the scan view."""
-    click_first_segment(page)
-    assert page.evaluate("window.viewer.state.selected") is not None
-    assert "var alpha" in page.locator("#selection").inner_text()
-    before = frames(page)
-    page.locator("#world-radio").check()
-    redrawn(page, before)
-    assert page.evaluate("window.viewer.state.selected") is None
-    assert page.locator("#selection").inner_text() == "click a segment"
-    before = frames(page)
-    page.locator("input[name=view][value=scan]").check()
-    redrawn(page, before)
-    assert page.evaluate("window.viewer.state.selected") is None
-    assert page.locator("#selection").inner_text() == "click a segment"
 
 
 def test_world_view_accumulates_the_scans_before(page):
