@@ -224,7 +224,7 @@ def test_a_bad_file_is_one_line_naming_it(tmp_path, text, needles) -> None:
 
 def test_unreadable_files_are_one_line_naming_them(tmp_path) -> None:
     for path, needle in (
-        (tmp_path / "missing.toml", "No such file"),
+        (tmp_path / "missing.toml", "no such file or directory"),
         (tmp_path, "directory"),
     ):
         with pytest.raises(ConfigError, match=needle) as caught:
@@ -346,7 +346,7 @@ def test_run_param_overrides_the_file(tuned, tmp_path) -> None:
 @pytest.mark.parametrize(
     ("text", "args", "needles"),
     [
-        (None, [], ["conf.toml", "No such file"]),
+        (None, [], ["conf.toml", "no such file or directory"]),
         ('method = "adaptive"\n[params\n', [], ["conf.toml, line 2", "not valid TOML"]),
         ('method = "adaptive"\nparam = 1\n', [], ["conf.toml, line 2", "key param"]),
         ("[params]\nk = true\n", [], ["conf.toml", "key params.k", "got True"]),

@@ -295,29 +295,3 @@ def segment_rows_or_none(dataset: Path) -> list[tuple]:
     if not list((dataset / "segments").glob("*/*.parquet")):
         return []
     return segment_rows(dataset)
-
-
-@pytest.mark.parametrize("when", ["while the workers start", "after the first part"])
-def test_ctrl_c_on_a_dask_run_prints_one_line(logs, tmp_path, when) -> None:
-    """Ctrl-C reaches the whole process group, Dask's workers included: they ignore it,
-    the command stops the cluster and says so in one line (exit 130)."""
-    import time
-
-    dataset = tmp_path / "features"
-    process = subprocess.Popen(
-        [sys.executable, "-m", "scanlines", "run", logs / "b", "--out", dataset, "--format",
-         "parquet", "--scheduler", "local", "-j", "2", "--chunk-records", "20"],
-        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, start_new_session=True,
-    )  # fmt: skip
-    deadline = time.monotonic() + 120
-    if when == "while the workers start":
-        time.sleep(0.8)
-    else:
-        while not list(dataset.glob("_staging/segments/*/*.parquet")):
-            assert time.monotonic() < deadline
-            assert process.poll() is None
-            time.sleep(0.05)
-    os.killpg(process.pid, signal.SIGINT)
-    _, stderr = process.communicate(timeout=120)
-    assert process.returncode == 130, stderr
-    assert stderr.strip().splitlines() == ["scanlines: interrupted"], stderr

@@ -168,20 +168,6 @@ def test_two_configurations_mark_their_differences(page, intel_profile):
     page.screenshot(path=ARTIFACTS / "viewer-compare-side-by-side.png")
 
 
-def test_clicking_a_segment_shows_its_numbers(page):
-    segment = page.evaluate("window.viewer.state.frame.results[0].segments[0]")
-    transform = page.evaluate("window.viewer.state.transform")
-    box = page.locator("#view-0 canvas").bounding_box()
-    middle = (np.array(segment["start"]) + np.array(segment["end"])) / 2
-    x = box["x"] + transform["x"] + middle[0] * transform["scale"]
-    y = box["y"] + transform["y"] - middle[1] * transform["scale"]
-    page.mouse.click(x, y)
-    details = page.locator("#selection").inner_text()
-    assert f"{segment['rho']:.4f} m" in details
-    assert f"{segment['first']}..{segment['last']}" in details
-    assert "var alpha" in details
-
-
 def world_view_of_the_last_300(page) -> dict:
     """Go to scan 299 and switch to the world view of the 300 scans up to it; what was drawn."""
     page.locator("#world-span").fill("300")

@@ -45,7 +45,7 @@ import tomli_w
 
 from scanlines.builtin_methods import DEFAULT_METHOD
 from scanlines.config_positions import _line_of, _toml_error
-from scanlines.errors import ParameterError, describe, one_line
+from scanlines.errors import NO_SUCH_FILE, ParameterError, describe, one_line
 from scanlines.params import Check, Choice, Either, Integer, Number, Pair, resolve
 
 __all__ = [
@@ -234,6 +234,8 @@ def load_config(path: str | Path) -> ExtractionConfig:
     try:
         with path.open("rb") as handle:
             data = handle.read(MAX_FILE_BYTES + 1)
+    except FileNotFoundError:
+        raise ConfigError(NO_SUCH_FILE, source=path) from None
     except OSError as error:
         reason = error.strerror or describe(error)
         raise ConfigError(f"cannot read the configuration: {reason}", source=path) from None

@@ -66,6 +66,10 @@ class LogFormatError(ScanlinesError, ValueError):
         super().__init__(prefix + self.reason)
 
 
+#: How every command and reader says that a file it was given is not there
+#: (``PATH: no such file or directory``).
+NO_SUCH_FILE = "no such file or directory"
+
 #: Longest text of a foreign exception quoted in an error message.
 QUOTED_CHARACTERS = 200
 

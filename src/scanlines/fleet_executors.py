@@ -6,6 +6,7 @@ import concurrent.futures as cf
 import contextlib
 import logging
 import multiprocessing
+import sys
 from collections.abc import Sequence
 from typing import Any
 
@@ -14,23 +15,60 @@ from scanlines.errors import ParameterError
 
 @contextlib.contextmanager
 def _interrupts_held() -> Any:
-    """SIGINT ignored while the worker processes start, so that they start with it ignored
-    (and their preload, :func:`dask_setup`, keeps it so), and blocked meanwhile, so that a
-    Ctrl-C then is held (Linux keeps a blocked signal pending even when ignored) and reaches
-    the command once the workers are up."""
+    """While the workers start: every thread started meanwhile (Dask's, among them those
+    that start the worker processes) blocks SIGINT as its first act, so that the worker
+    processes begin with it blocked (a Ctrl-C sent to the whole process group does not
+    reach a worker, whose preload, :func:`dask_setup`, then ignores it); and a SIGINT or
+    SIGTERM that arrives meanwhile is held, and handed to the handler it was for once the
+    cluster is made, so that the caller can stop the cluster.
+
+    SIGINT is not ignored here (an ignored SIGINT is inherited by the workers too): a
+    signal sent to the process goes to any thread that does not block it, and one that went
+    to another thread (a progress display's) while it was ignored was lost, and the run
+    went on to its end."""
     import signal
     import threading
 
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    held: list[int] = []
+    wanted = (signal.SIGINT, signal.SIGTERM)
+    previous = {signum: signal.signal(signum, lambda signum, _: held.append(signum))
+                for signum in wanted}  # fmt: skip
+    tracer = threading.gettrace()
+    threading.settrace(_blocking_sigint(tracer))
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, previous)
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+        threading.settrace(tracer)  # type: ignore[arg-type]
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+        if held:
+            _deliver(held[0], previous[held[0]])
+
+
+def _blocking_sigint(tracer: Any) -> Any:
+    """A trace function for new threads: block SIGINT in the thread (its child processes
+    inherit that), then trace on with ``tracer`` (a debugger's, coverage's), if any."""
+    import signal
+
+    def first_call(frame: Any, event: str, arg: Any) -> Any:
+        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        sys.settrace(tracer)
+        return tracer(frame, event, arg) if tracer is not None else None
+
+    return first_call
+
+
+def _deliver(signum: int, handler: Any) -> None:
+    """Hand a signal held back to ``handler``, the one it arrived for."""
+    import signal
+
+    if callable(handler):
+        handler(signum, None)  # the command's (or Python's) handler: raises the interrupt
+    elif handler == signal.SIG_DFL:
+        signal.raise_signal(signum)
 
 
 def dask_setup(worker: Any) -> None:
@@ -57,6 +95,13 @@ class _executor:
         self._quieted: list[tuple[logging.Logger, int]] = []
 
     def __enter__(self) -> tuple[cf.Executor, str]:
+        try:
+            return self._start()
+        except BaseException:  # an interrupt while the cluster starts: stop what started
+            self.__exit__()
+            raise
+
+    def _start(self) -> tuple[cf.Executor, str]:
         if self.scheduler is None:
             context = multiprocessing.get_context("spawn")
             self._pool = cf.ProcessPoolExecutor(self.jobs, mp_context=context)

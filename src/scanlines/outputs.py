@@ -24,7 +24,7 @@ import shutil
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 
-from scanlines.errors import ScanlinesError
+from scanlines.errors import ScanlinesError, describe
 
 __all__ = [
     "OutputError",
@@ -33,6 +33,7 @@ __all__ = [
     "discard",
     "remove_stale_temps",
     "temp_path",
+    "write_error",
     "write_text_atomically",
 ]
 
@@ -40,6 +41,16 @@ __all__ = [
 class OutputError(ScanlinesError, OSError):
     """An output cannot be written where it was asked for (missing folder, an existing
     output without ``overwrite``...)."""
+
+
+def write_error(target: str | Path, error: OSError, what: str = "the output") -> OutputError:
+    """An OS error met while writing ``target`` (a full disk, a read-only folder, a file
+    size limit) as one line naming ``target``, not the temporary file the error names."""
+    if error.errno is not None and error.strerror:
+        reason = f"{type(error).__name__}: [Errno {error.errno}] {error.strerror}"
+    else:
+        reason = describe(error)
+    return OutputError(f"{target}: cannot write {what} ({reason})")
 
 
 def check_output(target: str | Path, *, overwrite: bool, companions: Sequence[Path] = ()) -> Path:
@@ -102,10 +113,11 @@ def _process_exists(pid: int) -> bool:
 
 
 def discard(path: Path) -> None:
-    """Delete a temporary file or folder, if it is there."""
+    """Delete a temporary file or folder, if it is there (on a read-only file system,
+    deleting a missing file is an error: it is not tried)."""
     if path.is_dir() and not path.is_symlink():
         shutil.rmtree(path, ignore_errors=True)
-    else:
+    elif os.path.lexists(path):
         path.unlink(missing_ok=True)
 
 
@@ -171,6 +183,12 @@ def write_text_atomically(
             os.fsync(handle.fileno())
         os.chmod(temporary, 0o666 & ~umask())
         commit([(temporary, target)], overwrite=overwrite)
+    except OutputError:
+        discard(temporary)
+        raise
+    except OSError as error:  # a full disk, a read-only folder
+        discard(temporary)
+        raise write_error(target, error) from None
     except BaseException:
         discard(temporary)
         raise

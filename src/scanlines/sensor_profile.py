@@ -37,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from scanlines.errors import ScanlinesError
+from scanlines.errors import NO_SUCH_FILE, ScanlinesError
 from scanlines.scan import Scan
 from scanlines.sensor_mounting import estimate_mounting
 from scanlines.steps.noise import (
@@ -215,7 +215,7 @@ def read_profile(path: str | Path) -> SensorProfile:
     try:
         values = json.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
-        raise ProfileError(f"{path}: no such sensor profile") from None
+        raise ProfileError(f"{path}: {NO_SUCH_FILE}") from None
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
         raise ProfileError(f"{path}: cannot read the sensor profile: {error}") from None
     return SensorProfile.from_dict(values, where=str(path))

@@ -24,13 +24,16 @@ INTERRUPTED = 130
 TERMINATED = 143
 
 
+#: How an NPZ without ``range_max`` is read (:mod:`scanlines.io.npz`), in the help of every
+#: command that reads one.
+NPZ_HELP = (
+    "An .npz holds ranges, angle_min, angle_increment and range_max; without range_max, "
+    "the largest range, where at least 1 % of the beams hold it exactly, is read as a "
+    "no-return code (the SICK 81.83 m), not as a wall."
+)
 LogArgument = Annotated[
     Path,
-    typer.Argument(
-        help="CARMEN log, ROS bag, .dat, .csv or .npz (keys ranges, angle_min, "
-        "angle_increment, and range_max: without it, a range held by 1 % of the beams "
-        "at the top is read as a no-return code)."
-    ),
+    typer.Argument(help=f"CARMEN log, ROS bag, .dat, .csv or .npz. {NPZ_HELP}"),
 ]
 FovOption = Annotated[
     float | None, typer.Option("--fov", help="CARMEN FLASER: field of view, degrees.")

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from scanlines.cli.common import guarded, jobs_option
+from scanlines.cli.common import NPZ_HELP, guarded, jobs_option
 from scanlines.cli.eval_reports import (
     TABLE_WIDTH,
     _print_family,
@@ -107,7 +107,8 @@ def eval_command(
             help="A real log (any format 'scanlines info' reads), repeatable: measure the "
             "scan-to-scan repeatability of the methods instead (label-free; pairs 1-3 records "
             "apart registered by ICP from the log's poses, or ICP alone). Writes "
-            "repeatability.csv, repeatability_pairs.csv and repeatability.json into --out.",
+            "repeatability.csv, repeatability_pairs.csv and repeatability.json into --out. "
+            + NPZ_HELP,
         ),
     ] = None,
     scans: Annotated[

@@ -9,10 +9,17 @@ from typing import Annotated
 
 import typer
 
-from scanlines.cli.common import ConfigOption, guarded, method_options
+from scanlines.cli.common import (
+    NPZ_HELP,
+    ConfigOption,
+    OverwriteOption,
+    guarded,
+    method_options,
+    writable,
+)
 from scanlines.errors import LogFormatError
 
-FILE_HELP = "One scan: CSV (one row of ranges) or NPZ (ranges, angle_min, angle_increment)."
+FILE_HELP = f"One scan: CSV (one row of ranges) or NPZ. {NPZ_HELP}"
 
 
 def register(app: typer.Typer) -> None:
@@ -42,6 +49,7 @@ def extract_command(
         float | None, typer.Option("--range-max", help="CSV: largest valid range, metres.")
     ] = None,
     plot: Annotated[Path | None, typer.Option(help="Write a figure (PNG, PDF, SVG).")] = None,
+    overwrite: OverwriteOption = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of tables.")] = False,
     sensor_profile: Annotated[
         Path | None,
@@ -55,7 +63,8 @@ def extract_command(
 
     method, preset, params = method_options(method, preset, param, config)
     extractor = Extractor(method, preset, sensor_profile=sensor_profile, **params)
-    scan = load_one_scan(file, angle_min, angle_increment, range_max)
+    writable(plot, overwrite)  # a missing folder or a taken figure, before any work
+    scan, notes = load_one_scan(file, angle_min, angle_increment, range_max)
     result = extractor(scan)
     if plot is not None:
         from scanlines.viz.figures import save
@@ -64,9 +73,13 @@ def extract_command(
         save(plot_extraction(scan, result, title=file.name), plot)
     if as_json:
         payload = {"file": str(file), "beams": len(scan), **result.to_dict()}
+        if notes:
+            payload["notes"] = notes
         typer.echo(json.dumps(payload, indent=2))
     else:
         print_tables(file, scan, result)
+        for note in notes:
+            typer.echo(f"note: {note}")
         if plot is not None:
             typer.echo(f"figure: {plot}")
 
@@ -74,7 +87,8 @@ def extract_command(
 def load_one_scan(
     file: Path, angle_min: float | None, angle_increment: float | None, range_max: float | None
 ):
-    """The only scan of ``file`` (CSV angles given in degrees on the command line)."""
+    """The only scan of ``file`` (CSV angles given in degrees on the command line), and
+    the reader's notes (an NPZ's no-return code read as no return, say)."""
     from scanlines.io import open_log
 
     options: dict[str, float] = {}
@@ -90,13 +104,14 @@ def load_one_scan(
         raise LogFormatError(
             "--angle-min/--angle-increment/--range-max are for CSV files", path=file
         )
-    scans = iter(open_log(file, format=kind, **options))
+    reader = open_log(file, format=kind, **options)
+    scans = iter(reader)
     scan = next(scans, None)
     if scan is None:
         raise LogFormatError("no scan in the file", path=file)
     if next(scans, None) is not None:
         raise LogFormatError("holds more than one scan; use 'scanlines run' for logs", path=file)
-    return scan
+    return scan, reader.notes
 
 
 def print_tables(file: Path, scan, result) -> None:

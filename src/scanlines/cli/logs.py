@@ -9,6 +9,7 @@ from typing import Annotated, Literal
 import typer
 
 from scanlines.cli.common import (
+    NPZ_HELP,
     AngleMinOption,
     AngleStepOption,
     ConfigMethodOption,
@@ -89,8 +90,7 @@ def run_command(
     logs: Annotated[
         list[Path],
         typer.Argument(
-            help="Logs (CARMEN, ROS bag, .dat, .csv, .npz with a range_max key), folders "
-            "of logs, or globs.",
+            help="Logs (CARMEN, ROS bag, .dat, .csv, .npz), folders of logs, or globs. " + NPZ_HELP,
             metavar="LOG...",
         ),
     ],
@@ -223,11 +223,11 @@ def calibrate_command(
 
     if max_scans < 1:
         raise ParameterError(f"--max-scans must be at least 1, got {max_scans}")
-    out = out or log.with_name(log.name.split(".")[0] + ".profile.json")
-    writable(out, overwrite)
-    writable(plot, overwrite)
     options = reader_options(fov, angle_convention, topic, angle_min, angle_increment)
-    with open_log(log, options=options) as reader:
+    with open_log(log, options=options) as reader:  # a missing log before its profile's folder
+        out = out or log.with_name(log.name.split(".")[0] + ".profile.json")
+        writable(out, overwrite)
+        writable(plot, overwrite)
         profile = measure_profile(reader, parse_slice(scans), max_scans=max_scans, source=log.name)
     profile.save(out)
     table = Table(title=f"sensor profile of {log.name}", show_header=False)

@@ -11,6 +11,7 @@ from typing import Annotated
 import typer
 
 from scanlines.cli.common import (
+    NPZ_HELP,
     ConfigMethodOption,
     ConfigOption,
     OnErrorOption,
@@ -45,7 +46,7 @@ def ros2_command(
     sensor_profile: ProfileOption = None,
     play: Annotated[
         Path | None,
-        typer.Option("--play", metavar="LOG", help="Publish this log's scans instead."),
+        typer.Option("--play", metavar="LOG", help=f"Publish this log's scans instead. {NPZ_HELP}"),
     ] = None,
     rate: Annotated[
         float | None,
@@ -116,11 +117,13 @@ def _play(log, rate, scans, on_error, topic, frame_id, domain_id, loopback, wait
     if on_error not in ("fail", "skip"):
         raise ParameterError(f"--on-error must be fail or skip, got {on_error!r}")
     selection = parse_slice(scans)
-    player = Player(domain_id=domain_id, loopback=loopback, topic=topic, frame_id=frame_id)
-    if not player.wait_for_subscriber(wait):
-        typer.echo(f"scanlines ros2: no subscriber on {topic} after {wait:g} s; playing", err=True)
     skipped: Counter[str] = Counter()
     with open_log(log, options=reader_options(on_error=on_error)) as reader:
+        # a missing or unreadable log fails before waiting for anyone
+        player = Player(domain_id=domain_id, loopback=loopback, topic=topic, frame_id=frame_id)
+        if not player.wait_for_subscriber(wait):
+            note = f"scanlines ros2: no subscriber on {topic} after {wait:g} s; playing"
+            typer.echo(note, err=True)
         pairs = select(reader.enumerate(), selection)
         count = player.play(_playable(pairs, log, on_error, skipped), rate=rate)
         skipped.update(reader.skip_reasons)

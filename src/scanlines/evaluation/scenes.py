@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from scanlines import LogFormatError, ParameterError, Scan
+from scanlines.errors import NO_SUCH_FILE
 from scanlines.sim import SENSORS, NoiseModel, get_sensor, random_scene
 from scanlines.truth import TrueSegments, Truth
 
@@ -317,6 +318,8 @@ def load_scene_set(path: str | Path) -> SceneSet:
         When it cannot be read.
     """
     path = Path(path)
+    if not path.exists():
+        raise LogFormatError(NO_SUCH_FILE, path=path)
     try:
         with np.load(path, allow_pickle=False) as data:
             arrays = {key: data[key] for key in data.files}

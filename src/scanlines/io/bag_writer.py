@@ -107,7 +107,8 @@ class Ros2BagWriter(ResultWriter):
         self._types = get_typestore(Stores.ROS2_HUMBLE)
         register_feature_messages(self._types)
         self._tmpdir = temp_path(self.path)
-        self._tmpdir.mkdir()
+        with self._naming_the_output():  # a read-only folder, say
+            self._tmpdir.mkdir()
         self._bag_dir = self._tmpdir / (self.path.stem if self.single_file else self.path.name)
         plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
         self._writer = Writer(self._bag_dir, version=8, storage_plugin=plugin)

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from scanlines.errors import LogFormatError
+from scanlines.errors import NO_SUCH_FILE, LogFormatError
 from scanlines.io.carmen_messages import looks_like_carmen
 from scanlines.io.coreslam import looks_like_coreslam
 from scanlines.io.rosbag_files import is_ros2_bag_dir
@@ -83,7 +83,7 @@ def detect_format(path: str | Path) -> str:
     """
     path = Path(path)
     if not path.exists():
-        raise LogFormatError("no such file or directory", path=path)
+        raise LogFormatError(NO_SUCH_FILE, path=path)
     if path.is_dir():
         if is_ros2_bag_dir(path):
             return "rosbag"

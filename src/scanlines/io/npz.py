@@ -11,6 +11,10 @@ Keys
     without ``valid``), a largest range held by at least 1 % of all beams is taken for a
     no-return code (the SICK LMS writes 81.83 m, say), not a wall: those beams read as no
     return, and :attr:`NpzReader.notes` says so. A ``range_max`` key decides instead.
+    The scans' ``range_max`` is then the float32 just below the code
+    (:func:`no_return_limit`; extraction compares at float32 precision), so every path
+    that reads the archive (``run``, ``extract``, ``open_log``, the viewer) reads those
+    beams as no return, a single scan (``ranges`` of shape ``N``) as a stack.
 ``timestamps`` or ``timestamp``
     Optional, shape ``S`` (or scalar for one scan), seconds; ``NaN`` -> ``None``.
 ``poses`` or ``pose``, else ``odom_pose``
@@ -45,7 +49,7 @@ from typing import IO, Any
 
 import numpy as np
 
-from scanlines.errors import LogFormatError, describe
+from scanlines.errors import NO_SUCH_FILE, LogFormatError, describe
 from scanlines.io.base import (
     DEFAULT_MAX_BEAMS,
     DEFAULT_MAX_RECORD_BYTES,
@@ -178,7 +182,7 @@ class NpzReader(LogReader):
         try:
             return zipfile.ZipFile(self.path)
         except FileNotFoundError:
-            raise LogFormatError("file not found", path=self.path) from None
+            raise LogFormatError(NO_SUCH_FILE, path=self.path) from None
         except Exception as exc:  # zipfile raises several types on a damaged directory
             raise LogFormatError(
                 f"not a readable .npz archive ({describe(exc)})", path=self.path
@@ -377,8 +381,8 @@ class NpzReader(LogReader):
         pose = _first_present(row, _POSE_KEYS)
         pose_ok = pose is not None and bool(np.isfinite(pose).all())
         scalars = {k: float(row[k]) if k in row else _DEFAULTS[k] for k in _SCALAR_KEYS}
-        if self.no_return_code is not None:  # the code is no return: just below it is
-            scalars["range_max"] = float(np.nextafter(self.no_return_code, 0.0))
+        if self.no_return_code is not None:
+            scalars["range_max"] = no_return_limit(self.no_return_code)
         try:
             return Scan(
                 ranges,
@@ -391,6 +395,14 @@ class NpzReader(LogReader):
             raise LogFormatError(
                 f"scan {index}: {exc}", path=self.path, field=str(exc).split(" ", 1)[0]
             ) from None
+
+
+def no_return_limit(code: float) -> float:
+    """The ``range_max`` that reads ``code`` as no return: the float32 just below it.
+    Extraction takes ranges and limits at float32 precision (:class:`~scanlines.Extractor`);
+    the float64 just below the code rounds to the code's own float32, and the beams at the
+    code came back as returns there (two phantom walls 82 m away)."""
+    return float(np.nextafter(np.float32(code), np.float32(0.0)))
 
 
 def _check_size(header: _NpyHeader, member: zipfile.ZipInfo, path: Path, key: str) -> None:

@@ -26,6 +26,13 @@ Every entity is logged for every scan, empty when the scan has none of it, so no
 of an earlier scan lingers; the colours and radii of the points are logged once, static.
 The recording's application id is ``scanlines``, its name the output's stem; its
 wall-clock ``log_time`` timeline is left out.
+
+The SDK saves into a pipe (a FIFO in a private temporary folder) and a thread of this
+process copies it to the temporary output (:class:`_Copier`): the SDK's own file sink,
+on a write error (a full disk), logs it and stops writing, and its ``flush`` then waits
+for ever. Here the error is kept and raised by the next :meth:`RerunWriter.write` (or
+by ``close``) as one :class:`~scanlines.outputs.OutputError` naming the output, and the
+rest of the stream is read and dropped, so the SDK never waits.
 """
 
 from __future__ import annotations
@@ -34,6 +41,9 @@ import contextlib
 import functools
 import math
 import os
+import shutil
+import tempfile
+import threading
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -107,7 +117,7 @@ class RerunWriter(ResultWriter):
         super().__init__(path, meta=meta, frame=frame, overwrite=overwrite)
         if self.path.is_dir():
             raise ParameterError(f"{self.path} is a directory")
-        # A stream of its own (never the global recording), saving to the temporary file.
+        # A stream of its own (never the global recording), saved through a pipe.
         self._stream = self._rr.RecordingStream(application_id="scanlines")
         if not self._stream.is_enabled():
             raise ParameterError(
@@ -115,8 +125,11 @@ class RerunWriter(ResultWriter):
             )
         self._stream.set_log_time_enabled(False)
         self._temporary_file = temp_path(self.path)
+        self._copier: _Copier | None = None
         try:
-            self._stream.save(self._temporary_file)
+            with self._naming_the_output():
+                self._copier = _Copier(self._temporary_file)
+            self._stream.save(self._copier.pipe)
             self._stream.send_recording_name(self.path.stem)
             for name, (color, radius) in _POINT_STYLES.items():
                 style = self._rr.Points2D.from_fields(colors=color, radii=radius)
@@ -126,6 +139,7 @@ class RerunWriter(ResultWriter):
             raise
 
     def _write(self, features: ScanFeatures) -> None:
+        self._copier.check()  # type: ignore[union-attr]  # a write error so far
         rr, stream, timestamp = self._rr, self._stream, features.scan.timestamp
         stream.set_time("scan", sequence=features.index)
         if timestamp is not None and math.isfinite(timestamp):
@@ -148,13 +162,89 @@ class RerunWriter(ResultWriter):
         return self._temporary_file
 
     def _finish(self) -> None:
-        self._stream.flush()  # waits until every batch has reached the file
-        self._stream.disconnect()  # closes the file (with its footer)
-        with open(self._temporary_file, "rb") as handle:
-            os.fsync(handle.fileno())
+        self._stream.flush()  # waits until every batch has reached the pipe
+        self._stream.disconnect()  # closes the pipe (with the recording's footer)
+        self._copier.close()  # type: ignore[union-attr]  # raises a write error
         os.chmod(self._temporary_file, 0o666 & ~umask())
 
     def _abort(self) -> None:
         with contextlib.suppress(Exception):
             self._stream.disconnect()
+        if self._copier is not None:
+            with contextlib.suppress(Exception):  # the write error, raised already
+                self._copier.close()
         discard(self._temporary_file)
+
+
+class _Copier:
+    """A pipe the Rerun SDK saves into, copied by a thread to ``target`` (created here).
+
+    A write error (a full disk, a file size limit) is kept (:meth:`check` and
+    :meth:`close` raise it) and the rest of the stream read and dropped: the SDK never
+    waits on a full pipe.
+    """
+
+    def __init__(self, target: Path) -> None:
+        self._folder = Path(tempfile.mkdtemp(prefix="scanlines-rrd-"))
+        self._file = None
+        self._descriptors: list[int] = []
+        try:
+            #: The pipe to hand to the SDK's ``save``.
+            self.pipe = self._folder / "recording.rrd"
+            os.mkfifo(self.pipe, 0o600)
+            self._read = os.open(self.pipe, os.O_RDONLY | os.O_NONBLOCK)
+            self._descriptors.append(self._read)
+            # A writer of our own until the end: no end of stream before the SDK's opens.
+            self._keep_open = os.open(self.pipe, os.O_WRONLY)
+            self._descriptors.append(self._keep_open)
+            os.set_blocking(self._read, True)
+            self._file = open(target, "xb")  # noqa: SIM115 - closed by close()
+        except BaseException:
+            self._release()
+            raise
+        self.error: BaseException | None = None
+        self._thread = threading.Thread(target=self._copy, name="rrd copier", daemon=True)
+        self._thread.start()
+
+    def _copy(self) -> None:
+        while data := os.read(self._read, 1 << 16):
+            if self.error is None:
+                try:
+                    self._file.write(data)  # type: ignore[union-attr]
+                except BaseException as error:  # kept for the writer, which raises it
+                    self.error = error
+
+    def check(self) -> None:
+        """Raise the write error met so far, if any."""
+        if self.error is not None:
+            raise self.error
+
+    def close(self) -> None:
+        """After the SDK closed its end: copy the rest, write the file through to the
+        disk and close it; raise the write error met, if any."""
+        if self._keep_open in self._descriptors:
+            self._descriptors.remove(self._keep_open)
+            os.close(self._keep_open)
+            self._thread.join()
+        file, self._file = self._file, None
+        try:
+            if file is not None:
+                try:
+                    self.check()
+                    file.flush()
+                    os.fsync(file.fileno())
+                finally:
+                    file.close()
+            self.check()
+        finally:
+            self._release()
+
+    def _release(self) -> None:
+        for descriptor in self._descriptors:
+            os.close(descriptor)
+        self._descriptors.clear()
+        if self._file is not None:
+            with contextlib.suppress(OSError):
+                self._file.close()
+            self._file = None
+        shutil.rmtree(self._folder, ignore_errors=True)

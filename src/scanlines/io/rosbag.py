@@ -47,6 +47,7 @@ from scanlines.io.base import (
     ErrorPolicy,
     LogReader,
 )
+from scanlines.io.mcap_records import check_mcap_records
 from scanlines.io.rosbag_files import _bag_paths, _storage_bytes, is_ros2_bag_dir
 from scanlines.scan import Scan
 
@@ -111,6 +112,7 @@ class RosbagReader(LogReader):
             self.ros_version = 1
             self.topics = self._ros1_topics()
         else:
+            check_mcap_records(self.path)  # where a record is damaged, before rosbags
             with self._open() as reader:
                 self.ros_version = 2 if reader.is2 else 1
                 self.topics = _topic_table(reader, self.path)

@@ -15,7 +15,7 @@ from typing import IO
 
 import numpy as np
 
-from scanlines.errors import LogFormatError
+from scanlines.errors import NO_SUCH_FILE, LogFormatError
 
 __all__ = [
     "GZIP_MAGIC",
@@ -84,7 +84,7 @@ def iter_lines(path: Path, max_line: int | None = None) -> Iterator[tuple[int, s
             f"the gzip data is truncated or corrupt ({exc})", path=path, record=line_number + 1
         ) from None
     except FileNotFoundError:
-        raise LogFormatError("file not found", path=path) from None
+        raise LogFormatError(NO_SUCH_FILE, path=path) from None
 
 
 def _bounded_lines(fh: IO[str], max_line: int) -> Iterator[str]:

@@ -98,7 +98,7 @@ from pathlib import Path
 from types import TracebackType
 from typing import Any, ClassVar, Self
 
-from scanlines.errors import ParameterError, describe
+from scanlines.errors import ParameterError
 from scanlines.extraction import (
     Extraction,
     ExtractionTable,
@@ -114,7 +114,15 @@ from scanlines.io.feature_records import (
     json_records,
 )
 from scanlines.json_values import jsonable
-from scanlines.outputs import OutputError, check_output, commit, discard, temp_path, umask
+from scanlines.outputs import (
+    OutputError,
+    check_output,
+    commit,
+    discard,
+    temp_path,
+    umask,
+    write_error,
+)
 from scanlines.scan import Scan
 
 __all__ = [
@@ -249,7 +257,7 @@ class ResultWriter(ABC):
         except OutputError:
             raise
         except OSError as exc:
-            raise OutputError(f"{self.path}: cannot write the output ({describe(exc)})") from None
+            raise write_error(self.path, exc) from None
 
     def _count(self, first: Extraction | None, scans: int, segments: int, breakpoints, corners):
         if self._first_extraction is None:
@@ -376,7 +384,8 @@ class _TextFileWriter(ResultWriter):
         if self.path.is_dir():
             raise ParameterError(f"{self.path} is a directory")
         self._temporary_file = temp_path(self.path)
-        self._handle = open(self._temporary_file, "xb")  # noqa: SIM115 - closed by _finish
+        with self._naming_the_output():  # a read-only folder, say
+            self._handle = open(self._temporary_file, "xb")  # noqa: SIM115 - closed by _finish
 
     def _write(self, features: ScanFeatures) -> None:
         extraction = features.extraction

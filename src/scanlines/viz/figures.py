@@ -31,8 +31,10 @@ def pyplot() -> Any:
 def save(figure_or_axes: Any, path: str | Path, *, dpi: int = 130) -> Path:
     """Save a figure (or the figure of an axes) to ``path`` and close it; the file
     appears complete or not at all. The format is the suffix's (``.png``, ``.pdf``,
-    ``.svg``...); another suffix is a :class:`~scanlines.ParameterError`."""
-    from scanlines.outputs import commit, discard, temp_path
+    ``.svg``...); another suffix is a :class:`~scanlines.ParameterError`, and a file that
+    cannot be written (a read-only folder, a full disk) an
+    :class:`~scanlines.outputs.OutputError` naming ``path``."""
+    from scanlines.outputs import OutputError, commit, discard, temp_path, write_error
 
     figure = getattr(figure_or_axes, "figure", figure_or_axes)
     path = Path(path)
@@ -41,11 +43,15 @@ def save(figure_or_axes: Any, path: str | Path, *, dpi: int = 130) -> Path:
         pyplot().close(figure)
         known = ", ".join(sorted(figure.canvas.get_supported_filetypes()))
         raise ParameterError(f"{path}: figures are written as one of {known}, not {kind!r}")
-    path.parent.mkdir(parents=True, exist_ok=True)
     temporary = temp_path(path)
     try:
+        path.parent.mkdir(parents=True, exist_ok=True)
         figure.savefig(temporary, dpi=dpi, bbox_inches="tight", format=kind)
         commit([(temporary, path)], overwrite=True)
+    except OutputError:
+        raise
+    except OSError as error:
+        raise write_error(path, error, "the figure") from None
     finally:
         discard(temporary)
         pyplot().close(figure)

@@ -654,6 +654,7 @@ async function watchLog() {
   if (!state.log.ready) notes.push("preparing the extractor (measuring the sensor profile)");
   else if (state.log.profile) notes.push(`sensor profile ${state.log.profile}`);
   if (state.log.error) notes.push(`reading stopped: ${state.log.error}`);
+  for (const note of (state.log.reader && state.log.reader.notes) || []) notes.push(note);
   $("#log-state").textContent = notes.join(", ");
   if (state.log.error) showError(`reading stopped: ${state.log.error}`);
   if (reading || !state.log.ready) setTimeout(watchLog, 300);
@@ -690,7 +691,9 @@ async function start() {
   });
   for (const radio of document.querySelectorAll("input[name=view]")) {
     radio.addEventListener("change", (event) => {
-      state.view = event.target.value; state.transform = null; showPoseNote(); refresh(event);
+      state.view = event.target.value; state.transform = null;
+      state.selected = null;   // a segment of the scan view is not one of the world's
+      showSelection(); showPoseNote(); refresh(event);
     });
   }
   for (const box of document.querySelectorAll("#layers input")) {
