@@ -395,6 +395,23 @@ def test_api_map_of_a_log_without_poses_says_why(tmp_path):
     assert answer == {"error": "scans.csv has no poses: no line map"}
 
 
+@pytest.mark.parametrize("offset", [1e9 + 1.0, 1e15])
+def test_api_map_of_a_log_beyond_the_maps_limit_is_a_400_naming_the_scan(tmp_path, offset):
+    """Before: 500 (an ArrayMemoryError from 1e9 m)."""
+    from map_shift import shifted_sample
+    from scanlines.viewer import ViewerServer
+
+    log = shifted_sample("intel", offset, tmp_path)
+    with ViewerServer(ViewerSession(ScanStore(log, {}))) as server:
+        status, answer = request(server, "/api/map", {"config": {}})
+    assert status == 400
+    assert re.fullmatch(
+        rf"{re.escape(log.name)}: scan 0: the pose's x = \S+ m is beyond the map's limit "
+        r"\|x\| <= 1e9 m",
+        answer["error"],
+    ), answer
+
+
 def test_api_config_is_a_toml_file_and_a_command_line(intel_server, tmp_path):
     config = {
         "method": "split_merge",

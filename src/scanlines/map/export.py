@@ -44,9 +44,8 @@ __all__ = [
 
 #: What the coordinates of a map file are.
 FRAME_NOTE = (
-    "metres in the log's own world frame (x east/forward, y north/left as the log has "
-    "them), not WGS84 longitude and latitude; a GIS must be told the frame (for a log in "
-    "UTM, its zone's EPSG code)"
+    "metres in the log's own world frame, a local metric frame: not WGS84 longitude and "
+    "latitude; a GIS must be told the frame (for a log in UTM, its zone's EPSG code)"
 )
 
 
