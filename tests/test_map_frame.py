@@ -19,8 +19,6 @@ from scanlines import Extractor
 from scanlines.cli.commands import app
 from scanlines.io import open_log
 from scanlines.map import FusionSettings, LineMap, build_map
-from scanlines.map.frame import MapError, frame_at
-from scanlines.map.grid import CELLS_PER_BOX, _Grid, box_pairs
 from scanlines.map.holdout import evaluate_map
 
 OFFSETS = (0.0, 1e4, 1e5, 5e6, 1e7, 1e8)
@@ -126,6 +124,7 @@ def test_a_log_at_1e8_m_maps_as_fast_as_at_the_origin(tmp_path, extractor):
 def test_a_pose_or_segment_beyond_the_extent_names_the_source_and_scan():
     from scanlines import extract
     from scanlines.io.transform import to_world
+    from scanlines.map.frame import MapError
     from test_map import view
 
     walls = [((-3.0, 2.0), (6.0, 2.0)), ((6.0, -3.0), (6.0, 2.0))]
@@ -145,6 +144,8 @@ def test_a_pose_or_segment_beyond_the_extent_names_the_source_and_scan():
 
 
 def test_the_local_frame_is_the_first_pose_rounded_to_the_metre():
+    from scanlines.map.frame import frame_at
+
     assert frame_at((1e7 + 0.274, -13.486, 2.0)).origin == (1e7, -13.0)
     assert frame_at((-0.4, 0.2, 0.0)).origin == (0.0, 0.0)
     assert math.copysign(1.0, frame_at((-0.4, 0.2, 0.0)).x0) == 1.0
@@ -165,6 +166,8 @@ def random_boxes(rng, n, spread, size):
 
 @pytest.mark.parametrize("spread", [20.0, 1e9])
 def test_the_spatial_index_finds_every_overlapping_pair(spread):
+    from scanlines.map.grid import box_pairs
+
     rng = np.random.default_rng(3)
     queries = random_boxes(rng, 300, spread, spread / 5)
     boxes = random_boxes(rng, 400, spread, spread / 5)
@@ -174,6 +177,8 @@ def test_the_spatial_index_finds_every_overlapping_pair(spread):
 
 def test_the_spatial_index_bounds_its_cells_for_a_huge_box():
     """A line 10^9 m long (and 10^9 m wide a box) among small ones: before, 10^17 cells."""
+    from scanlines.map.grid import CELLS_PER_BOX, _Grid, box_pairs
+
     rng = np.random.default_rng(4)
     boxes = np.vstack((random_boxes(rng, 500, 50.0, 3.0), [[-1e9, -1e9, 1e9, 1e9]]))
     grid = _Grid(boxes)

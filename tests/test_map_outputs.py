@@ -18,7 +18,6 @@ from typer.testing import CliRunner
 from map_shift import shifted_sample
 from scanlines.cli.commands import app
 from scanlines.data import sample
-from scanlines.map.export import dumps
 from scanlines.map.poses import PoseError, read_tum
 from scanlines.scan import Scan
 
@@ -49,6 +48,8 @@ def test_eval_map_without_align_writes_strict_json(tmp_path):
 
 
 def test_dumps_never_writes_a_bare_nan_or_infinity():
+    from scanlines.map.export import dumps
+
     text = dumps({"a": float("nan"), "b": [float("inf"), -float("inf")], "c": np.float64(1.5)})
     assert strict(text) == {"a": None, "b": ["inf", "-inf"], "c": 1.5}
 
