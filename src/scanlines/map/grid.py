@@ -32,7 +32,8 @@ def boxes_of(ends: np.ndarray, margin: float) -> np.ndarray:
 
 
 class _Grid:
-    """Cells of side ``cell`` (metres), counted from the cell ``anchor`` (two integers)."""
+    """Cells of side ``cell`` (metres), counted from the cell ``anchor`` (two integers), over
+    the ``N x 4`` ``boxes``: :meth:`cells` lists the cells of rows of them."""
 
     def __init__(self, boxes: np.ndarray) -> None:
         low = boxes[:, :2].min(axis=0)
@@ -41,27 +42,31 @@ class _Grid:
         cap = CELLS_PER_BOX * len(boxes) + 4096
         while True:
             anchor = np.floor(low / cell)
-            lo, hi = self._corners(boxes, cell, anchor)
-            if float(np.prod(hi - lo + 1.0, axis=1).sum()) <= cap:
+            lo = np.floor(boxes[:, :2] / cell) - anchor
+            hi = np.floor(boxes[:, 2:] / cell) - anchor
+            size = hi - lo + 1.0
+            if float(np.dot(size[:, 0], size[:, 1])) <= cap:
                 break
             cell *= 2.0
         self.cell, self.anchor = cell, anchor
+        self._lo, self._size = lo.astype(np.int64), size.astype(np.int64)
 
-    @staticmethod
-    def _corners(boxes: np.ndarray, cell: float, anchor: np.ndarray):
-        return np.floor(boxes[:, :2] / cell) - anchor, np.floor(boxes[:, 2:] / cell) - anchor
-
-    def cells(self, boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``(keys, rows)``: the cells each box of ``boxes`` (``N x 4``) covers, one pair per
-        cell, keys as integers."""
-        lo, hi = (c.astype(np.int64) for c in self._corners(boxes, self.cell, self.anchor))
-        size = hi - lo + 1
+    def cells(self, rows: slice) -> tuple[np.ndarray, np.ndarray]:
+        """``(keys, rows)``: the cells each box of ``rows`` (of the boxes the grid was made
+        of) covers, one pair per cell, keys as integers, rows counted from the slice's
+        start."""
+        lo, size = self._lo[rows], self._size[rows]
         count = size[:, 0] * size[:, 1]
-        rows = np.repeat(np.arange(len(boxes)), count)
+        owner = np.repeat(np.arange(len(lo)), count)
         local = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
-        cx = lo[rows, 0] + local % size[rows, 0]
-        cy = lo[rows, 1] + local // size[rows, 0]
-        return (cx << _BITS) | cy, rows
+        cx = lo[owner, 0] + local % size[owner, 0]
+        cy = lo[owner, 1] + local // size[owner, 0]
+        return (cx << _BITS) | cy, owner
+
+    def keys_at(self, points: np.ndarray) -> np.ndarray:
+        """The key of the cell of each ``K x 2`` point."""
+        cell = (np.floor(points / self.cell) - self.anchor).astype(np.int64)
+        return (cell[:, 0] << _BITS) | cell[:, 1]
 
 
 def box_pairs(queries: np.ndarray, boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -71,10 +76,10 @@ def box_pairs(queries: np.ndarray, boxes: np.ndarray) -> tuple[np.ndarray, np.nd
     if not len(queries) or not len(boxes):
         return empty, empty
     grid = _Grid(np.vstack((queries, boxes)))
-    box_keys, box_rows = grid.cells(boxes)
+    box_keys, box_rows = grid.cells(slice(len(queries), None))
     order = np.argsort(box_keys, kind="stable")
     box_keys, box_rows = box_keys[order], box_rows[order]
-    query_keys, query_rows = grid.cells(queries)
+    query_keys, query_rows = grid.cells(slice(0, len(queries)))
     starts = np.searchsorted(box_keys, query_keys, side="left")
     stops = np.searchsorted(box_keys, query_keys, side="right")
     count = stops - starts
@@ -114,5 +119,5 @@ def _cell_pairs(grid, boxes, queries, box_rows, query_keys, query_rows, starts, 
     )
     # A pair meets in several cells: keep it once, in the cell of its overlap's low corner.
     corner = np.maximum(box[:, :2], query[:, :2])
-    hit &= grid.cells(np.hstack((corner, corner)))[0] == key
+    hit &= grid.keys_at(corner) == key
     return q[hit].astype(np.int64), b[hit].astype(np.int64)
