@@ -1,15 +1,19 @@
-"""Fuzz the log readers: mutate the seeds, read each input through every channel, report.
+"""Fuzz the log readers and the map commands: mutate the seeds, run each input through
+every channel of its target, report.
 
 Usage, from the repository root::
 
-    python -m tests.fuzz.run --count 5000 --seed 1 [--jobs 2] [--save-failures DIR]
+    python -m tests.fuzz.run --count 5000 --seed 1 [--jobs 2] [--target all|logs|maps]
+        [--save-failures DIR]
 
-Input ``i`` is seed ``i mod S`` (round robin over the seed formats) mutated by
-the next plan of that seed (round robin over its mutators), with a generator
-seeded by ``(seed, i)``: the same ``--seed`` always gives the same inputs, and
-the first ``n`` inputs of a longer run are those of a run of ``n``. Prints a
-table of outcomes by format and channel and every defect; exits 1 if there is
-any defect.
+Targets: ``logs`` (every log format through the readers, ``info`` and ``run``) and
+``maps`` (a CARMEN log's poses and a TUM file through ``map`` and ``eval --map``:
+``map_target.py``); ``all`` (the default) both. Input ``i`` is seed ``i mod S`` (round
+robin over the seeds of the targets) mutated by the next plan of that seed (round robin
+over its mutators), with a generator seeded by ``(seed, i)``: the same ``--seed`` and
+``--target`` always give the same inputs, and the first ``n`` inputs of a longer run are
+those of a run of ``n``. Prints a table of outcomes by seed and channel and every defect;
+exits 1 if there is any defect.
 """
 
 from __future__ import annotations
@@ -40,8 +44,17 @@ from .channels import (
     Outcome,
     Worker,
 )
+from .map_channels import MAP_CHANNELS
+from .map_target import MAP_SEED_FILES, build_map_seeds, map_plans
 from .plans import make_input, plans_for
 from .seeds import SEED_FILES, build_seeds
+
+#: Each target's seeds, its plans and its channels.
+TARGETS = {
+    "logs": (tuple(SEED_FILES), plans_for, CHANNELS),
+    "maps": (tuple(MAP_SEED_FILES), map_plans, MAP_CHANNELS),
+}
+ALL_TARGETS = ("logs", "maps")
 
 
 @dataclass
@@ -54,6 +67,7 @@ class Case:
     path: Path
     outcomes: list[Outcome] = field(default_factory=list)
     saved: Path | None = None
+    channels: tuple[str, ...] | None = None  # None: those of the run
 
     @property
     def defects(self) -> list[Outcome]:
@@ -67,14 +81,21 @@ class Case:
         )
 
 
-def make_case(index: int, seed: int, seeds: dict[str, Path], folder: Path) -> Case:
-    names = list(SEED_FILES)
+def make_case(
+    index: int,
+    seed: int,
+    seeds: dict[str, Path],
+    folder: Path,
+    targets: tuple[str, ...] = ("logs",),
+) -> Case:
+    names = [name for target in targets for name in TARGETS[target][0]]
     seed_name = names[index % len(names)]
-    plans = plans_for(seed_name)
+    target = next(t for t in targets if seed_name in TARGETS[t][0])
+    plans = TARGETS[target][1](seed_name)
     plan = plans[(index // len(names)) % len(plans)]
     rng = random.Random(f"{seed}:{index}")
     path = make_input(seeds[seed_name], plan, rng, folder / f"{index:05d}-{seeds[seed_name].name}")
-    return Case(index, seed_name, plan.name, path)
+    return Case(index, seed_name, plan.name, path, channels=TARGETS[target][2])
 
 
 def remove(path: Path) -> None:
@@ -128,7 +149,7 @@ def run_cases(
                 if index is None:
                     return
                 case = make(index)
-                case.outcomes = worker.run_all(case.path, channels)
+                case.outcomes = worker.run_all(case.path, case.channels or channels)
                 if case.defects and save_failures is not None:
                     case.saved = save_input(case, seed, save_failures)
                 if remove_inputs:
@@ -154,31 +175,46 @@ def run_cases(
     return sorted(cases, key=lambda c: c.index)
 
 
-def fuzz(count: int, seed: int = 1, *, workdir: Path | None = None, **options: Any) -> list[Case]:
-    """Generate ``count`` inputs from ``seed`` and read each through every channel.
+def fuzz(
+    count: int,
+    seed: int = 1,
+    *,
+    workdir: Path | None = None,
+    targets: tuple[str, ...] = ALL_TARGETS,
+    **options: Any,
+) -> list[Case]:
+    """Generate ``count`` inputs of ``targets`` from ``seed`` and run each through every
+    channel of its target.
 
     ``options`` are those of :func:`run_cases` (``jobs``, ``save_failures``, ...).
     """
     with tempfile.TemporaryDirectory(prefix="scanlines-fuzz-") as scratch:
         workdir = Path(scratch) if workdir is None else workdir
-        seeds = build_seeds(workdir / "seeds")
+        seeds: dict[str, Path] = {}
+        if "logs" in targets:
+            seeds |= build_seeds(workdir / "seeds")
+        if "maps" in targets:
+            seeds |= build_map_seeds(workdir / "seeds")
         inputs = workdir / "inputs"
         shutil.rmtree(inputs, ignore_errors=True)
         inputs.mkdir(parents=True)
 
         def make(index: int) -> Case:
-            return make_case(index, seed, seeds, inputs)
+            return make_case(index, seed, seeds, inputs, targets)
 
         return run_cases(make, count, workdir=workdir, seed=seed, remove_inputs=True, **options)
 
 
 def replay(paths: list[Path], *, workdir: Path | None = None, **options: Any) -> list[Case]:
-    """Read saved inputs (files or bag directories) through every channel and ``run mcap``."""
+    """Read saved inputs (files or bag directories) through every channel and ``run mcap``;
+    map inputs (a folder with ``log.clf``) through the map channels."""
     with tempfile.TemporaryDirectory(prefix="scanlines-replay-") as scratch:
         workdir = Path(scratch) if workdir is None else workdir
 
         def make(index: int) -> Case:
-            return Case(index, paths[index].name, "replay", paths[index])
+            path = paths[index]
+            channels = MAP_CHANNELS if is_map_input(path) else None
+            return Case(index, path.name, "replay", path, channels=channels)
 
         options.setdefault("channels", CHANNELS + EXTRA_CHANNELS)
         return run_cases(make, len(paths), workdir=workdir, **options)
@@ -263,6 +299,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--count", type=int, default=300, help="inputs to generate (300)")
     parser.add_argument("--seed", type=int, default=1, help="seed of the mutations (1)")
     parser.add_argument("--jobs", type=int, default=1, help="worker processes (1)")
+    parser.add_argument(
+        "--target", choices=("all", *ALL_TARGETS), default="all", help="what to fuzz (all)"
+    )
     parser.add_argument("--save-failures", type=Path, help="copy defective inputs here")
     parser.add_argument("--workdir", type=Path, help="keep seeds and outputs here (default: temp)")
     parser.add_argument("--timeout", type=float, default=DEFAULT_TIMEOUT, help="s per channel (20)")
@@ -293,16 +332,24 @@ def main(argv: list[str] | None = None) -> int:
     if args.replay:
         cases = replay(replay_inputs(args.replay), **options)
     else:
-        cases = fuzz(args.count, args.seed, **options)
+        targets = ALL_TARGETS if args.target == "all" else (args.target,)
+        cases = fuzz(args.count, args.seed, targets=targets, **options)
     print(report(cases, time.perf_counter() - started))
     return 1 if any(case.defects for case in cases) else 0
 
 
+def is_map_input(path: Path) -> bool:
+    """A map target's input: a folder holding ``log.clf``."""
+    return path.is_dir() and (path / "log.clf").is_file()
+
+
 def replay_inputs(paths: list[Path]) -> list[Path]:
-    """Files and bag directories as given; a folder that is not a bag: its entries."""
+    """Files, bag directories and map inputs as given; another folder: its entries."""
     inputs = []
     for path in paths:
-        if path.is_dir() and not (path / "metadata.yaml").exists() and path.suffix == "":
+        if is_map_input(path):
+            inputs.append(path)
+        elif path.is_dir() and not (path / "metadata.yaml").exists() and path.suffix == "":
             inputs += sorted(p for p in path.iterdir() if p.suffix != ".md")
         else:
             inputs.append(path)

@@ -1,8 +1,10 @@
-"""Fuzzing the log readers: past failures stay fixed, and seeded mutations find no defect.
+"""Fuzzing the log readers and the map commands: past failures stay fixed, and seeded
+mutations find no defect.
 
-Every input is read through the library (fail and skip modes) and the
-``info`` and ``run`` commands, in worker processes with a timeout and a memory
-limit (see ``channels.py``). A failure lists each defect as ``format |
+Every log input is read through the library (fail and skip modes) and the
+``info`` and ``run`` commands, every map input (a log's poses, a TUM file) through
+``map`` and ``eval --map``, in worker processes with a timeout and a memory
+limit (see ``channels.py``, ``map_channels.py``). A failure lists each defect as ``format |
 mutator | channel | error | message | input``. ``pytest --long`` runs the long
 mutation campaign instead of the short one.
 """
@@ -20,6 +22,7 @@ from .run import Case, fuzz, replay, report
 pytestmark = pytest.mark.slow  # thousands of damaged inputs
 
 SHORT_RUN = 300
+MAP_RUN = 45
 LONG_RUN = 5000
 SEED = 1
 JOBS = max(1, min(2, len(os.sched_getaffinity(0))))
@@ -54,6 +57,17 @@ def test_short_mutation_run(request: pytest.FixtureRequest, tmp_path: Path) -> N
         pytest.skip("the long run covers these inputs (the first of the same seed)")
     cases = fuzz(SHORT_RUN, SEED, jobs=JOBS, save_failures=tmp_path / "failures")
     assert len(cases) == SHORT_RUN
+    fail_on_defects(cases)
+
+
+def test_short_map_run(tmp_path: Path) -> None:
+    """The map target alone, bounded: 45 inputs (15 of each map seed: shifted, damaged and
+    jumping poses, TUM files with duplicates, huge or non-finite fields) through ``map``
+    and ``eval --map``. Reproduce with ``python -m tests.fuzz.run --count 45 --seed 1
+    --target maps``."""
+    cases = fuzz(MAP_RUN, SEED, targets=("maps",), jobs=JOBS, save_failures=tmp_path / "failures")
+    assert len(cases) == MAP_RUN
+    assert {o.channel for case in cases for o in case.outcomes} == {"map", "eval map"}
     fail_on_defects(cases)
 
 
