@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from scanlines._core import partition_optimal_runs
 
 from scanlines import Extractor, Scan, extract
 from scanlines.data import sample
 from scanlines.io import open_log
-from scanlines._core import partition_optimal_runs
 
 PENALTY, CLUTTER, MIN_POINTS = 6.0, 4.0, 3
 
