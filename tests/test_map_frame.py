@@ -36,7 +36,7 @@ def mapped(path, extractor):
 
 @pytest.mark.parametrize("name", ["intel", "freiburg"])
 def test_the_same_trajectory_shifted_by_a_constant_gives_the_same_map(name, tmp_path, extractor):
-    """Before: 117, 165, 183 and 74 lines at 0, 1e4, 1e5 and 5e6 m (Intel)."""
+    """Before: 117, 165, 183 and 75 lines at 0, 1e4, 1e5 and 5e6 m (Intel)."""
     reference = None
     for offset in OFFSETS:
         build = mapped(shifted_sample(name, offset, tmp_path), extractor)
