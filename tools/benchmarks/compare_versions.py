@@ -5,12 +5,12 @@
 For a change that must not be slower: install the other version into a virtual environment
 of its own (``python -m venv /tmp/old && /tmp/old/bin/pip install .`` in a checkout of it)
 and pass that environment's ``python``. Each round runs one child process per version, the
-other version first in even rounds and last in odd ones; a child loads the scans, extracts each once (the other
-version's kernels compile or load from its cache there, lazy imports happen), then times
-``PASSES`` passes over each dataset and reports the median time per scan. Printed per
-method and dataset: the median over rounds of each version's time and the median of the
-paired ratios (this / other; below 1 is faster), so that both versions see the same state
-of a shared machine.
+other version first in even rounds and last in odd ones; a child loads the scans, extracts
+each once (the other version's kernels compile or load from its cache there, lazy imports
+happen), then times ``PASSES`` passes over each dataset and reports the median time per
+scan. Printed per method and dataset: the median over rounds of each version's time and the
+median of the paired ratios (this / other; below 1 is faster), so that both versions see
+the same state of a shared machine.
 
 The datasets: the first 60 scans of the shipped Intel (180 beams) and Freiburg (360 beams)
 excerpts, 60 simulated TiM571 scenes (481 beams, seeds 0-59), and 60 rooms seen by a
