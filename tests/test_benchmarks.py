@@ -56,3 +56,12 @@ def test_compare_versions_times_two_versions_in_their_own_processes():
     rows = [line.split() for line in out.splitlines()[1:]]
     assert [row[0] for row in rows] == ["iepf/intel", "iepf/freiburg", "iepf/tim571", "iepf/1081"]
     assert all(float(value) > 0 for row in rows for value in row[-3:])
+
+
+def test_map_offsets_gives_one_map_at_every_offset_and_refuses_beyond_the_limit():
+    out = run("map_offsets.py", "--offsets", "0", "1e7", "2e9")
+    rows = [line.split("|")[1:-1] for line in out.splitlines()[2:]]
+    assert [row[1].strip() for row in rows] == ["0", "0", "2"]
+    assert rows[0][2] == rows[1][2]  # the same lines
+    assert float(rows[1][3]) < 1e-6
+    assert "beyond the map's limit" in rows[2][6]

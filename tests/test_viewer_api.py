@@ -363,8 +363,9 @@ def test_api_map_is_the_library_map_of_the_log_in_the_world_frame(intel_server):
     assert np.isfinite(ends).all()
     expected = library_map(sample("intel"), config)
     assert len(lines) == len(expected)
-    np.testing.assert_allclose(ends[:, 0], expected.start)
-    np.testing.assert_allclose(ends[:, 1], expected.end)
+    np.testing.assert_allclose(ends[:, 0], expected.world_start)
+    np.testing.assert_allclose(ends[:, 1], expected.world_end)
+    assert answer["origin"] == list(expected.origin)
     assert [line["scans"] for line in lines] == expected.scans.tolist()
     assert [line["first_scan"] for line in lines] == expected.first_scan.tolist()
     assert [line["last_scan"] for line in lines] == expected.last_scan.tolist()
@@ -392,6 +393,23 @@ def test_api_map_of_a_log_without_poses_says_why(tmp_path):
         assert request(server, "/api/map", b"{}")[0] == 400  # no configuration
     assert status == 409
     assert answer == {"error": "scans.csv has no poses: no line map"}
+
+
+@pytest.mark.parametrize("offset", [1e9 + 1.0, 1e15])
+def test_api_map_of_a_log_beyond_the_maps_limit_is_a_400_naming_the_scan(tmp_path, offset):
+    """Before: 500 (an ArrayMemoryError from 1e9 m)."""
+    from map_shift import shifted_sample
+    from scanlines.viewer import ViewerServer
+
+    log = shifted_sample("intel", offset, tmp_path)
+    with ViewerServer(ViewerSession(ScanStore(log, {}))) as server:
+        status, answer = request(server, "/api/map", {"config": {}})
+    assert status == 400
+    assert re.fullmatch(
+        rf"{re.escape(log.name)}: scan 0: the pose's x = \S+ m is beyond the map's limit "
+        r"\|x\| <= 1e9 m",
+        answer["error"],
+    ), answer
 
 
 def test_api_config_is_a_toml_file_and_a_command_line(intel_server, tmp_path):

@@ -11,7 +11,10 @@ Channels
 ``run``
     ``scanlines run PATH --out DIR/out.jsonl --on-error skip``, in-process.
 
-``run mcap`` (``--out DIR/out.mcap``) is an extra channel for the corpus.
+``run mcap`` (``--out DIR/out.mcap``) is an extra channel for the corpus. The map
+target's channels, ``map`` and ``eval map``, are in ``map_channels.py``; the DDS target's,
+``dds node`` and ``node exit``, in ``dds_target.py``. :class:`Case` (an input and its
+outcomes) serves all three targets.
 
 Outcomes
 --------
@@ -48,6 +51,8 @@ from dataclasses import asdict, dataclass, field
 from multiprocessing.connection import Connection
 from pathlib import Path
 from typing import Any
+
+from .map_channels import MAP_CHANNELS, map_channel
 
 CHANNELS = ("library fail", "library skip", "info", "run")
 EXTRA_CHANNELS = ("run mcap",)
@@ -151,10 +156,16 @@ def command_channel(channel: str, path: Path, workdir: Path, declared: int | Non
         if channel == "run":
             return check_run_output(channel, out, declared)
         return Outcome(channel, SUCCESS)
+    return classify_failure(channel, result)
+
+
+def classify_failure(channel: str, result: Any, notices: tuple[str, ...] = ()) -> Outcome:
+    """A command that did not exit 0: a clean error (exit 2, one ``scanlines: error:`` line,
+    last, besides notices) or a defect."""
     stderr = result.stderr.strip().splitlines()
     if result.exit_code == 2:
         errors = [line for line in stderr if line.startswith("scanlines: error:")]
-        others = [line for line in stderr if not line.startswith(NOTICE_PREFIXES)]
+        others = [line for line in stderr if not line.startswith(NOTICE_PREFIXES + notices)]
         if len(errors) == 1 and others == errors and stderr[-1] == errors[0]:
             return Outcome(channel, CLEAN_ERROR, "exit 2", errors[0])
         return Outcome(channel, DEFECT, "exit 2 with a malformed error", all_lines(result.stderr))
@@ -186,7 +197,9 @@ def run_channel(channel: str, path: str, workdir: str, declared: int | None) -> 
     suite's warning filter) turns an otherwise clean outcome into a defect."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        if channel.startswith("library"):
+        if channel in MAP_CHANNELS:
+            outcome = map_channel(channel, Path(path), Path(workdir))
+        elif channel.startswith("library"):
             outcome = library_channel(channel, Path(path))
         else:
             outcome = command_channel(channel, Path(path), Path(workdir), declared)
@@ -324,6 +337,7 @@ class Case:
     path: Path
     outcomes: list[Outcome] = field(default_factory=list)
     saved: Path | None = None
+    channels: tuple[str, ...] | None = None  # None: those of the run
 
     @property
     def defects(self) -> list[Outcome]:

@@ -30,7 +30,8 @@ BAG_DIRECTORY_SEEDS = ("ros2-db3-dir", "ros2-mcap-dir")
 @dataclass(frozen=True)
 class Plan:
     """One way of mutating a seed: ``name`` (e.g. ``text/bad_number``), the mutator and,
-    for a bag directory, the file it damages (``"storage"`` or ``"metadata.yaml"``)."""
+    for a folder (a bag directory, a map input), the file it damages (``"storage"``: the
+    bag's storage file; else the file's name, e.g. ``"metadata.yaml"``, ``"poses.tum"``)."""
 
     name: str
     mutator: Mutator
@@ -80,8 +81,8 @@ def make_input(seed: Path, plan: Plan, rng: random.Random, destination: Path) ->
         destination.write_bytes(plan.mutator(rng, seed.read_bytes()))
         return destination
     shutil.copytree(seed, destination)
-    if plan.target == "metadata.yaml":
-        target = destination / "metadata.yaml"
+    if plan.target not in (None, "storage"):  # a file of the folder by name
+        target = destination / plan.target
     else:
         target = next(p for p in sorted(destination.iterdir()) if p.name != "metadata.yaml")
     target.write_bytes(plan.mutator(rng, target.read_bytes()))

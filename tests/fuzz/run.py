@@ -1,20 +1,27 @@
-"""Fuzz the log readers and the ROS 2 node: mutate the seeds, try each input, report.
+"""Fuzz the log readers, the map commands and the ROS 2 node: mutate the seeds, try each
+input, report.
 
 Usage, from the repository root::
 
-    python -m tests.fuzz.run --count 5000 --seed 1 [--jobs 2] [--targets logs dds]
+    python -m tests.fuzz.run --count 5000 --seed 1 [--jobs 2] [--targets logs maps dds]
                              [--save-failures DIR]
 
-Two targets. ``logs`` (the default): input ``i`` is seed ``i mod S`` (round robin over
-the seed formats) mutated by the next plan of that seed (round robin over its mutators),
-read through every channel of ``channels.py``. ``dds``: input ``i`` is a LaserScan
-sample mutated by plan ``i mod P`` of ``mutate_cdr.py``, sent to one running ROS 2 node
-(``dds_target.py``). With both, ``--count`` is shared: input ``k`` of the campaign goes to
-target ``k mod 2``. Each target's generator is seeded by ``(seed, i)``: the same
-``--seed`` always gives the same inputs, and the first ``n`` inputs of a target in a longer
-run are those of a run of ``n``. Prints a table of outcomes by format and channel and
-every defect; exits 1 if there is any defect. ``--replay`` takes saved inputs (``.cdr``
-ones go to the node).
+Three targets. ``logs``: every log format (``seeds.py``), mutated by the plans of
+``plans.py``, read through every channel of ``channels.py`` (the library, ``info``,
+``run``). ``maps``: a CARMEN log's poses and a TUM file of them (``map_target.py``),
+mutated by ``mutate_maps.py``, through ``map`` and ``eval --map`` (``map_channels.py``).
+``dds``: a LaserScan sample mutated by ``mutate_cdr.py``, sent to one running ROS 2 node
+(``dds_target.py``); it starts a node, so it runs only when named. ``--targets`` takes
+any of them (default ``logs maps``). ``--count`` is shared: input ``k`` of the campaign
+goes to target ``k mod T`` of the ``T`` named. Input ``i`` of ``logs`` or ``maps`` is
+seed ``i mod S`` of that target (round robin over its seeds) mutated by the next plan of
+that seed (round robin over its mutators); input ``i`` of ``dds`` is the sample mutated by
+plan ``i mod P``. Each target's generator is seeded by ``(seed, i)``: the same ``--seed``
+always gives the same inputs, and the first ``n`` inputs of a target in a longer run are
+those of a run of ``n``. Prints a table of outcomes by seed and channel for each target
+and every defect; exits 1 if there is any defect. ``--replay`` takes saved inputs: log
+files and bag directories, map inputs (a folder with ``log.clf``) and DDS samples
+(``.cdr``, sent to a node).
 """
 
 from __future__ import annotations
@@ -29,7 +36,7 @@ import time
 from collections import Counter, defaultdict
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 from scanlines.data import sample
 
@@ -45,21 +52,46 @@ from .channels import (
     Outcome,
     Worker,
 )
-from .plans import make_input, plans_for
+from .map_channels import MAP_CHANNELS
+from .map_target import MAP_SEED_FILES, build_map_seeds, map_plans
+from .plans import Plan, make_input, plans_for
 from .seeds import SEED_FILES, build_seeds
 
-#: What inputs go to: the log readers (``channels.py``), a ROS 2 node (``dds_target.py``).
-TARGETS = ("logs", "dds")
+
+class SeededTarget(NamedTuple):
+    """A target whose inputs are mutated seed files: its seeds (names), how they are
+    written, the plans of a seed and the channels its inputs go through."""
+
+    seeds: tuple[str, ...]
+    build: Callable[[Path], dict[str, Path]]
+    plans: Callable[[str], list[Plan]]
+    channels: tuple[str, ...]
 
 
-def make_case(index: int, seed: int, seeds: dict[str, Path], folder: Path) -> Case:
-    names = list(SEED_FILES)
-    seed_name = names[index % len(names)]
-    plans = plans_for(seed_name)
-    plan = plans[(index // len(names)) % len(plans)]
+#: The targets made of mutated seed files, in worker processes (``channels.py``).
+SEEDED_TARGETS = {
+    "logs": SeededTarget(tuple(SEED_FILES), build_seeds, plans_for, CHANNELS),
+    "maps": SeededTarget(tuple(MAP_SEED_FILES), build_map_seeds, map_plans, MAP_CHANNELS),
+}
+#: What inputs go to: the log readers, the map commands, a ROS 2 node (``dds_target.py``).
+TARGETS = ("logs", "maps", "dds")
+#: Those of a run that names none (``dds`` starts a node: only when named).
+DEFAULT_TARGETS = ("logs", "maps")
+
+
+def make_case(
+    index: int, seed: int, seeds: dict[str, Path], folder: Path, target: str = "logs"
+) -> Case:
+    """Input ``index`` of ``target``: its seed ``index mod S`` mutated by that seed's next
+    plan, with a generator seeded by ``seed:index`` (a run of one target makes the inputs
+    that target made before the targets shared a campaign)."""
+    spec = SEEDED_TARGETS[target]
+    seed_name = spec.seeds[index % len(spec.seeds)]
+    plans = spec.plans(seed_name)
+    plan = plans[(index // len(spec.seeds)) % len(plans)]
     rng = random.Random(f"{seed}:{index}")
     path = make_input(seeds[seed_name], plan, rng, folder / f"{index:05d}-{seeds[seed_name].name}")
-    return Case(index, seed_name, plan.name, path)
+    return Case(index, seed_name, plan.name, path, channels=spec.channels)
 
 
 def remove(path: Path) -> None:
@@ -94,7 +126,8 @@ def run_cases(
     memory_limit: int = DEFAULT_MEMORY_LIMIT,
     progress: bool = False,
 ) -> list[Case]:
-    """Cases ``make(0) ... make(count - 1)`` through ``channels``, in ``jobs`` workers."""
+    """Cases ``make(0) ... make(count - 1)``, each through its own channels (``channels``
+    where it has none), in ``jobs`` workers."""
     cases: list[Case] = []
     pending = iter(range(count))
     lock = threading.Lock()
@@ -113,7 +146,7 @@ def run_cases(
                 if index is None:
                     return
                 case = make(index)
-                case.outcomes = worker.run_all(case.path, channels)
+                case.outcomes = worker.run_all(case.path, case.channels or channels)
                 if case.defects and save_failures is not None:
                     case.saved = save_input(case, seed, save_failures)
                 if remove_inputs:
@@ -139,19 +172,26 @@ def run_cases(
     return sorted(cases, key=lambda c: c.index)
 
 
+def without_domain(options: dict[str, Any]) -> dict[str, Any]:
+    """``options`` less the DDS target's own (``domain``), for :func:`run_cases`."""
+    return {k: v for k, v in options.items() if k != "domain"}
+
+
 def fuzz(
     count: int,
     seed: int = 1,
     *,
-    targets: tuple[str, ...] = ("logs",),
+    targets: tuple[str, ...] = DEFAULT_TARGETS,
     workdir: Path | None = None,
     **options: Any,
 ) -> list[Case]:
     """Generate ``count`` inputs from ``seed``, shared round robin between ``targets``
-    (``logs``: read through every channel; ``dds``: sent to a ROS 2 node).
+    (``logs``: read through every channel; ``maps``: through ``map`` and ``eval --map``;
+    ``dds``: sent to a ROS 2 node, on ``options["domain"]``).
 
     ``options`` are those of :func:`run_cases` (``jobs``, ``save_failures``, ...).
     """
+    targets = tuple(dict.fromkeys(targets))
     unknown = set(targets) - set(TARGETS)
     if unknown or not targets:
         raise ValueError(f"targets are {', '.join(TARGETS)}, got {', '.join(targets)}")
@@ -159,22 +199,23 @@ def fuzz(
     with tempfile.TemporaryDirectory(prefix="scanlines-fuzz-") as scratch:
         workdir = Path(scratch) if workdir is None else workdir
         cases = []
-        if counts.get("logs"):
-            logs_options = {k: v for k, v in options.items() if k != "domain"}
-            cases += fuzz_logs(counts["logs"], seed, workdir, **logs_options)
-        if counts.get("dds"):
-            cases += fuzz_dds(counts["dds"], seed, workdir, **options)
+        for target, n in counts.items():
+            if n and target == "dds":
+                cases += fuzz_dds(n, seed, workdir, **options)
+            elif n:
+                cases += fuzz_seeded(target, n, seed, workdir, **without_domain(options))
         return cases
 
 
-def fuzz_logs(count: int, seed: int, workdir: Path, **options: Any) -> list[Case]:
-    seeds = build_seeds(workdir / "seeds")
-    inputs = workdir / "inputs"
+def fuzz_seeded(target: str, count: int, seed: int, workdir: Path, **options: Any) -> list[Case]:
+    """``count`` inputs of a seeded target (``logs``, ``maps``) through its channels."""
+    seeds = SEEDED_TARGETS[target].build(workdir / "seeds")
+    inputs = workdir / f"{target}-inputs"
     shutil.rmtree(inputs, ignore_errors=True)
     inputs.mkdir(parents=True)
 
     def make(index: int) -> Case:
-        return make_case(index, seed, seeds, inputs)
+        return make_case(index, seed, seeds, inputs, target)
 
     return run_cases(make, count, workdir=workdir, seed=seed, remove_inputs=True, **options)
 
@@ -208,8 +249,9 @@ def _dds_cases(make, count, workdir, sample, seed=0, **options: Any) -> list[Cas
 
 
 def replay(paths: list[Path], *, workdir: Path | None = None, **options: Any) -> list[Case]:
-    """Read saved inputs (files or bag directories) through every channel and ``run mcap``;
-    send saved DDS samples (``.cdr``) to a ROS 2 node."""
+    """Read saved inputs (files or bag directories) through every channel and ``run mcap``,
+    map inputs (a folder with ``log.clf``) through the map channels; send saved DDS samples
+    (``.cdr``) to a ROS 2 node."""
     samples = [p for p in paths if p.suffix == ".cdr"]
     paths = [p for p in paths if p.suffix != ".cdr"]
     with tempfile.TemporaryDirectory(prefix="scanlines-replay-") as scratch:
@@ -218,9 +260,11 @@ def replay(paths: list[Path], *, workdir: Path | None = None, **options: Any) ->
         if paths:
 
             def make(index: int) -> Case:
-                return Case(index, paths[index].name, "replay", paths[index])
+                path = paths[index]
+                channels = MAP_CHANNELS if is_map_input(path) else None
+                return Case(index, path.name, "replay", path, channels=channels)
 
-            logs_options = {k: v for k, v in options.items() if k != "domain"}
+            logs_options = without_domain(options)
             logs_options.setdefault("channels", CHANNELS + EXTRA_CHANNELS)
             cases += run_cases(make, len(paths), workdir=workdir, **logs_options)
         if samples:
@@ -291,13 +335,14 @@ def defect_kinds(cases: list[Case]) -> list[str]:
 
 
 def report(cases: list[Case], seconds: float | None = None, *, kinds: bool = True) -> str:
-    """The outcome tables (the logs'; the DDS node's, by mutator), then every defect and
-    (``kinds``) the defects grouped by kind."""
+    """The outcome tables (the logs', the maps', the DDS node's by mutator), then every
+    defect and (``kinds``) the defects grouped by kind."""
     from .dds_target import SEED_NAME, outcomes_by_plan
 
     samples = [case for case in cases if case.seed_name == SEED_NAME]
-    logs = [case for case in cases if case.seed_name != SEED_NAME]
-    parts = [outcome_table(logs)] if logs else []
+    maps = [case for case in cases if case.channels == MAP_CHANNELS]
+    logs = [c for c in cases if c.seed_name != SEED_NAME and c.channels != MAP_CHANNELS]
+    parts = [outcome_table(group) for group in (logs, maps) if group]
     parts += [outcomes_by_plan(samples)] if samples else []
     if seconds is not None:
         parts.append(f"{len(cases)} inputs in {seconds:.0f} s")
@@ -333,17 +378,21 @@ def main(argv: list[str] | None = None) -> int:
         type=Path,
         nargs="+",
         metavar="INPUT",
-        help="instead of fuzzing, read these inputs (or the inputs in these "
-        "folders, e.g. tests/fuzz/corpus) through every channel",
+        help="instead of fuzzing, read these inputs (or the inputs in these folders, e.g. "
+        "tests/fuzz/corpus) through every channel of their target: log files and bags, "
+        "map inputs (a folder with log.clf), DDS samples (.cdr)",
     )
-    parser.add_argument("--domain-id", type=int, default=97, help="dds: the DDS domain (97)")
     parser.add_argument(
         "--targets",
         nargs="+",
+        action="extend",
         choices=TARGETS,
-        default=["logs"],
-        help="what the inputs go to: log readers, a ROS 2 node over DDS (logs)",
+        metavar="TARGET",
+        help="what the inputs go to, any of logs (the log readers), maps (the map "
+        "commands), dds (a ROS 2 node: started only when named); space separated or "
+        "repeated (logs maps)",
     )
+    parser.add_argument("--domain-id", type=int, default=97, help="dds: the DDS domain (97)")
     args = parser.parse_args(argv)
     options: dict[str, Any] = {
         "jobs": args.jobs,
@@ -358,16 +407,24 @@ def main(argv: list[str] | None = None) -> int:
     if args.replay:
         cases = replay(replay_inputs(args.replay), **options)
     else:
-        cases = fuzz(args.count, args.seed, targets=tuple(args.targets), **options)
+        targets = tuple(args.targets or DEFAULT_TARGETS)
+        cases = fuzz(args.count, args.seed, targets=targets, **options)
     print(report(cases, time.perf_counter() - started))
     return 1 if any(case.defects for case in cases) else 0
 
 
+def is_map_input(path: Path) -> bool:
+    """A map target's input: a folder holding ``log.clf``."""
+    return path.is_dir() and (path / "log.clf").is_file()
+
+
 def replay_inputs(paths: list[Path]) -> list[Path]:
-    """Files and bag directories as given; a folder that is not a bag: its entries."""
+    """Files, bag directories and map inputs as given; another folder: its entries."""
     inputs = []
     for path in paths:
-        if path.is_dir() and not (path / "metadata.yaml").exists() and path.suffix == "":
+        if is_map_input(path):
+            inputs.append(path)
+        elif path.is_dir() and not (path / "metadata.yaml").exists() and path.suffix == "":
             inputs += sorted(p for p in path.iterdir() if p.suffix != ".md")
         else:
             inputs.append(path)

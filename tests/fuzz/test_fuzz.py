@@ -1,12 +1,13 @@
-"""Fuzzing the log readers and the ROS 2 node: past failures stay fixed, and seeded
-mutations find no defect.
+"""Fuzzing the log readers, the map commands and the ROS 2 node: past failures stay
+fixed, and seeded mutations find no defect.
 
-Every input is read through the library (fail and skip modes) and the
-``info`` and ``run`` commands, in worker processes with a timeout and a memory
-limit (see ``channels.py``); every DDS sample is sent to one running ROS 2 node
-(``dds_target.py``). A failure lists each defect as ``format | mutator | channel |
-error | message | input``. ``pytest --long`` runs the long mutation campaign instead
-of the short one.
+Every log input is read through the library (fail and skip modes) and the ``info`` and
+``run`` commands, every map input (a log's poses, a TUM file) through ``map`` and ``eval
+--map``, in worker processes with a timeout and a memory limit (see ``channels.py``,
+``map_channels.py``); every DDS sample is sent to one running ROS 2 node
+(``dds_target.py``). A failure lists each defect as ``format | mutator | channel | error |
+message | input``. ``pytest --long`` runs the long mutation campaign (logs and maps)
+instead of the short one of the logs.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from .run import Case, fuzz, replay, report
 pytestmark = pytest.mark.slow  # thousands of damaged inputs
 
 SHORT_RUN = 300
+MAP_RUN = 45
 DDS_SHORT_RUN = 200
 DDS_DOMAIN = 98  # not the campaign's 97: a campaign may run meanwhile
 LONG_RUN = 5000
@@ -53,18 +55,31 @@ def test_corpus_input_reads_cleanly(corpus_cases: dict[str, Case], name: str) ->
 
 
 def test_short_mutation_run(request: pytest.FixtureRequest, tmp_path: Path) -> None:
-    """Reproduce with ``python -m tests.fuzz.run --count 300 --seed 1``; the defective
-    inputs are kept in this test's ``tmp_path``."""
+    """The log target alone. Reproduce with ``python -m tests.fuzz.run --count 300 --seed
+    1 --targets logs``; the defective inputs are kept in this test's ``tmp_path``."""
     if request.config.getoption("--long"):
         pytest.skip("the long run covers these inputs (the first of the same seed)")
-    cases = fuzz(SHORT_RUN, SEED, jobs=JOBS, save_failures=tmp_path / "failures")
+    failures = tmp_path / "failures"
+    cases = fuzz(SHORT_RUN, SEED, targets=("logs",), jobs=JOBS, save_failures=failures)
     assert len(cases) == SHORT_RUN
+    fail_on_defects(cases)
+
+
+def test_short_map_run(tmp_path: Path) -> None:
+    """The map target alone, bounded: 45 inputs (15 of each map seed: shifted, damaged and
+    jumping poses, TUM files with duplicates, huge or non-finite fields) through ``map``
+    and ``eval --map``. Reproduce with ``python -m tests.fuzz.run --count 45 --seed 1
+    --targets maps``."""
+    cases = fuzz(MAP_RUN, SEED, targets=("maps",), jobs=JOBS, save_failures=tmp_path / "failures")
+    assert len(cases) == MAP_RUN
+    assert {o.channel for case in cases for o in case.outcomes} == {"map", "eval map"}
     fail_on_defects(cases)
 
 
 @pytest.mark.long
 def test_long_mutation_run(request: pytest.FixtureRequest, tmp_path: Path) -> None:
-    """``python -m tests.fuzz.run --count 5000 --seed 1 --jobs N``."""
+    """``python -m tests.fuzz.run --count 5000 --seed 1 --jobs N``: 2,500 inputs each of the
+    logs and maps targets."""
     if not request.config.getoption("--long"):
         pytest.skip("a long run: give pytest --long")
     jobs = max(1, len(os.sched_getaffinity(0)))

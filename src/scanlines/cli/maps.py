@@ -92,7 +92,7 @@ def map_command(
     topic: TopicOption = None,
 ) -> None:
     from scanlines.cli.common import writable
-    from scanlines.map.export import check_map_format, write_map
+    from scanlines.map.export import check_map_format, naming_output, write_map
 
     check_map_format(out)  # an unknown suffix (or DXF without ezdxf) before the log is read
     writable(out, overwrite)
@@ -108,12 +108,15 @@ def map_command(
         from scanlines.viz.figures import save
         from scanlines.viz.maps import plot_map
 
-        save(plot_map(lines, title=f"line map of {log.name}"), plot)
+        with naming_output(plot, "the figure"):
+            save(plot_map(lines, title=f"line map of {log.name}"), plot)
         typer.echo(f"figure: {plot}")
     typer.echo(
         f"{len(lines)} map lines from {build.segments} segments of {build.scans} scans "
         f"({build.poses}); wrote {out}"
     )
+    if build.pose_note:
+        typer.echo(f"poses: {build.pose_note}", err=True)
     if build.without_pose:
         typer.echo(f"{build.without_pose} scans had no pose and were not mapped", err=True)
 
@@ -162,8 +165,9 @@ def run_build(log: Path, options: ReaderOptions, prepared: dict[str, Any], scans
     with open_log(log, options=options) as reader:
         indexed = reader.enumerate() if scans is None else islice(reader.enumerate(), scans)
         return build_map(
-            indexed, prepared["extractor"], poses=prepared["poses"], settings=prepared["settings"]
-        )
+            indexed, prepared["extractor"], poses=prepared["poses"], settings=prepared["settings"],
+            source=str(log),
+        )  # fmt: skip
 
 
 def map_meta(log: Path, build, prepared: dict[str, Any]) -> dict[str, Any]:
@@ -171,6 +175,7 @@ def map_meta(log: Path, build, prepared: dict[str, Any]) -> dict[str, Any]:
     return {
         "log": log.name,
         "poses": build.poses,
+        "poses_note": build.pose_note,
         "scans": build.scans,
         "segments": build.segments,
         "method": extractor.method,
@@ -188,7 +193,6 @@ def evaluate_map_command(
     align: bool = False,
 ) -> None:
     """``scanlines eval --map LOG``: the map of every scan but each 10th, scored on those."""
-    import json
     import time
 
     from rich.console import Console
@@ -197,7 +201,9 @@ def evaluate_map_command(
     from scanlines.errors import ParameterError
     from scanlines.io import open_log
     from scanlines.map.align import AlignSettings
+    from scanlines.map.export import dumps, naming_output
     from scanlines.map.holdout import evaluate_map
+    from scanlines.outputs import write_text_atomically
 
     if spec.is_truth:
         raise ParameterError("--map scores a method; 'truth' has no scans to map")
@@ -211,7 +217,7 @@ def evaluate_map_command(
     score, build = evaluate_map(
         lambda: open_log(log), prepared["extractor"], profile.sigma_at,
         poses=prepared["poses"], settings=prepared["settings"], limit=scans,
-        align=AlignSettings() if align else None,
+        align=AlignSettings() if align else None, source=str(log),
     )  # fmt: skip
     seconds = time.perf_counter() - started
     table = Table(title=f"line map of {log.name}: {score.poses}", show_header=False)
@@ -238,19 +244,23 @@ def evaluate_map_command(
     for row in rows:
         table.add_row(*row)
     Console().print(table)
-    out.mkdir(parents=True, exist_ok=True)
+    if build.pose_note:
+        typer.echo(f"poses: {build.pose_note}", err=True)
     path = out / "map_eval.json"
     payload = {
         "log": log.name,
         "method": spec.text,
         **score.to_dict(),
+        "poses_note": build.pose_note,
+        "origin": list(build.frame.origin),
         "segments_mapped": build.segments,
         "segments_per_line": build.segments / max(score.lines, 1),
         "align": None if build.align is None else build.align.to_dict(),
         "scans_aligned": build.aligned,
         "seconds": seconds,
     }
-    path.write_text(json.dumps(payload, indent=1) + "\n", encoding="utf-8")
+    with naming_output(path, "the map's score"):
+        write_text_atomically(path, dumps(payload), make_folder=True)
     typer.echo(f"wrote {path}")
 
 

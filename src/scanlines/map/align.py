@@ -98,12 +98,15 @@ def nearest_segments(
         return distance, nearest
     ab = end - start
     length2 = np.maximum(np.sum(ab**2, axis=1), 1e-18)
-    for lo in range(0, len(points), 256):  # bounded K x L blocks
-        ap = points[lo : lo + 256, None, :] - start[None, :, :]
-        t = np.clip(np.einsum("klj,lj->kl", ap, ab) / length2[None, :], 0.0, 1.0)
-        d2 = np.sum((ap - t[:, :, None] * ab[None, :, :]) ** 2, axis=2)
-        nearest[lo : lo + 256] = np.argmin(d2, axis=1)
-        distance[lo : lo + 256] = np.sqrt(np.min(d2, axis=1))
+    # A return kilometres away squares past the floats' range: its distance is inf.
+    with np.errstate(over="ignore", invalid="ignore"):
+        for lo in range(0, len(points), 256):  # bounded K x L blocks
+            ap = points[lo : lo + 256, None, :] - start[None, :, :]
+            t = np.clip(np.einsum("klj,lj->kl", ap, ab) / length2[None, :], 0.0, 1.0)
+            d2 = np.sum((ap - t[:, :, None] * ab[None, :, :]) ** 2, axis=2)
+            d2 = np.where(np.isnan(d2), np.inf, d2)
+            nearest[lo : lo + 256] = np.argmin(d2, axis=1)
+            distance[lo : lo + 256] = np.sqrt(np.min(d2, axis=1))
     return distance, nearest
 
 

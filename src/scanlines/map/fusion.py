@@ -29,6 +29,8 @@ from typing import Any
 import numpy as np
 
 from scanlines.extraction import ALPHA, END_X, END_Y, RHO, START_X, START_Y, Extraction
+from scanlines.map.frame import LocalFrame, MapError, check_segments
+from scanlines.map.grid import box_pairs, boxes_of
 
 __all__ = ["FusionSettings", "LineMap", "MapLines"]
 
@@ -81,12 +83,15 @@ class FusionSettings:
 
 @dataclass(frozen=True)
 class MapLines:
-    """The lines of a map, as arrays (one row per line).
+    """The lines of a map, as arrays (one row per line), in the map's local frame.
 
-    ``rho, alpha``: Hesse normal form in the world frame (``rho >= 0``); ``covariances``:
-    ``L x 2 x 2`` of ``(rho, alpha)``; ``start, end``: ``L x 2`` endpoints of the extent;
-    ``scans``, ``returns``: support; ``first_scan``, ``last_scan``: log indices of the first
-    and last scan that saw the line; ``segments``: segments fused into it.
+    ``origin``: where the local frame's origin is in the world (:mod:`scanlines.map.frame`;
+    a point ``p`` of the local frame is ``p + origin`` in the world); ``rho, alpha``: Hesse
+    normal form in the local frame (``rho >= 0``); ``covariances``: ``L x 2 x 2`` of
+    ``(rho, alpha)``; ``start, end``: ``L x 2`` endpoints of the extent in the local frame
+    (:attr:`world_start`, :attr:`world_end` in the world); ``scans``, ``returns``: support;
+    ``first_scan``, ``last_scan``: log indices of the first and last scan that saw the line;
+    ``segments``: segments fused into it.
     """
 
     rho: np.ndarray
@@ -99,9 +104,27 @@ class MapLines:
     first_scan: np.ndarray
     last_scan: np.ndarray
     segments: np.ndarray
+    origin: tuple[float, float] = (0.0, 0.0)
 
     def __len__(self) -> int:
         return len(self.rho)
+
+    @property
+    def world_start(self) -> np.ndarray:
+        return self.start + np.array(self.origin, dtype=np.float64)
+
+    @property
+    def world_end(self) -> np.ndarray:
+        return self.end + np.array(self.origin, dtype=np.float64)
+
+    def world_hesse(self) -> tuple[np.ndarray, np.ndarray]:
+        """``rho, alpha`` of each line in the world frame (``rho >= 0``). Far from the
+        world's origin they are ill-conditioned (``rho`` as large as the coordinates): the
+        map keeps its lines in the local frame."""
+        x0, y0 = self.origin
+        rho = self.rho + x0 * np.cos(self.alpha) + y0 * np.sin(self.alpha)
+        flip = rho < 0
+        return np.abs(rho), np.where(flip, _wrap(self.alpha + math.pi), self.alpha)
 
     @property
     def lengths(self) -> np.ndarray:
@@ -113,11 +136,17 @@ def _wrap(angle):
 
 
 class LineMap:
-    """A map of lines built one scan at a time: :meth:`add` a scan's world-frame features,
-    :meth:`lines` for the map (clutter dropped)."""
+    """A map of lines built one scan at a time: :meth:`add` a scan's features in the map's
+    frame, :meth:`lines` for the map (clutter dropped).
 
-    def __init__(self, settings: FusionSettings | None = None) -> None:
+    ``frame``: the map's local frame (:class:`~scanlines.map.frame.LocalFrame`); the
+    features and poses given to :meth:`add` are in it. By default the world's own frame;
+    :func:`~scanlines.map.build_map` sets it from the first pose.
+    """
+
+    def __init__(self, settings: FusionSettings | None = None, frame: LocalFrame | None = None):
         self.settings = settings or FusionSettings()
+        self.frame = frame or LocalFrame()
         self._n = 0
         self._grow(64)
         self.segments_seen = 0
@@ -154,11 +183,22 @@ class LineMap:
     # -- one scan --------------------------------------------------------------------------
 
     def add(self, world: Extraction, scan_index: int, pose: tuple[float, float, float]) -> None:
-        """Fuse the segments of one scan, already in the world frame (``to_world``), whose
-        sensor stood at ``pose``; ``scan_index`` is the scan's index in the log."""
+        """Fuse the segments of one scan, already in the map's frame (``to_world`` by the
+        pose in that frame), whose sensor stood at ``pose`` (in that frame); ``scan_index``
+        is the scan's index in the log.
+
+        Raises
+        ------
+        MapError
+            If a segment is not finite or lies beyond
+            :data:`~scanlines.map.frame.MAX_EXTENT` from the frame's origin.
+        """
         self.scans_added += 1
         keep = np.asarray(world.n_points) >= self.settings.min_points
         lines = np.asarray(world.lines)[keep]
+        check_segments(lines[:, [START_X, START_Y, END_X, END_Y]], f"scan {scan_index}")
+        if not np.isfinite(lines[:, [RHO, ALPHA]]).all():
+            raise MapError(f"scan {scan_index}: a segment's line is not finite")
         covariances = np.asarray(world.covariances)[keep] + self._pose_noise(lines, pose)
         n_points = np.asarray(world.n_points)[keep]
         self.segments_seen += len(lines)
@@ -197,7 +237,7 @@ class LineMap:
         if n == 0:
             return targets
         ends = _ends_of(lines)
-        seg, line = _box_pairs(_boxes(ends, self.settings.max_gap), self._box[:n])
+        seg, line = box_pairs(boxes_of(ends, self.settings.max_gap), self._box[:n])
         if not len(seg):
             return targets
         d2 = self._agreement(
@@ -243,7 +283,7 @@ class LineMap:
         self._n += 1
         self._rho[k], self._alpha[k], self._cov[k] = line[RHO], line[ALPHA], cov
         self._t[k] = _extent(line[RHO], line[ALPHA], _ends_of(line[None])[0])
-        self._box[k] = _boxes(self._ends(k)[None], 0.0)[0]
+        self._box[k] = boxes_of(self._ends(k)[None], 0.0)[0]
         self._scans[k], self._returns[k], self._fused[k] = 1, n_points, 1
         self._first[k] = self._last[k] = scan_index
 
@@ -255,7 +295,7 @@ class LineMap:
         ends = np.vstack((self._ends(k), _ends_of(line[None])[0]))
         self._combine(k, rho, alpha, cov)
         self._t[k] = _extent(self._rho[k], self._alpha[k], ends)
-        self._box[k] = _boxes(self._ends(k)[None], 0.0)[0]
+        self._box[k] = boxes_of(self._ends(k)[None], 0.0)[0]
         if self._last[k] != scan_index:
             self._scans[k] += 1
         self._returns[k] += n_points
@@ -300,7 +340,7 @@ class LineMap:
                 break
             ends = self._all_ends()
             margin = np.array([-1.0, -1.0, 1.0, 1.0]) * self.settings.max_gap
-            i, j = _box_pairs(self._box[:n] + margin, self._box[:n])
+            i, j = box_pairs(self._box[:n] + margin, self._box[:n])
             upper = i < j
             i, j = i[upper], j[upper]
             d2 = self._agreement(
@@ -333,7 +373,7 @@ class LineMap:
             cov = cov * np.array([[1.0, -1.0], [-1.0, 1.0]])
         self._combine(i, rho, alpha, cov)
         self._t[i] = _extent(self._rho[i], self._alpha[i], ends)
-        self._box[i] = _boxes(self._ends(i)[None], 0.0)[0]
+        self._box[i] = boxes_of(self._ends(i)[None], 0.0)[0]
         self._scans[i] += self._scans[j]  # an upper bound: both may have seen one scan
         self._returns[i] += self._returns[j]
         self._fused[i] += self._fused[j]
@@ -385,6 +425,7 @@ class LineMap:
             first_scan=self._first[keep].copy(),
             last_scan=self._last[keep].copy(),
             segments=self._fused[keep].copy(),
+            origin=self.frame.origin,
         )
 
 
@@ -400,91 +441,6 @@ def _inverse(m: np.ndarray) -> np.ndarray:
     a, b, c, d = float(m[0, 0]), float(m[0, 1]), float(m[1, 0]), float(m[1, 1])
     det = a * d - b * c
     return np.array([[d, -b], [-c, a]]) / det
-
-
-def _boxes(ends: np.ndarray, margin: float) -> np.ndarray:
-    """``N x 4`` bounding boxes ``(x_min, y_min, x_max, y_max)`` of ``N x 2 x 2`` endpoints,
-    grown by ``margin`` on every side."""
-    return np.hstack((ends.min(axis=1) - margin, ends.max(axis=1) + margin))
-
-
-#: The side of a cell of the spatial index (metres).
-CELL = 2.0
-
-
-def _cells(boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(keys, rows)``: the grid cells each box of ``boxes`` (``N x 4``) covers, one pair per
-    cell, keys as integers."""
-    lo = np.floor(boxes[:, :2] / CELL).astype(np.int64)
-    hi = np.floor(boxes[:, 2:] / CELL).astype(np.int64)
-    size = hi - lo + 1
-    count = size[:, 0] * size[:, 1]
-    rows = np.repeat(np.arange(len(boxes)), count)
-    local = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
-    cx = lo[rows, 0] + local % size[rows, 0]
-    cy = lo[rows, 1] + local // size[rows, 0]
-    return ((cx + (1 << 30)) << 31) | (cy + (1 << 30)), rows
-
-
-def _box_pairs(queries: np.ndarray, boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Index pairs ``(q, b)`` of the ``queries`` and ``boxes`` (``N x 4``) that overlap.
-
-    The spatial index of association: a uniform grid of :data:`CELL` metres, each box
-    listed under the cells it covers (sorted keys, binary search); the pairs sharing a cell
-    are then cut to those whose boxes meet. Cost: the lines near each query, not the map.
-    """
-    empty = np.zeros(0, dtype=np.int64)
-    if not len(queries) or not len(boxes):
-        return empty, empty
-    box_keys, box_rows = _cells(boxes)
-    order = np.argsort(box_keys, kind="stable")
-    box_keys, box_rows = box_keys[order], box_rows[order]
-    query_keys, query_rows = _cells(queries)
-    starts = np.searchsorted(box_keys, query_keys, side="left")
-    stops = np.searchsorted(box_keys, query_keys, side="right")
-    count = stops - starts
-    # The candidate pairs are looked at in blocks of about BLOCK: the peak memory of a merge
-    # stays bounded however many lines the map holds.
-    total = np.cumsum(count)
-    edges = np.searchsorted(total, np.arange(BLOCK, int(total[-1]) if len(total) else 0, BLOCK))
-    found_q, found_b = [], []
-    for lo, hi in zip(
-        np.concatenate(([0], edges)), np.concatenate((edges, [len(count)])), strict=True
-    ):
-        if hi <= lo:
-            continue
-        q, b = _cell_pairs(
-            boxes, queries, box_rows, query_keys[lo:hi], query_rows[lo:hi], starts[lo:hi],
-            count[lo:hi],
-        )  # fmt: skip
-        found_q.append(q)
-        found_b.append(b)
-    if not found_q:
-        return empty, empty
-    return np.concatenate(found_q), np.concatenate(found_b)
-
-
-#: Candidate pairs of the spatial index looked at together.
-BLOCK = 1 << 16
-
-
-def _cell_pairs(boxes, queries, box_rows, query_keys, query_rows, starts, count):
-    """The overlapping pairs among the candidates of some query cells, each pair once."""
-    q = np.repeat(query_rows, count)
-    key = np.repeat(query_keys, count)
-    local = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
-    b = box_rows[np.repeat(starts, count) + local]
-    box, query = boxes[b], queries[q]
-    hit = (
-        (box[:, 0] <= query[:, 2])
-        & (box[:, 2] >= query[:, 0])
-        & (box[:, 1] <= query[:, 3])
-        & (box[:, 3] >= query[:, 1])
-    )
-    # A pair meets in several cells: keep it once, in the cell of its overlap's low corner.
-    corner = np.maximum(box[:, :2], query[:, :2])
-    hit &= _cells(np.hstack((corner, corner)))[0] == key
-    return q[hit].astype(np.int64), b[hit].astype(np.int64)
 
 
 def _extent(rho: float, alpha: float, points: np.ndarray) -> np.ndarray:

@@ -72,7 +72,8 @@ def score_held_out(
 ) -> MapScore:
     """Score ``build``'s map on its held-out scans, read again from ``indexed``: at the
     poses given, and where the map was built with alignment, also localised (each held-out
-    scan aligned to the finished map first, as a robot localising with it would)."""
+    scan aligned to the finished map first, as a robot localising with it would). All of
+    it in the map's local frame, where ``build.held_out`` and the lines are."""
     lines = build.line_map.lines()
     target = LineSet(lines.rho, lines.alpha, lines.start, lines.end)
     locate = None if build.align is None else replace(build.align, damping=1.0)
@@ -140,12 +141,13 @@ def evaluate_map(
     every: int = 10,
     limit: int | None = None,
     align: AlignSettings | None = None,
+    source: str | None = None,
 ) -> tuple[MapScore, MapBuild]:
     """Build the map from all scans but every ``every``-th, then score it on those.
 
     ``open_indexed()`` opens the log afresh (a context manager giving a reader with
     ``enumerate()``); the log is read twice, one scan in memory at a time; ``limit``: only
-    its first scans.
+    its first scans; ``source``: the log's name, for error messages.
     """
     from itertools import islice
 
@@ -155,7 +157,7 @@ def evaluate_map(
     with open_indexed() as reader:
         build = build_map(
             indexed(reader), extractor, poses=poses, settings=settings,
-            hold_out=lambda index: index % every == 0, align=align,
+            hold_out=lambda index: index % every == 0, align=align, source=source,
         )  # fmt: skip
     with open_indexed() as reader:
         score = score_held_out(indexed(reader), build, sigma_at)

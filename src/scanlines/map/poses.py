@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from scanlines.errors import ScanlinesError
+from scanlines.map.frame import MapError, check_pose
 from scanlines.poses import IDENTITY, Pose, compose, relative_pose
 from scanlines.scan import Scan
 
@@ -26,9 +27,18 @@ class PoseError(ScanlinesError, ValueError):
 
 
 class LogPoses:
-    """The pose each scan carries (CARMEN ``FLASER``/``ROBOTLASER``: the laser's pose)."""
+    """The pose each scan carries (CARMEN ``FLASER``/``ROBOTLASER``: the laser's pose).
+
+    A log cannot say whether its poses were corrected (by SLAM) or are raw odometry, which
+    drifts: a map of raw odometry draws each wall several times, a fan of copies. ``note``
+    says so, for the summary and the map's metadata."""
 
     name = "the log's poses"
+    note = (
+        "the map uses the log's poses as recorded, unaligned; a log cannot say whether they "
+        "are corrected, and raw odometry drifts (each wall drawn several times): give "
+        "corrected poses with --poses FILE (TUM)"
+    )
 
     def __call__(self, index: int, scan: Scan) -> Pose | None:
         return scan.pose
@@ -71,9 +81,14 @@ class TrajectoryPoses:
 
 def read_tum(path: str | Path) -> TrajectoryPoses:
     """A TUM trajectory file (``timestamp tx ty tz qx qy qz qw`` per line, ``#`` comments;
-    the format evo reads and writes): planar poses, yaw from the quaternion."""
+    the format evo reads and writes): planar poses, yaw from the quaternion.
+
+    Two lines with the same timestamp must give the same planar pose (within
+    :data:`DUPLICATE_TOLERANCE`; a writer that repeats a pose is harmless, and the line is
+    kept once); two different poses at one time are refused, naming both lines. So is a
+    position beyond the map's limit (:data:`~scanlines.map.frame.MAX_COORDINATE`)."""
     path = Path(path)
-    times, poses = [], []
+    times, poses, numbers = [], [], []
     try:
         text = path.read_text(encoding="utf-8")
     except UnicodeDecodeError as error:
@@ -99,11 +114,41 @@ def read_tum(path: str | Path) -> TrajectoryPoses:
         if norm < 1e-6:
             raise PoseError(f"{path}: line {number}: the quaternion (qx..qw) is zero")
         qx, qy, qz, qw = qx / norm, qy / norm, qz / norm, qw / norm
+        try:
+            check_pose((x, y, 0.0), f"{path}: line {number}")
+        except MapError as error:
+            raise PoseError(str(error)) from None
         times.append(t)
         poses.append((x, y, math.atan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz))))
+        numbers.append(number)
     if not times:
         raise PoseError(f"{path}: no pose in the file")
-    return TrajectoryPoses(np.array(times), np.array(poses), source=path.name)
+    keep = _unique_times(np.array(times), np.array(poses), np.array(numbers), path)
+    return TrajectoryPoses(np.array(times)[keep], np.array(poses)[keep], source=path.name)
+
+
+#: Two poses of one timestamp closer than this (metres, radians) are the same pose.
+DUPLICATE_TOLERANCE = 1e-9
+
+
+def _unique_times(times: np.ndarray, poses: np.ndarray, numbers: np.ndarray, path: Path):
+    """Indices of the poses to keep: the first of each timestamp; a :class:`PoseError`
+    naming both lines where one timestamp has two different poses."""
+    order = np.argsort(times, kind="stable")
+    same = np.flatnonzero(times[order][1:] == times[order][:-1])
+    for k in same:
+        a, b = order[k], order[k + 1]
+        step = np.abs(poses[b] - poses[a])
+        step[2] = abs(math.remainder(poses[b, 2] - poses[a, 2], 2 * math.pi))
+        if (step > DUPLICATE_TOLERANCE).any():
+            first, second = sorted((int(numbers[a]), int(numbers[b])))
+            raise PoseError(
+                f"{path}: lines {first} and {second}: two different poses at the same "
+                f"timestamp {float(times[a])!r}"
+            )
+    drop = np.zeros(len(times), dtype=bool)
+    drop[order[same + 1]] = True
+    return np.flatnonzero(~drop)
 
 
 def write_tum(path: str | Path, stamped: list[tuple[float, Pose]]) -> None:

@@ -272,12 +272,12 @@ class ViewerSession:
             raise NoPoses(f"{self.store.path.name} has no poses: no line map")
         extractor = self.extractor(config.to_dict())
         started = time.perf_counter()
-        build = build_map(self._every_scan(), extractor)
+        build = build_map(self._every_scan(), extractor, source=self.store.path.name)
         lines = build.line_map.lines()
         return {
-            "config": config.to_dict(), "poses": build.poses, "scans": build.scans,
-            "segments": build.segments, "seconds": time.perf_counter() - started,
-            "lines": map_records(lines),
+            "config": config.to_dict(), "poses": build.poses, "poses_note": build.pose_note,
+            "origin": list(lines.origin), "scans": build.scans, "segments": build.segments,
+            "seconds": time.perf_counter() - started, "lines": map_records(lines),
         }  # fmt: skip
 
     def _every_scan(self) -> Iterator[tuple[int, Scan]]:

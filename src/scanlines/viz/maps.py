@@ -34,7 +34,7 @@ def plot_map(
         ax.plot(trajectory[:, 0], trajectory[:, 1], lw=0.6, c="tab:orange", alpha=0.6,
                 label="poses", zorder=1)  # fmt: skip
     if len(lines):
-        segments = np.stack((lines.start, lines.end), axis=1)
+        segments = np.stack((lines.world_start, lines.world_end), axis=1)
         scans = np.maximum(lines.scans, 1)
         shade = LineCollection(
             segments, cmap="viridis", norm=LogNorm(1, max(int(scans.max()), 2)), linewidths=1.2,
