@@ -201,9 +201,11 @@ def test_a_read_only_folder_is_named_in_one_line(tmp_path, read_only_folder, wha
     code, _, stderr = in_child(args, user=NOBODY if os.geteuid() == 0 else None)
     assert code == 2, stderr
     shown = target / "map_eval.json" if what == "eval" else target
-    name = {"map": "the map", "plot": "the figure", "eval": "the map's score"}[what]
+    # Written whole or not at all: the shared atomic writer names the output it commits.
+    name = {"map": "the output", "plot": "the figure", "eval": "the map's score"}[what]
     assert stderr.strip().splitlines()[-1] == (
-        f"scanlines: error: {shown}: cannot write {name}: Permission denied"
+        f"scanlines: error: {shown}: cannot write {name} "
+        "(PermissionError: [Errno 13] Permission denied)"
     )
     assert list(read_only_folder.iterdir()) == []
 
@@ -225,14 +227,15 @@ def test_a_full_disk_is_named_in_one_line(tmp_path, monkeypatch):
     done = invoke("map", sample("intel"), "--out", out, "--scans", "30")
     assert done.exit_code == 2
     assert done.stderr.strip().splitlines()[-1] == (
-        f"scanlines: error: {out}: cannot write the map: No space left on device"
+        f"scanlines: error: {out}: cannot write the output "
+        "(OSError: [Errno 28] No space left on device)"
     )
     scores = tmp_path / "scores"
     done = invoke("eval", "--map", sample("intel"), "--out", scores, "--scans", "30")
     assert done.exit_code == 2
     assert done.stderr.strip().splitlines()[-1] == (
-        f"scanlines: error: {scores / 'map_eval.json'}: cannot write the map's score: "
-        "No space left on device"
+        f"scanlines: error: {scores / 'map_eval.json'}: cannot write the output "
+        "(OSError: [Errno 28] No space left on device)"
     )
     assert list(tmp_path.iterdir()) == [scores]
     assert list(scores.iterdir()) == []

@@ -29,6 +29,7 @@ from scanlines.outputs import (
     commit,
     discard,
     temp_path,
+    write_error,
     write_text_atomically,
 )
 
@@ -63,8 +64,7 @@ def naming_output(path: Path, what: str = "the map") -> Iterator[None]:
     except OutputError:
         raise
     except OSError as error:
-        reason = error.strerror or str(error) or type(error).__name__
-        raise OutputError(f"{path}: cannot write {what}: {reason}") from None
+        raise write_error(path, error, what) from None
 
 
 MAP_FORMATS = (".geojson", ".json", ".svg", ".dxf")
