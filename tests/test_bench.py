@@ -231,7 +231,7 @@ def test_quick_pipeline_section(quick_run):
     assert len(pipeline["load_before"]) == 3
     assert 0.0 <= pipeline["other_cores_busy"] <= os.cpu_count()
     assert 0 < pipeline["floor_us"] < stages["extract (batch)"]
-    assert pipeline["cold"] is None  # not in --quick: it compiles from an empty cache
+    assert pipeline["cold"] is None  # not in --quick: a fresh process per method
     page = (folder / "PERFORMANCE.md").read_text()
     assert "What a run costs besides the kernels" in page
     assert "one pass over the returns (floor)" in page

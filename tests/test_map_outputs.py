@@ -197,7 +197,7 @@ def test_a_read_only_folder_is_named_in_one_line(tmp_path, read_only_folder, wha
     }[what]  # fmt: skip
     warm = invoke("map", log, "--out", tmp_path / "warm.json", "--scans", "5", "--plot",
                   tmp_path / "warm.png")  # fmt: skip
-    assert warm.exit_code == 0, warm.output  # the kernels and matplotlib loaded here
+    assert warm.exit_code == 0, warm.output  # matplotlib loaded here
     code, _, stderr = in_child(args, user=NOBODY if os.geteuid() == 0 else None)
     assert code == 2, stderr
     shown = target / "map_eval.json" if what == "eval" else target

@@ -24,7 +24,7 @@ Outcomes
     A :class:`~scanlines.ScanlinesError` with a one-line message naming the
     file (library); exit code 2 with one ``scanlines: error:`` line as the
     last line of stderr (command; other stderr lines may only be the
-    ``sensor profile:`` and kernel compilation notices).
+    ``sensor profile:`` notices).
 ``defect``
     Anything else: another exception, a multi-line message, a message not
     naming the file, a traceback or exit code 1, a *silent loss* (a file
@@ -63,7 +63,7 @@ STARTUP_TIMEOUT = 600.0
 #: Warnings from files under this folder are scanlines' own.
 OWN_CODE = f"{os.sep}scanlines{os.sep}"
 #: stderr lines ``scanlines run`` may print besides its error line.
-NOTICE_PREFIXES = ("sensor profile:", "scanlines: compil")
+NOTICE_PREFIXES = ("sensor profile:",)
 
 
 @dataclass
