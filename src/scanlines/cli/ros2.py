@@ -54,10 +54,15 @@ def ros2_command(
     scans: ScansOption = None,
     on_error: OnErrorOption = "fail",
     topic: Annotated[str, typer.Option(help="The LaserScan topic.")] = "/scan",
-    markers_topic: Annotated[str, typer.Option(help="MarkerArray topic.")] = "/line_markers",
     segments_topic: Annotated[
-        str, typer.Option(help="laser_line_extraction LineSegmentList topic.")
+        str, typer.Option(help="laser_line_extraction's LineSegmentList topic.")
     ] = "/line_segments",
+    markers_topic: Annotated[
+        str, typer.Option(help="laser_line_extraction's Marker topic (the segments, a line list).")
+    ] = "/line_markers",
+    marker_array_topic: Annotated[
+        str, typer.Option(help="MarkerArray topic: segments, breakpoints and corners.")
+    ] = "/scanlines/markers",
     features_topic: Annotated[
         str | None,
         typer.Option(help="Also publish the full result (scanlines/msg/ScanFeatures) here."),
@@ -95,8 +100,9 @@ def ros2_command(
         method_options(method, preset, param, config),
         sensor_profile,
         topic,
-        markers_topic,
         segments_topic,
+        markers_topic,
+        marker_array_topic,
         features_topic,
         domain_id,
         loopback,
@@ -154,8 +160,9 @@ def _node(
     chosen,
     sensor_profile,
     topic,
-    markers_topic,
     segments_topic,
+    markers_topic,
+    marker_array_topic,
     features_topic,
     domain_id,
     loopback,
@@ -174,8 +181,9 @@ def _node(
         domain_id=domain_id,
         loopback=loopback,
         scan_topic=topic,
-        markers_topic=markers_topic,
         segments_topic=segments_topic,
+        markers_topic=markers_topic,
+        marker_array_topic=marker_array_topic,
         features_topic=features_topic,
     )
     print(
