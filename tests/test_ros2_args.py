@@ -407,3 +407,40 @@ def test_the_launch_file_runs_the_node_with_the_example_parameters(monkeypatch):
     got = apply_parameters(options(), args.parameters())
     assert got == node_options(["--params-file", str(DOCS / "params.yaml")])
     assert args.resolve(got.topics["topic"]) == "/scan"
+
+
+# -- the README's commands -------------------------------------------------------------------
+
+
+def readme_ros2_section() -> str:
+    text = (Path(__file__).parents[1] / "README.md").read_text()
+    start = text.index("### Live on a robot: a ROS 2 node")
+    return text[start : text.index("\n### ", start + 1)]
+
+
+def test_the_readmes_ros_commands_parse_and_its_start_line_is_the_nodes():
+    import re
+    import shlex
+
+    from scanlines.cli.ros2 import start_line
+    from scanlines.extractor import Extractor
+
+    section = readme_ros2_section()
+    commands = re.search(r"```bash\n(.*?)```", section, flags=re.DOTALL).group(1)
+    ros_lines = [line for line in commands.splitlines() if "--ros-args" in line]
+    assert len(ros_lines) >= 2
+    root = Path(__file__).parents[1]
+    for line in ros_lines:
+        words = shlex.split(line, comments=True)
+        assert words[:2] == ["scanlines", "ros2"]
+        _, ros_words = split_ros_args(words[2:])
+        ros_words = [str(root / w) if w.endswith(".yaml") else w for w in ros_words]
+        args = parse_ros_args(ros_words)
+        got = apply_parameters(options(), args.parameters())
+        if "__ns:=/robot1" in line:
+            topics = {k: None if v is None else args.resolve(v) for k, v in got.topics.items()}
+            extractor = Extractor(got.method, got.preset, **got.params)
+            shown = start_line(args.fully_qualified_name, 0, extractor, got, None, topics)
+            (example,) = re.findall(r"^scanlines ros2: node .*$", section, flags=re.MULTILINE)
+            assert shown == example
+    assert "ros2 launch docs/ros2/scanlines.launch.py" in commands
