@@ -100,7 +100,8 @@ def test_play_node_subscriber_match_scanlines_run(intel_profile, run_records):
     domain = 61
     segments = reader_of(domain, "/line_segments", msg.LineSegmentList)
     features = reader_of(domain, "/features", msg.ScanFeatures)
-    markers = reader_of(domain, "/line_markers", msg.MarkerArray)
+    markers = reader_of(domain, "/line_markers", msg.Marker)
+    marker_arrays = reader_of(domain, "/scanlines/markers", msg.MarkerArray)
     node = scanlines(
         "ros2",
         "--loopback",
@@ -117,6 +118,7 @@ def test_play_node_subscriber_match_scanlines_run(intel_profile, run_records):
         assert wait_for_match(segments, START), "the node never published"
         assert wait_for_match(features, 10)
         assert wait_for_match(markers, 10)
+        assert wait_for_match(marker_arrays, 10)
         player = scanlines(
             "ros2",
             "--play",
@@ -133,15 +135,18 @@ def test_play_node_subscriber_match_scanlines_run(intel_profile, run_records):
         assert code == 0, err
         got = take_all(segments, SCANS, 30)
         full = take_all(features, SCANS, 10)
-        drawn = take_all(markers, SCANS, 10)
+        lines = take_all(markers, SCANS, 10)
+        drawn = take_all(marker_arrays, SCANS, 10)
         code, _, err = finish(node)
     finally:
         node.kill()
     assert code == 0, err
     assert f"{SCANS} scans published, 0 malformed skipped" in err
     assert "latency receipt to publish: median" in err
-    assert len(got) == len(full) == len(drawn) == SCANS == len(run_records)
-    for message, extended, shown, record in zip(got, full, drawn, run_records, strict=True):
+    assert len(got) == len(full) == len(lines) == len(drawn) == SCANS == len(run_records)
+    for message, extended, line, shown, record in zip(
+        got, full, lines, drawn, run_records, strict=True
+    ):
         assert message.header.frame_id == "laser"
         stamp = message.header.stamp
         assert stamp.sec + stamp.nanosec * 1e-9 == pytest.approx(record["timestamp"], abs=1e-6)
@@ -157,6 +162,9 @@ def test_play_node_subscriber_match_scanlines_run(intel_profile, run_records):
         assert extended.corners == record["corners"]
         assert [m.ns for m in shown.markers] == ["", "segments", "breakpoints", "corners"]
         assert len(shown.markers[1].points) == 2 * len(expected)
+        assert line.ns == "line_extraction"
+        assert line.header == message.header
+        assert [(p.x, p.y) for p in line.points] == [(p.x, p.y) for p in shown.markers[1].points]
 
 
 def test_malformed_scans_are_counted_and_skipped():

@@ -94,17 +94,49 @@ def _sample_extraction():
     return scan, Extractor()(scan)
 
 
-@pytest.mark.parametrize("kind", ["segments", "markers", "features"])
+@pytest.mark.parametrize("kind", ["segments", "marker", "markers", "features", "tf"])
 def test_published_types_serialise_as_rosbags(store, kind):
     scan, extraction = _sample_extraction()
     assert len(extraction.lines) > 0
     header = msg.Header(stamp=convert.stamp_of(12.5), frame_id="laser")
     message = {
         "segments": lambda: convert.line_segments(extraction, header),
+        "marker": lambda: convert.line_marker(extraction, header),
         "markers": lambda: convert.markers(extraction, scan, header),
         "features": lambda: convert.features(extraction, scan, header),
+        "tf": lambda: convert.transform((1.5, -2.0, 2.5), header.stamp, "odom", "laser"),
     }[kind]()
     assert_same_wire(message, store)
+
+
+def test_the_line_marker_is_laser_line_extractions():
+    """One LINE_LIST in namespace line_extraction, id 0, 0.1 m wide, red: the marker
+    laser_line_extraction publishes on line_markers, each segment's start and end."""
+    _, extraction = _sample_extraction()
+    header = msg.Header(stamp=convert.stamp_of(12.5), frame_id="laser")
+    marker = convert.line_marker(extraction, header)
+    assert (marker.ns, marker.id, marker.type, marker.action) == ("line_extraction", 0, 5, 0)
+    assert marker.scale.x == 0.1
+    assert (marker.color.r, marker.color.g, marker.color.b, marker.color.a) == (1, 0, 0, 1)
+    assert marker.pose.orientation.w == 1.0
+    ends = [(p.x, p.y) for p in marker.points]
+    assert ends[0::2] == [tuple(row[2:4]) for row in extraction.lines.tolist()]
+    assert ends[1::2] == [tuple(row[4:6]) for row in extraction.lines.tolist()]
+
+
+def test_a_pose_is_a_transform_of_its_yaw():
+    stamp = convert.stamp_of(3.25)
+    (sent,) = convert.transform((1.0, 2.0, np.pi / 2), stamp, "odom", "laser").transforms
+    assert (sent.header.frame_id, sent.child_frame_id, sent.header.stamp) == (
+        "odom",
+        "laser",
+        stamp,
+    )
+    moved = sent.transform
+    assert (moved.translation.x, moved.translation.y, moved.translation.z) == (1.0, 2.0, 0.0)
+    rotation = moved.rotation
+    assert (rotation.x, rotation.y) == (0.0, 0.0)
+    assert (rotation.z, rotation.w) == pytest.approx((np.sqrt(0.5), np.sqrt(0.5)))
 
 
 @settings(max_examples=40, deadline=None)

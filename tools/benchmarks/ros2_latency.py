@@ -1,6 +1,7 @@
 """Latency of the ROS 2 node, receipt to publish, per scan, at a fixed scan rate over DDS.
 
     python tools/benchmarks/ros2_latency.py [--rate 40] [--scans 400] [--log intel|sim1081]
+        [--node-arg=--markers-topic= ...]
 
 Starts ``scanlines ros2`` (the default method, loopback DDS) in a process of its own,
 publishes the scans to it at ``--rate`` Hz from this process, and prints the node's own
@@ -8,6 +9,8 @@ summary: scans published, and the median and 99th percentile of the time from ta
 each scan off the DDS reader to its last message written. ``sim1081`` is a simulated
 1,081-beam scanner (270 deg at 0.25 deg, 30 m: a Hokuyo UTM-30LX layout, the tim571's
 noise) over random scenes; ``intel`` the shipped Intel excerpt (180 beams), cycled.
+``--node-arg`` (repeatable) passes an option to the node: ``--node-arg=--markers-topic=``
+turns its ``Marker`` off.
 """
 
 from __future__ import annotations
@@ -47,6 +50,7 @@ def main() -> None:
     parser.add_argument("--scans", type=int, default=400)
     parser.add_argument("--log", choices=("intel", "sim1081"), default="intel")
     parser.add_argument("--domain-id", type=int, default=90)
+    parser.add_argument("--node-arg", action="append", default=[], help="an option of the node")
     args = parser.parse_args()
     scans = (intel_scans if args.log == "intel" else sim1081_scans)(args.scans)
     from cyclonedds.sub import DataReader
@@ -59,7 +63,7 @@ def main() -> None:
                            default_qos())  # fmt: skip
     node = subprocess.Popen(
         [sys.executable, "-m", "scanlines", "ros2", "--loopback", "--domain-id",
-         str(args.domain_id), "--max-scans", str(len(scans)), "--duration", "600"],
+         str(args.domain_id), "--max-scans", str(len(scans)), "--duration", "600", *args.node_arg],
         stderr=subprocess.PIPE, text=True,
     )  # fmt: skip
     try:

@@ -1,14 +1,19 @@
-"""``scanlines ros2``: the line-extraction node on a ROS 2 LaserScan topic, or ``--play`` a log."""
+"""``scanlines ros2``: the line-extraction node on a ROS 2 LaserScan topic, or ``--play`` a log.
+
+Beside its options the command takes ROS 2's own arguments after ``--ros-args`` (remapping,
+namespace, node name, ``-p`` parameters and ``--params-file``: :mod:`scanlines.ros2.ros_args`),
+as ``ros2 run`` and launch files pass them.
+"""
 
 from __future__ import annotations
 
 import os
 import sys
-from collections import Counter
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
+from typer.core import TyperCommand
 
 from scanlines.cli.common import (
     NPZ_HELP,
@@ -17,20 +22,39 @@ from scanlines.cli.common import (
     OnErrorOption,
     ParamOption,
     PresetOption,
-    ProfileOption,
     ScansOption,
     guarded,
     method_options,
 )
 from scanlines.interrupts import is_interrupt
 
+#: Where :class:`RosArgsCommand` leaves the words of the ``--ros-args`` sections.
+ROS_ARGS = "scanlines.ros_args"
+
+HELP = (
+    "ROS 2 node over DDS (no ROS install): LaserScan in; laser_line_extraction's line "
+    "segments and Marker, and a MarkerArray, out. --play LOG publishes a log's scans (and "
+    "its poses on /tf). ROS arguments follow --ros-args: -r FROM:=TO (-r __ns:=/NS, "
+    "-r __node:=NAME), -p NAME:=VALUE, --params-file FILE (NAME: ros__parameters: ...); "
+    "parameters are the options' names with _ (method, preset, sensor_profile, topic, "
+    "markers_topic...) and the method's parameters."
+)
+
+
+class RosArgsCommand(TyperCommand):
+    """A command whose ``--ros-args`` sections (to ``--`` or the end) are taken off the
+    command line before its options are parsed, into ``ctx.meta[ROS_ARGS]``."""
+
+    def parse_args(self, ctx: Any, args: list[str]) -> list[str]:
+        from scanlines.ros2.ros_args import split_ros_args
+
+        own, ros = split_ros_args(args)
+        ctx.meta[ROS_ARGS] = ros
+        return super().parse_args(ctx, own)
+
 
 def register(app: typer.Typer) -> None:
-    app.command(
-        "ros2",
-        help="ROS 2 node over DDS (no ROS install): LaserScan in, markers and "
-        "laser_line_extraction line segments out; --play LOG publishes a log's scans.",
-    )(guarded(ros2_command))
+    app.command("ros2", cls=RosArgsCommand, help=HELP)(guarded(ros2_command))
 
 
 def _domain_default() -> int:
@@ -38,12 +62,24 @@ def _domain_default() -> int:
     return int(value) if value.isdigit() else 0
 
 
+NodeProfileOption = Annotated[
+    Path | None,
+    typer.Option(
+        "--sensor-profile",
+        help="Sensor profile from `scanlines calibrate` on a log of this sensor: the range "
+        "noise every scan's thresholds and covariances take (default: each scan's noise "
+        "measured from that scan alone; the start-up line says which).",
+    ),
+]
+
+
 def ros2_command(
+    ctx: typer.Context,
     method: ConfigMethodOption = None,
     preset: PresetOption = None,
     param: ParamOption = None,
     config: ConfigOption = None,
-    sensor_profile: ProfileOption = None,
+    sensor_profile: NodeProfileOption = None,
     play: Annotated[
         Path | None,
         typer.Option("--play", metavar="LOG", help=f"Publish this log's scans instead. {NPZ_HELP}"),
@@ -54,16 +90,29 @@ def ros2_command(
     ] = None,
     scans: ScansOption = None,
     on_error: OnErrorOption = "fail",
-    topic: Annotated[str, typer.Option(help="The LaserScan topic.")] = "/scan",
-    markers_topic: Annotated[str, typer.Option(help="MarkerArray topic.")] = "/line_markers",
+    topic: Annotated[
+        str, typer.Option(help="The LaserScan topic (relative: under the namespace).")
+    ] = "scan",
     segments_topic: Annotated[
-        str, typer.Option(help="laser_line_extraction LineSegmentList topic.")
-    ] = "/line_segments",
+        str, typer.Option(help="laser_line_extraction's LineSegmentList topic.")
+    ] = "line_segments",
+    markers_topic: Annotated[
+        str,
+        typer.Option(help="laser_line_extraction's Marker topic: the segments as a line list."),
+    ] = "line_markers",
+    marker_array_topic: Annotated[
+        str, typer.Option(help="MarkerArray topic: segments, breakpoints and corners.")
+    ] = "scanlines/markers",
     features_topic: Annotated[
         str | None,
         typer.Option(help="Also publish the full result (scanlines/msg/ScanFeatures) here."),
     ] = None,
-    frame_id: Annotated[str, typer.Option(help="--play: the scans' frame_id.")] = "laser",
+    frame_id: Annotated[
+        str, typer.Option(help="--play: the scans' frame_id (the child frame of /tf).")
+    ] = "laser",
+    odom_frame: Annotated[
+        str, typer.Option(help="--play: the frame of the log's poses on /tf.")
+    ] = "odom",
     domain_id: Annotated[
         int, typer.Option(help="ROS domain id.", show_default="$ROS_DOMAIN_ID, else 0")
     ] = _domain_default(),
@@ -81,7 +130,9 @@ def ros2_command(
         float | None, typer.Option(help="Node: stop after this many seconds.", min=0)
     ] = None,
 ) -> None:
+    from scanlines.config import DEFAULT_METHOD
     from scanlines.errors import ParameterError
+    from scanlines.ros2.parameters import NodeOptions, apply_parameters
 
     try:
         import cyclonedds  # noqa: F401
@@ -89,103 +140,76 @@ def ros2_command(
         raise ParameterError(
             'scanlines ros2 needs Cyclone DDS: pip install "scanlines[ros2]"'
         ) from None
+    ros, values = _ros_arguments(ctx.meta.get(ROS_ARGS))
     if play is not None:
-        _play(play, rate, scans, on_error, topic, frame_id, domain_id, loopback, wait)
+        from scanlines.cli.ros2_play import play_log
+
+        options = NodeOptions(DEFAULT_METHOD, topics={"topic": topic})
+        options = apply_parameters(options, values)
+        play_log(
+            play, rate, scans, on_error, ros.resolve(options.topics["topic"]), ros.resolve("/tf"),
+            frame_id, odom_frame, domain_id, loopback, wait,
+        )  # fmt: skip
         return
-    _node(
-        method_options(method, preset, param, config),
-        sensor_profile,
-        topic,
-        markers_topic,
-        segments_topic,
-        features_topic,
-        domain_id,
-        loopback,
-        max_scans,
-        duration,
+    chosen = NodeOptions(
+        *method_options(method, preset, param, config),
+        sensor_profile=sensor_profile,
+        topics={
+            "topic": topic,
+            "segments_topic": segments_topic,
+            "markers_topic": markers_topic or None,
+            "marker_array_topic": marker_array_topic or None,
+            "features_topic": features_topic or None,
+        },
     )
+    _node(apply_parameters(chosen, values), ros, domain_id, loopback, max_scans, duration)
 
 
-def _play(log, rate, scans, on_error, topic, frame_id, domain_id, loopback, wait) -> None:
-    from scanlines.cli.common import reader_options
-    from scanlines.cli.log_reports import _with_breakdown
+def _ros_arguments(words: list[str] | None):
+    """The ROS arguments of the command line and the parameters they set for this node
+    (a line on stderr for each parameters file without an entry for it)."""
     from scanlines.errors import ParameterError
-    from scanlines.io import open_log
-    from scanlines.ros2 import Player
-    from scanlines.runner import parse_slice, select
+    from scanlines.ros2.ros_args import parse_ros_args
 
-    if on_error not in ("fail", "skip"):
-        raise ParameterError(f"--on-error must be fail or skip, got {on_error!r}")
-    selection = parse_slice(scans)
-    skipped: Counter[str] = Counter()
-    with open_log(log, options=reader_options(on_error=on_error)) as reader:
-        # a missing or unreadable log fails before waiting for anyone
-        player = Player(domain_id=domain_id, loopback=loopback, topic=topic, frame_id=frame_id)
-        if not player.wait_for_subscriber(wait):
-            note = f"scanlines ros2: no subscriber on {topic} after {wait:g} s; playing"
-            typer.echo(note, err=True)
-        pairs = select(reader.enumerate(), selection)
-        count = player.play(_playable(pairs, log, on_error, skipped), rate=rate)
-        skipped.update(reader.skip_reasons)
-    text = f"scanlines ros2: published {count} scans of {log.name} on {topic}"
-    if on_error == "skip":
-        text += f"; scan records skipped: {_with_breakdown(sum(skipped.values()), skipped)}"
-    typer.echo(text, err=True)
+    ros = parse_ros_args(words or [])
+    if ros.sources:
+        try:
+            import yaml  # noqa: F401
+        except ImportError:
+            raise ParameterError(
+                '--ros-args parameters are YAML: pip install ".[ros2]" (PyYAML)'
+            ) from None
+    notes: list[str] = []
+    values = ros.parameters(notes)
+    for note in notes:
+        print(f"scanlines ros2: {note}", file=sys.stderr, flush=True)
+    return ros, values
 
 
-def _playable(pairs, log: Path, on_error: str, skipped: Counter[str]):
-    """The scans of ``pairs`` (index, scan) that a LaserScan can carry. A timestamp that is
-    no ROS 2 time (before 1970, or past 2**31 - 1 s) stops the play with an error naming the
-    log, the scan and the field, or with ``--on-error skip`` is counted in ``skipped``."""
-    from scanlines.errors import LogFormatError
-    from scanlines.ros2.convert import stamp_problem
-
-    for index, scan in pairs:
-        problem = stamp_problem(scan.timestamp or 0.0)
-        if problem is None:
-            yield scan
-        elif on_error == "skip":
-            skipped["timestamp"] += 1
-        else:
-            reason = f"{problem}; --on-error skip skips such scans"
-            raise LogFormatError(
-                reason, path=log, record=index, field="timestamp", unit="scan index"
-            )
-
-
-def _node(
-    chosen,
-    sensor_profile,
-    topic,
-    markers_topic,
-    segments_topic,
-    features_topic,
-    domain_id,
-    loopback,
-    max_scans,
-    duration,
-) -> None:
+def _node(options, ros, domain_id, loopback, max_scans, duration) -> None:
     from scanlines.extractor import Extractor
     from scanlines.ros2 import LineNode
     from scanlines.sensor_profile import read_profile
 
-    method, preset, params = chosen
-    profile = None if sensor_profile is None else read_profile(sensor_profile)
-    extractor = Extractor(method, preset, sensor_profile=profile, **params)
+    path = options.sensor_profile
+    profile = None if path is None else read_profile(path)
+    extractor = Extractor(options.method, options.preset, sensor_profile=profile, **options.params)
+    topics = {
+        name: None if given is None else ros.resolve(given)
+        for name, given in options.topics.items()
+    }
     node = LineNode(
         extractor,
         domain_id=domain_id,
         loopback=loopback,
-        scan_topic=topic,
-        markers_topic=markers_topic,
-        segments_topic=segments_topic,
-        features_topic=features_topic,
+        scan_topic=topics["topic"],
+        segments_topic=topics["segments_topic"],
+        markers_topic=topics["markers_topic"],
+        marker_array_topic=topics["marker_array_topic"],
+        features_topic=topics["features_topic"],
     )
-    print(
-        f"scanlines ros2: {extractor!r} listening on {topic} (domain {domain_id})",
-        file=sys.stderr,
-        flush=True,
-    )
+    line = start_line(ros.fully_qualified_name, domain_id, extractor, options, path, topics)
+    print(line, file=sys.stderr, flush=True)
     try:
         node.spin(max_scans=max_scans, duration=duration)
     except BaseException as stop:
@@ -193,3 +217,34 @@ def _node(
             stop.add_note(node.stats.summary())  # the interrupt's one line carries it
         raise
     print(f"scanlines ros2: {node.stats.summary()}", file=sys.stderr, flush=True)
+
+
+_KINDS = (
+    ("segments_topic", "LineSegmentList"),
+    ("markers_topic", "Marker"),
+    ("marker_array_topic", "MarkerArray"),
+    ("features_topic", "ScanFeatures"),
+)
+
+
+def start_line(node_name, domain_id, extractor, options, profile_path, topics) -> str:
+    """The node's one start-up line: its name, the scan topic, the method (preset and
+    parameters set), where the noise comes from, and the topics it publishes."""
+    method = f"method {extractor.method}"
+    if extractor.preset:
+        method += f", preset {extractor.preset}"
+    for name in options.params:
+        method += f", {name}={extractor.params[name]!r}"
+    profile = extractor.sensor_profile
+    if profile is None:
+        noise = "noise measured on each scan alone (no sensor profile)"
+    else:
+        noise = (
+            f"noise from sensor profile {profile_path} (sigma(r) = "
+            f"{profile.noise_sigma0 * 1e3:.3g} mm + {profile.noise_per_metre * 1e3:.3g} mm/m)"
+        )
+    published = ", ".join(f"{topics[name]} ({kind})" for name, kind in _KINDS if topics[name])
+    return (
+        f"scanlines ros2: node {node_name} (domain {domain_id}) listening on "
+        f"{topics['topic']} (LaserScan); {method}; {noise}; publishing {published}"
+    )

@@ -1,4 +1,5 @@
-"""Scans to and from ``sensor_msgs/LaserScan``, and an extraction as the node's messages."""
+"""Scans to and from ``sensor_msgs/LaserScan``, an extraction as the node's messages, and a
+log's pose as ``/tf``."""
 
 from __future__ import annotations
 
@@ -15,11 +16,13 @@ __all__ = [
     "beam_count_error",
     "features",
     "laser_scan",
+    "line_marker",
     "line_segments",
     "markers",
     "scan_of",
     "stamp_of",
     "stamp_problem",
+    "transform",
 ]
 
 _COLORS = {
@@ -28,6 +31,10 @@ _COLORS = {
     "corners": (0.1, 0.3, 1.0, 1.0),
 }
 _SCALES = {"segments": 0.03, "breakpoints": 0.08, "corners": 0.12}
+#: laser_line_extraction's marker on ``line_markers``: its namespace, line width and colour.
+LINE_MARKER_NS = "line_extraction"
+LINE_MARKER_WIDTH = 0.1
+LINE_MARKER_COLOR = (1.0, 0.0, 0.0, 1.0)
 #: Largest ``builtin_interfaces/msg/Time.sec`` (an int32).
 MAX_STAMP_SECONDS = 2**31 - 1
 
@@ -164,6 +171,27 @@ def _points(scan: Scan, beams) -> list[msg.Point]:
 assert len(END_KINDS) < 256  # end kinds travel as uint8
 
 
+def _segment_ends(extraction: Extraction) -> list[msg.Point]:
+    ends = extraction.lines[:, [START_X, START_Y, END_X, END_Y]].reshape(-1, 2)
+    return [msg.Point(x, y, 0.0) for x, y in ends.tolist()]
+
+
+def line_marker(extraction: Extraction, header: msg.Header) -> msg.Marker:
+    """The segments as laser_line_extraction draws them on ``line_markers``: one
+    ``LINE_LIST`` marker (namespace ``line_extraction``, id 0, 0.1 m wide, red), each
+    segment's start and end, which replaces the previous scan's in RViz."""
+    return msg.Marker(
+        header=header,
+        ns=LINE_MARKER_NS,
+        id=0,
+        type=msg.Marker.LINE_LIST,
+        action=msg.Marker.ADD,
+        scale=msg.Vector3(LINE_MARKER_WIDTH, 0.0, 0.0),
+        color=msg.ColorRGBA(*LINE_MARKER_COLOR),
+        points=_segment_ends(extraction),
+    )
+
+
 def markers(extraction: Extraction, scan: Scan, header: msg.Header) -> msg.MarkerArray:
     """RViz / Foxglove markers: a DELETEALL, then segments (a line list), breakpoints and
     corners (sphere lists at their beams' points)."""
@@ -191,3 +219,23 @@ def markers(extraction: Extraction, scan: Scan, header: msg.Header) -> msg.Marke
             )
         )
     return msg.MarkerArray(markers=out)
+
+
+def transform(
+    pose: tuple[float, float, float], stamp: msg.Time, parent: str, child: str
+) -> msg.TFMessage:
+    """``/tf`` of a planar pose ``(x, y, theta)`` of frame ``child`` in frame ``parent``
+    (``odom -> laser``), stamped ``stamp``."""
+    x, y, theta = pose
+    return msg.TFMessage(
+        transforms=[
+            msg.TransformStamped(
+                header=msg.Header(stamp=stamp, frame_id=parent),
+                child_frame_id=child,
+                transform=msg.Transform(
+                    translation=msg.Vector3(x, y, 0.0),
+                    rotation=msg.Quaternion(0.0, 0.0, math.sin(theta / 2), math.cos(theta / 2)),
+                ),
+            )
+        ]
+    )

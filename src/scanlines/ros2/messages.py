@@ -3,9 +3,9 @@
 Each class is a ROS 2 message type: ``typename`` is ROS 2's DDS name for it
 (``pkg::msg::dds_::Name_``), fields in the order of the ``.msg`` file, so the CDR bytes are
 those a ROS 2 node sends and decodes. ``sensor_msgs``, ``std_msgs``, ``geometry_msgs``,
-``builtin_interfaces`` and ``visualization_msgs`` follow ROS 2 Humble; ``LineSegment`` and
-``LineSegmentList`` are laser_line_extraction's; ``Segment`` and ``ScanFeatures`` are the
-project's own (:data:`SCANLINES_MSGS`).
+``builtin_interfaces``, ``visualization_msgs`` and ``tf2_msgs`` follow ROS 2 Humble;
+``LineSegment`` and ``LineSegmentList`` are laser_line_extraction's; ``Segment`` and
+``ScanFeatures`` are the project's own (:data:`SCANLINES_MSGS`).
 """
 
 # No `from __future__ import annotations`: the IDL layer resolves the annotations as objects.
@@ -34,7 +34,10 @@ __all__ = [
     "Quaternion",
     "ScanFeatures",
     "Segment",
+    "TFMessage",
     "Time",
+    "Transform",
+    "TransformStamped",
     "UVCoordinate",
     "Vector3",
 ]
@@ -164,6 +167,24 @@ class Marker(IdlStruct, typename=_dds("visualization_msgs/msg/Marker")):
 @dataclass
 class MarkerArray(IdlStruct, typename=_dds("visualization_msgs/msg/MarkerArray")):
     markers: sequence[Marker] = field(default_factory=list)
+
+
+@dataclass
+class Transform(IdlStruct, typename=_dds("geometry_msgs/msg/Transform")):
+    translation: Vector3 = field(default_factory=Vector3)
+    rotation: Quaternion = field(default_factory=Quaternion)
+
+
+@dataclass
+class TransformStamped(IdlStruct, typename=_dds("geometry_msgs/msg/TransformStamped")):
+    header: Header = field(default_factory=Header)
+    child_frame_id: str = ""
+    transform: Transform = field(default_factory=Transform)
+
+
+@dataclass
+class TFMessage(IdlStruct, typename=_dds("tf2_msgs/msg/TFMessage")):
+    transforms: sequence[TransformStamped] = field(default_factory=list)
 
 
 #: laser_line_extraction's messages, as its ``msg/`` files define them.

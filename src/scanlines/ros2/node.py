@@ -92,10 +92,12 @@ def _reason(error: BaseException) -> str:
 
 class LineNode:
     """Subscribes to ``scan_topic`` (sensor-data QoS) and publishes, per scan, stamped and
-    framed as the scan: ``markers`` (``visualization_msgs/MarkerArray``), ``line_segments``
-    (laser_line_extraction's ``LineSegmentList``) and, with ``features``, the full result
-    (``scanlines/msg/ScanFeatures`` on ``features_topic``). Publishers use ROS 2's default
-    QoS (reliable, keep last 10)."""
+    framed as the scan, what laser_line_extraction publishes: its ``LineSegmentList`` on
+    ``segments_topic`` and its ``visualization_msgs/Marker`` (one line list) on
+    ``markers_topic``; and the project's: a ``visualization_msgs/MarkerArray`` (segments,
+    breakpoints, corners) on ``marker_array_topic`` and, with ``features_topic``, the full
+    result (``scanlines/msg/ScanFeatures``). A topic of ``None`` is not published.
+    Publishers use ROS 2's default QoS (reliable, keep last 10)."""
 
     def __init__(
         self,
@@ -104,8 +106,9 @@ class LineNode:
         domain_id: int = 0,
         loopback: bool = False,
         scan_topic: str = "/scan",
-        markers_topic: str = "/line_markers",
         segments_topic: str = "/line_segments",
+        markers_topic: str | None = "/line_markers",
+        marker_array_topic: str | None = "/scanlines/markers",
         features_topic: str | None = None,
         log: TextIO = sys.stderr,
     ) -> None:
@@ -117,13 +120,14 @@ class LineNode:
         self.extractor = extractor
         self.log = log
         self.stats = NodeStats()
-        prepare(msg.LaserScan, msg.MarkerArray, msg.LineSegmentList, msg.ScanFeatures)
+        prepare(msg.LaserScan, msg.Marker, msg.MarkerArray, msg.LineSegmentList, msg.ScanFeatures)
         dp = participant(domain_id, loopback=loopback)
         self._participant = dp
         writers = {}
         for name, topic, kind in (
-            ("markers", markers_topic, msg.MarkerArray),
             ("segments", segments_topic, msg.LineSegmentList),
+            ("markers", markers_topic, msg.Marker),
+            ("marker_array", marker_array_topic, msg.MarkerArray),
             ("features", features_topic, msg.ScanFeatures),
         ):
             if topic is not None:
@@ -137,7 +141,8 @@ class LineNode:
 
     @property
     def writers(self) -> dict:
-        """The DataWriters by output (``markers``, ``segments``, ``features``)."""
+        """The DataWriters by output (``segments``, ``markers``, ``marker_array``,
+        ``features``)."""
         return dict(self._writers)
 
     def spin(self, *, max_scans: int | None = None, duration: float | None = None) -> NodeStats:
@@ -205,7 +210,9 @@ class LineNode:
         if "segments" in writers:
             writers["segments"].write(convert.line_segments(extraction, header))
         if "markers" in writers:
-            writers["markers"].write(convert.markers(extraction, scan, header))
+            writers["markers"].write(convert.line_marker(extraction, header))
+        if "marker_array" in writers:
+            writers["marker_array"].write(convert.markers(extraction, scan, header))
         if "features" in writers:
             writers["features"].write(convert.features(extraction, scan, header))
 

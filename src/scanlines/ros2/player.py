@@ -1,4 +1,5 @@
-"""Publishing a log's scans as ``sensor_msgs/LaserScan`` at their recorded rate, or a fixed one."""
+"""Publishing a log's scans as ``sensor_msgs/LaserScan`` at their recorded rate, or a fixed one,
+and their poses on ``/tf``."""
 
 from __future__ import annotations
 
@@ -31,9 +32,15 @@ def schedule(previous: float | None, current: float | None, rate: float | None) 
     return min(current - previous, MAX_PAUSE)
 
 
+#: Depth of the ``/tf`` writer: tf2's broadcasters and listeners keep the last 100.
+TF_DEPTH = 100
+
+
 class Player:
     """A LaserScan publisher on ``topic`` (ROS 2's default QoS, so both best-effort and
-    reliable subscribers receive it)."""
+    reliable subscribers receive it), and of each scan's pose, when it has one, as the
+    transform ``odom_frame -> frame_id`` on ``tf_topic`` (``tf2_msgs/TFMessage``, stamped as
+    the scan and sent just before it, so that RViz can show the scans in ``odom_frame``)."""
 
     def __init__(
         self,
@@ -42,15 +49,23 @@ class Player:
         loopback: bool = False,
         topic: str = "/scan",
         frame_id: str = "laser",
+        tf_topic: str = "/tf",
+        odom_frame: str = "odom",
     ) -> None:
         from cyclonedds.pub import DataWriter
         from cyclonedds.topic import Topic
 
-        prepare(msg.LaserScan)
+        prepare(msg.LaserScan, msg.TFMessage)
         dp = participant(domain_id, loopback=loopback)
         self._participant = dp
         self.frame_id = frame_id
+        self.odom_frame = odom_frame
+        self.tf_topic = tf_topic
         self.writer = DataWriter(dp, Topic(dp, ros_topic(topic), msg.LaserScan), default_qos())
+        tf = Topic(dp, ros_topic(tf_topic), msg.TFMessage)
+        self.tf_writer = DataWriter(dp, tf, default_qos(TF_DEPTH))
+        #: Transforms published so far.
+        self.transforms = 0
 
     def wait_for_subscriber(self, timeout: float) -> bool:
         """Wait up to ``timeout`` seconds for a subscriber (then :data:`SETTLE` more);
@@ -80,7 +95,15 @@ class Player:
             message = convert.laser_scan(scan, self.frame_id, scan_time=0.0)
             if restamp:
                 message.header.stamp = convert.stamp_of(time.time())
+            if scan.pose is not None:
+                stamp = message.header.stamp
+                self.tf_writer.write(
+                    convert.transform(scan.pose, stamp, self.odom_frame, self.frame_id)
+                )
+                self.transforms += 1
             self.writer.write(message)
             published += 1
         self.writer.wait_for_acks(int(DRAIN * 1e9))
+        if self.transforms:
+            self.tf_writer.wait_for_acks(int(DRAIN * 1e9))
         return published
