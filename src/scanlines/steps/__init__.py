@@ -21,9 +21,11 @@ entry points are :class:`~scanlines.Scan` and :class:`~scanlines.Extractor`;
 ``merge``        merging neighbours (by the criterion, by chi-square)
 ``events``       corners and breakpoints between consecutive segments
 ``assemble``     the result arrays of an :class:`~scanlines.Extraction`
+``arrays``       the array types the compiled steps take
 """
 
 __all__ = [
+    "arrays",
     "assemble",
     "breakpoints",
     "clusters",

@@ -17,6 +17,7 @@ import numpy as np
 
 from scanlines import _core
 from scanlines.extraction import N_LINE_COLUMNS, Extraction
+from scanlines.steps.arrays import float64s, int64s
 from scanlines.steps.noise import NoiseLine
 from scanlines.steps.returns import Returns
 
@@ -85,8 +86,8 @@ def assemble(
     """
     n_beams, wrap = scan_shape
     return _core.assemble(
-        *returns, fit, _ints(a), _ints(b), float(angle_min), _reals(sigma),
-        *(_ints(e) for e in events), int(n_beams), bool(wrap),
+        *returns, fit, int64s(a), int64s(b), float(angle_min), float64s(sigma),
+        *(int64s(e) for e in events), int(n_beams), bool(wrap),
     )  # fmt: skip
 
 
@@ -122,17 +123,9 @@ def finish(
     :class:`~scanlines.steps.noise.NoiseLine` (NaN: measured from the scan) for the
     covariances.
     """
-    a, b, group = (_ints(v) for v in runs)
+    a, b, group = (int64s(v) for v in runs)
     clustered, ring, breakpoints = clusters
     return _core.finish(
         *returns, int(n_beams), bool(full_circle), a, b, group, (bool(clustered), bool(ring)),
-        _ints(breakpoints), _ints(outliers), float(angle_min), output._asdict(), tuple(noise),
+        int64s(breakpoints), int64s(outliers), float(angle_min), output._asdict(), tuple(noise),
     )  # fmt: skip
-
-
-def _ints(values) -> np.ndarray:
-    return np.ascontiguousarray(values, dtype=np.int64)
-
-
-def _reals(values) -> np.ndarray:
-    return np.ascontiguousarray(values, dtype=np.float64)

@@ -45,6 +45,7 @@ import numpy as np
 
 from scanlines import _core
 from scanlines.params import Param, choice, coded, number, radians
+from scanlines.steps.arrays import int64s
 from scanlines.steps.noise import NoiseLine
 from scanlines.steps.returns import Returns
 
@@ -180,7 +181,7 @@ def break_flags(returns: Returns, gap: np.ndarray, step: float, rule: Breakpoint
     are far apart but collinear and evenly spaced, so a distance threshold alone cuts the
     wall; a depth jump or a spike is neither.
     """
-    return _core.break_flags(*returns, _ints(gap), float(step), rule)
+    return _core.break_flags(*returns, int64s(gap), float(step), rule)
 
 
 def scan_rule(spec: RuleSpec, returns: Returns, gap: np.ndarray, noise: NoiseLine):
@@ -190,10 +191,6 @@ def scan_rule(spec: RuleSpec, returns: Returns, gap: np.ndarray, noise: NoiseLin
     tolerance ``line_k`` standard deviations of an extrapolation from two points
     (``sqrt(5) sigma``). :data:`NO_RULE` gives a rule that cuts at missing beams only."""
     kind, k, margin, tolerance, line, lam, c0, jump = _core.scan_rule(
-        spec._asdict(), *returns, _ints(gap), tuple(noise)
+        spec._asdict(), *returns, int64s(gap), tuple(noise)
     )
     return BreakpointRule(kind, k, margin, tolerance, NoiseLine(*line), lam, c0, jump)
-
-
-def _ints(values) -> np.ndarray:
-    return np.ascontiguousarray(values, dtype=np.int64)

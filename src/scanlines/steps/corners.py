@@ -27,6 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from scanlines import _core
+from scanlines.steps.arrays import float64s, int64s
 from scanlines.steps.fit import Moments
 
 __all__ = [
@@ -46,7 +47,9 @@ TURN, DK, DK_SIGNED = range(3)
 def slope_scores(r, gap, step: float, start, end, signed: bool) -> np.ndarray:
     """Eq. 13 at every position (0 where a neighbour lies outside the cluster, or a zero
     range gives no slope); ``signed`` leaves out the printed absolute values."""
-    return _core.slope_scores(_reals(r), _ints(gap), float(step), _ints(start), _ints(end), signed)
+    return _core.slope_scores(
+        float64s(r), int64s(gap), float(step), int64s(start), int64s(end), signed
+    )
 
 
 def turn_scores(x, y, moments: Moments, start, end, window: int) -> np.ndarray:
@@ -55,7 +58,7 @@ def turn_scores(x, y, moments: Moments, start, end, window: int) -> np.ndarray:
     The line before ``p``, ``[p - w, p]``, is the line after ``p - w``: each run is
     fitted once, except the shortened ones at a cluster's ends.
     """
-    return _core.turn_scores(_reals(x), _reals(y), *moments, _ints(start), _ints(end), window)
+    return _core.turn_scores(float64s(x), float64s(y), *moments, int64s(start), int64s(end), window)
 
 
 def turn_window(x, y, index, sigma: float) -> int:
@@ -67,17 +70,9 @@ def turn_window(x, y, index, sigma: float) -> int:
     3..15), so that at 1 deg and 1 cm noise a short wall still has a corner score,
     and at 0.33 deg and 2 cm the score is not noise.
     """
-    return _core.turn_window(_reals(x), _reals(y), _ints(index), float(sigma))
+    return _core.turn_window(float64s(x), float64s(y), int64s(index), float(sigma))
 
 
 def peak_positions(score, start, end) -> np.ndarray:
     """Positions ``i`` with ``|s_i| > |s_{i-1}|`` and ``|s_i| > |s_{i+1}|`` inside a cluster."""
-    return _core.peak_positions(_reals(score), _ints(start), _ints(end))
-
-
-def _ints(values) -> np.ndarray:
-    return np.ascontiguousarray(values, dtype=np.int64)
-
-
-def _reals(values) -> np.ndarray:
-    return np.ascontiguousarray(values, dtype=np.float64)
+    return _core.peak_positions(float64s(score), int64s(start), int64s(end))

@@ -31,6 +31,7 @@ from __future__ import annotations
 import numpy as np
 
 from scanlines import _core
+from scanlines.steps.arrays import bools, float64s, int64s
 from scanlines.steps.breakpoints import BreakpointRule
 from scanlines.steps.returns import Returns
 
@@ -55,7 +56,7 @@ ISOLATED, LITERAL, NO_DENOISE = range(3)
 
 def literal_noise(d) -> np.ndarray:
     """Step 2 as written, on neighbour distances ``d`` (length n - 1): a mask of n points."""
-    return _core.literal_noise(_reals(d))
+    return _core.literal_noise(float64s(d))
 
 
 def isolated_noise(returns: Returns, gap, step: float, rule: BreakpointRule, breaks) -> np.ndarray:
@@ -65,7 +66,7 @@ def isolated_noise(returns: Returns, gap, step: float, rule: BreakpointRule, bre
     the two neighbours must be at most two beams apart (no beam missing beside the point).
     """
     return _core.isolated_noise(
-        _returns(returns), _ints(gap), float(step), tuple(rule), _flags(breaks)
+        _returns(returns), int64s(gap), float(step), tuple(rule), bools(breaks)
     )
 
 
@@ -78,7 +79,7 @@ def window_means(x, y, noise, window: int, breaks) -> tuple[np.ndarray, np.ndarr
     right neighbours: where two windows overlap, a point takes the mean of the noise
     point to its left. Returns the moved coordinates.
     """
-    return _core.window_means(_reals(x), _reals(y), _flags(noise), int(window), _flags(breaks))
+    return _core.window_means(float64s(x), float64s(y), bools(noise), int(window), bools(breaks))
 
 
 def small_clusters(breaks, min_points: int, seam_joined: bool) -> np.ndarray:
@@ -89,7 +90,7 @@ def small_clusters(breaks, min_points: int, seam_joined: bool) -> np.ndarray:
     echo. ``seam_joined`` counts the first and last clusters of a full circle
     whose seam is continuous as one.
     """
-    return _core.small_clusters(_flags(breaks), int(min_points), bool(seam_joined))
+    return _core.small_clusters(bools(breaks), int(min_points), bool(seam_joined))
 
 
 def in_between_clusters(r, gap, breaks, small, margin: float) -> np.ndarray:
@@ -103,7 +104,7 @@ def in_between_clusters(r, gap, breaks, small, margin: float) -> np.ndarray:
     themselves, are judged.
     """
     return _core.in_between_clusters(
-        _reals(r), _ints(gap), _flags(breaks), _flags(small), float(margin)
+        float64s(r), int64s(gap), bools(breaks), bools(small), float(margin)
     )
 
 
@@ -131,16 +132,4 @@ def denoise(returns: Returns, n_beams: int, step: float, full_circle: bool,
 
 def _returns(returns: Returns) -> tuple[np.ndarray, ...]:
     index, r, x, y = returns
-    return _ints(index), _reals(r), _reals(x), _reals(y)
-
-
-def _ints(values) -> np.ndarray:
-    return np.ascontiguousarray(values, dtype=np.int64)
-
-
-def _reals(values) -> np.ndarray:
-    return np.ascontiguousarray(values, dtype=np.float64)
-
-
-def _flags(values) -> np.ndarray:
-    return np.ascontiguousarray(values, dtype=np.bool_)
+    return int64s(index), float64s(r), float64s(x), float64s(y)

@@ -45,6 +45,7 @@ import numpy as np
 from scanlines import _core
 from scanlines.extraction import END_KINDS
 from scanlines.params import Param, integer, number, radians
+from scanlines.steps.arrays import int64s
 from scanlines.steps.fit import Moments
 from scanlines.steps.returns import Returns
 
@@ -100,7 +101,7 @@ def segment_events(
     """
     beams, distance, angle = bounds
     return _core.segment_events(
-        *returns, int(n_beams), *moments, _ints(a), _ints(b), _ints(group), bool(clustered),
+        *returns, int(n_beams), *moments, int64s(a), int64s(b), int64s(group), bool(clustered),
         bool(wrap), int(beams), float(distance), float(angle),
     )  # fmt: skip
 
@@ -123,10 +124,6 @@ def junction_events(
     don't-care).
     """
     return _core.junction_events(
-        *returns, int(fit), *moments, _ints(a), _ints(b), _ints(owner), bool(shared),
+        *returns, int(fit), *moments, int64s(a), int64s(b), int64s(owner), bool(shared),
         bool(ring), float(sigma), np.ascontiguousarray(turn_sigma, dtype=np.float64),
     )  # fmt: skip
-
-
-def _ints(values) -> np.ndarray:
-    return np.ascontiguousarray(values, dtype=np.int64)

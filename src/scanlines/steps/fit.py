@@ -28,6 +28,7 @@ from typing import NamedTuple
 import numpy as np
 
 from scanlines import _core
+from scanlines.steps.arrays import float64s, int64s
 
 __all__ = [
     "FITS",
@@ -107,7 +108,7 @@ def paper_run(moments: Moments, a: int, b: int) -> tuple[float, float, float]:
 
 def fit_many(fit: int, moments: Moments, a: np.ndarray, b: np.ndarray):
     """:func:`fit_run` over runs ``[a[k], b[k]]``: arrays ``rho, alpha, sse``."""
-    return _core.fit_many(fit, *moments, _ints(a), _ints(b))
+    return _core.fit_many(fit, *moments, int64s(a), int64s(b))
 
 
 def hesse_difference(rho_1: float, alpha_1: float, rho_2: float, alpha_2: float):
@@ -145,13 +146,13 @@ def run_covariances(returns, rho, alpha, a, b, sigma, inflate):
     """
     _, r, x, y = returns
     return _core.run_covariances(
-        r, x, y, _reals(rho), _reals(alpha), _ints(a), _ints(b), _reals(sigma), bool(inflate)
+        r,
+        x,
+        y,
+        float64s(rho),
+        float64s(alpha),
+        int64s(a),
+        int64s(b),
+        float64s(sigma),
+        bool(inflate),
     )
-
-
-def _ints(values) -> np.ndarray:
-    return np.ascontiguousarray(values, dtype=np.int64)
-
-
-def _reals(values) -> np.ndarray:
-    return np.ascontiguousarray(values, dtype=np.float64)

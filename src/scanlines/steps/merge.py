@@ -27,6 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from scanlines import _core
+from scanlines.steps.arrays import float64s, int64s
 from scanlines.steps.fit import Moments
 from scanlines.steps.returns import Returns
 
@@ -36,7 +37,7 @@ __all__ = ["merge_by_chi_square", "pair_chi_squares"]
 def pair_chi_squares(rho, alpha, covariance, first, second) -> np.ndarray:
     """The chi-square of the line pairs ``(first[i], second[i])`` (module docstring)."""
     return _core.pair_chi_squares(
-        _reals(rho), _reals(alpha), _reals(covariance), _ints(first), _ints(second)
+        float64s(rho), float64s(alpha), float64s(covariance), int64s(first), int64s(second)
     )
 
 
@@ -51,14 +52,6 @@ def merge_by_chi_square(
     takes it. Returns new ``a, b, group`` arrays.
     """
     return _core.merge_by_chi_square(
-        *returns, *moments, _ints(a), _ints(b), _ints(group), _reals(sigma), float(threshold),
+        *returns, *moments, int64s(a), int64s(b), int64s(group), float64s(sigma), float(threshold),
         bool(inflate),
     )  # fmt: skip
-
-
-def _ints(values) -> np.ndarray:
-    return np.ascontiguousarray(values, dtype=np.int64)
-
-
-def _reals(values) -> np.ndarray:
-    return np.ascontiguousarray(values, dtype=np.float64)

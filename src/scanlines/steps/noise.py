@@ -21,6 +21,7 @@ from typing import NamedTuple
 import numpy as np
 
 from scanlines import _core
+from scanlines.steps.arrays import float64s, int64s
 from scanlines.steps.returns import Returns
 
 __all__ = [
@@ -77,7 +78,7 @@ def local_residuals(returns: Returns, gap: np.ndarray) -> tuple[np.ndarray, np.n
     Unlike an orthogonal distance from a fitted line, this does not depend on the line's
     direction, which noise larger than the spacing of the returns makes arbitrary.
     """
-    return _core.local_residuals(*returns, _ints(gap))
+    return _core.local_residuals(*returns, int64s(gap))
 
 
 def scan_noise(returns: Returns, gap: np.ndarray) -> NoiseLine:
@@ -91,12 +92,12 @@ def scan_noise(returns: Returns, gap: np.ndarray) -> NoiseLine:
     the noise far away upwards). Fewer than 5 samples: the constant
     :data:`MIN_NOISE_SIGMA`.
     """
-    return NoiseLine(*_core.scan_noise(*returns, _ints(gap)))
+    return NoiseLine(*_core.scan_noise(*returns, int64s(gap)))
 
 
 def return_sigmas(r: np.ndarray, noise: NoiseLine) -> np.ndarray:
     """The noise sigma of ``noise`` at each range of ``r``."""
-    return _core.return_sigmas(_reals(r), tuple(noise))
+    return _core.return_sigmas(float64s(r), tuple(noise))
 
 
 def residual_tolerances(r: np.ndarray, noise: NoiseLine, floor: float) -> np.ndarray:
@@ -104,7 +105,7 @@ def residual_tolerances(r: np.ndarray, noise: NoiseLine, floor: float) -> np.nda
     (metres), or 5 times the noise sigma at its range where that is more (Gaussian noise
     puts one return in about 1.7 million farther, so on a noisy sensor the bound cuts at
     shapes, not at noise)."""
-    return _core.residual_tolerances(_reals(r), tuple(noise), float(floor))
+    return _core.residual_tolerances(float64s(r), tuple(noise), float(floor))
 
 
 def covariance_sigmas(
@@ -112,25 +113,17 @@ def covariance_sigmas(
 ) -> np.ndarray:
     """Per-return sigma of the segment covariances: the ``range_sigma`` override where it
     is a number (NaN: not given), else ``noise`` if known, else the scan's own."""
-    return _core.covariance_sigmas(float(range_sigma), tuple(noise), *returns, _ints(gap))
+    return _core.covariance_sigmas(float(range_sigma), tuple(noise), *returns, int64s(gap))
 
 
 def offset_power_sums(index: np.ndarray, a: int, b: int, i: int) -> tuple[float, ...]:
     """Sums of ``t^0 .. t^4`` over the beam offsets ``t = index[p] - index[i]`` of
     positions ``a..b``."""
-    return _core.offset_power_sums(_ints(index), a, b, i)
+    return _core.offset_power_sums(int64s(index), a, b, i)
 
 
 def parabola_at_centre(index, r, a: int, b: int, i: int, sums) -> tuple[float, float, float]:
     """Least-squares parabola of ``r`` over the beam offsets ``index - index[i]`` of
     positions ``a..b`` (``sums``: their :func:`offset_power_sums`): ``(r[i] - fit at i,
     leverage of i, slope at i per beam)``."""
-    return _core.parabola_at_centre(_ints(index), _reals(r), a, b, i, tuple(sums))
-
-
-def _ints(values) -> np.ndarray:
-    return np.ascontiguousarray(values, dtype=np.int64)
-
-
-def _reals(values) -> np.ndarray:
-    return np.ascontiguousarray(values, dtype=np.float64)
+    return _core.parabola_at_centre(int64s(index), float64s(r), a, b, i, tuple(sums))

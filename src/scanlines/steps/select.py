@@ -34,6 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from scanlines import _core
+from scanlines.steps.arrays import bools, float64s, int64s
 from scanlines.steps.fit import RunCost
 
 __all__ = [
@@ -75,7 +76,7 @@ def threshold_grid(low: float, high: float, step: float, max_evaluations: int) -
 
 def level_corners(ranked, accepted, level: int) -> np.ndarray:
     """Sorted positions of the accepted candidates among the ``level`` best."""
-    return _core.level_corners(_ints(ranked), _flags(accepted), int(level))
+    return _core.level_corners(int64s(ranked), bools(accepted), int(level))
 
 
 def best_level(criterion: int, sse, segments, levels, n_points: int, sigma: float, penalty: float):
@@ -84,7 +85,7 @@ def best_level(criterion: int, sse, segments, levels, n_points: int, sigma: floa
     The criterion of one segmentation: the SSE (``"sse"``), or ``SSE / sigma^2 + penalty
     ln(max(n_points, 2)) segments`` (``"bic"``); a NaN SSE counts as inf."""
     return _core.best_level(
-        int(criterion), _reals(sse), _ints(segments), _ints(levels), int(n_points),
+        int(criterion), float64s(sse), int64s(segments), int64s(levels), int(n_points),
         float(sigma), float(penalty),
     )  # fmt: skip
 
@@ -98,7 +99,7 @@ def start_sweep(cost: RunCost, start, end, candidates, scores, grid, use_grid: b
     rank in position order.
     """
     return _core.start_sweep(
-        cost, _ints(start), _ints(end), _ints(candidates), _reals(scores), _reals(grid),
+        cost, int64s(start), int64s(end), int64s(candidates), float64s(scores), float64s(grid),
         bool(use_grid), int(max_evaluations),
     )  # fmt: skip
 
@@ -145,18 +146,6 @@ def sweep_levels(cost: RunCost, start, end, candidates, scores, grid, use_grid: 
     threshold ``thresholds[t]`` gives.
     """
     return _core.sweep_levels(
-        cost, _ints(start), _ints(end), _ints(candidates), _reals(scores), _reals(grid),
+        cost, int64s(start), int64s(end), int64s(candidates), float64s(scores), float64s(grid),
         bool(use_grid), int(max_evaluations), bool(shared),
     )  # fmt: skip
-
-
-def _ints(values) -> np.ndarray:
-    return np.ascontiguousarray(values, dtype=np.int64)
-
-
-def _reals(values) -> np.ndarray:
-    return np.ascontiguousarray(values, dtype=np.float64)
-
-
-def _flags(values) -> np.ndarray:
-    return np.ascontiguousarray(values, dtype=np.bool_)

@@ -32,9 +32,8 @@ References
 
 from __future__ import annotations
 
-import numpy as np
-
 from scanlines import _core
+from scanlines.steps.arrays import float64s, int64s
 from scanlines.steps.fit import Moments, RunCost
 
 __all__ = [
@@ -60,7 +59,7 @@ def chord_distance(x, y, a: int, b: int, p: int) -> float:
     the farthest point is the far corner, not an arbitrary point of the side opposite the
     chord.
     """
-    return _core.chord_distance(_reals(x), _reals(y), a, b, p)
+    return _core.chord_distance(float64s(x), float64s(y), a, b, p)
 
 
 def split_at_farthest(x, y, moments: Moments, a, b, group, threshold: float, reference: int):
@@ -70,7 +69,7 @@ def split_at_farthest(x, y, moments: Moments, a, b, group, threshold: float, ref
     (so sequence order for disjoint runs given in order).
     """
     return _core.split_at_farthest(
-        _reals(x), _reals(y), *moments, _ints(a), _ints(b), _ints(group), float(threshold),
+        float64s(x), float64s(y), *moments, int64s(a), int64s(b), int64s(group), float(threshold),
         int(reference),
     )  # fmt: skip
 
@@ -80,7 +79,7 @@ def cut_at(start, end, corners, shared: bool):
 
     ``shared``: the corner point ends one run and starts the next.
     """
-    return _core.cut_at(_ints(start), _ints(end), _ints(corners), bool(shared))
+    return _core.cut_at(int64s(start), int64s(end), int64s(corners), bool(shared))
 
 
 def refine_cuts(cost: RunCost, a, b, owner):
@@ -91,13 +90,5 @@ def refine_cuts(cost: RunCost, a, b, owner):
     """
     fit, moments, inv_r2, variances = cost
     return _core.refine_cuts(
-        fit, *moments, _reals(inv_r2), _reals(variances), _ints(a), _ints(b), _ints(owner)
+        fit, *moments, float64s(inv_r2), float64s(variances), int64s(a), int64s(b), int64s(owner)
     )
-
-
-def _ints(values) -> np.ndarray:
-    return np.ascontiguousarray(values, dtype=np.int64)
-
-
-def _reals(values) -> np.ndarray:
-    return np.ascontiguousarray(values, dtype=np.float64)
