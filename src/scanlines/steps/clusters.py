@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from scanlines import _core
+from scanlines.steps.arrays import bools
 from scanlines.steps.breakpoints import BreakpointRule
 from scanlines.steps.returns import Returns
 
@@ -60,6 +61,6 @@ def cluster_returns(
     """
     rotated, start, end, breakpoints, ring = _core.cluster_returns(
         *returns, int(n_beams), float(step), bool(full_circle), rule, int(ring_window),
-        np.ascontiguousarray(known_breaks, dtype=bool),
+        bools(known_breaks),
     )  # fmt: skip
     return Returns(*rotated), start, end, breakpoints, ring

@@ -40,12 +40,10 @@ noise of their directions.
 
 from __future__ import annotations
 
-import numpy as np
-
 from scanlines import _core
 from scanlines.extraction import END_KINDS
 from scanlines.params import Param, integer, number, radians
-from scanlines.steps.arrays import int64s
+from scanlines.steps.arrays import float64s, int64s
 from scanlines.steps.fit import Moments
 from scanlines.steps.returns import Returns
 
@@ -125,5 +123,5 @@ def junction_events(
     """
     return _core.junction_events(
         *returns, int(fit), *moments, int64s(a), int64s(b), int64s(owner), bool(shared),
-        bool(ring), float(sigma), np.ascontiguousarray(turn_sigma, dtype=np.float64),
+        bool(ring), float(sigma), float64s(turn_sigma),
     )  # fmt: skip
