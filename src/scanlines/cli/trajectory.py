@@ -11,7 +11,8 @@ TrajectoryOption = Annotated[
     Path | None,
     typer.Option(
         "--trajectory",
-        help="Score an estimated trajectory (TUM file) against --reference instead: ATE after "
+        help="Score an estimated trajectory (a TUM file .tum/.txt, or a log's poses) against "
+        "--reference instead: ATE after "
         "a rigid 2-D alignment and RPE per metre travelled, poses matched within 10 ms (as "
         "evo). Writes trajectory_eval.json into --out (or to --out if it ends in .json).",
     ),
