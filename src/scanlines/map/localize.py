@@ -105,18 +105,19 @@ class Localisation:
         return sum(1 for t in self.tracked if t.status == "did not fit")
 
 
-def _widened(settings: TrackSettings, covariance: np.ndarray) -> TrackSettings:
-    """``settings`` with the gate and the largest correction widened to 3 standard
-    deviations of the predicted pose where it is that uncertain (after scans that did not
-    fit), so that tracking can catch the map again; at most 1 m and 30 degrees."""
-    sigma = math.sqrt(max(covariance[0, 0], covariance[1, 1]))
-    turn = math.sqrt(covariance[2, 2])
-    gate = min(max(settings.gate, 3.0 * sigma), 1.0)
-    if gate == settings.gate and 3.0 * turn <= settings.max_turn:
+def _widened(settings: TrackSettings, misses: int) -> TrackSettings:
+    """``settings`` with the gate and the largest correction widened after ``misses``
+    scans in a row that did not fit (their poses predicted only), so that tracking can
+    catch the map again: by half the gate per miss, to at most 1 m and 30 degrees."""
+    if not misses:
         return settings
-    shift = max(settings.max_shift, min(3.0 * sigma, 1.0))
-    widest = max(settings.max_turn, min(3.0 * turn, math.radians(30.0)))
-    return replace(settings, gate=gate, max_shift=shift, max_turn=widest)
+    grow = 1.0 + 0.5 * misses
+    return replace(
+        settings,
+        gate=min(settings.gate * grow, 1.0),
+        max_shift=min(max(settings.max_shift, settings.gate * grow), 1.0),
+        max_turn=min(settings.max_turn * grow, math.radians(30.0)),
+    )
 
 
 def _propagate(covariance: np.ndarray, pose: Pose, increment: Pose, noise: np.ndarray):
@@ -146,6 +147,7 @@ def localize(
     pose: Pose | None = None
     last_odometry: Pose | None = None
     covariance = np.diag([INITIAL_SIGMA[0] ** 2] * 2 + [INITIAL_SIGMA[1] ** 2])
+    misses = 0
     for index, scan in indexed:
         if scan.timestamp is None or scan.timestamp < t0 - START_TOLERANCE:
             run.skipped += 1
@@ -162,8 +164,9 @@ def localize(
             noise = settings.increment_covariance(increment)
             covariance = _propagate(covariance, pose, increment, noise)
         fit = track_points(scan.points[scan.valid], predicted, covariance, lines,
-                           _widened(settings, covariance))  # fmt: skip
+                           _widened(settings, misses))  # fmt: skip
         pose, covariance, last_odometry = fit.pose, fit.covariance, odometry
+        misses = 0 if fit.used else misses + 1
         status = "aligned" if fit.used else "did not fit"
         run.tracked.append(TrackedPose(index, scan.timestamp, frame.pose(odometry), predicted,
                                        fit.pose, covariance, status))  # fmt: skip
