@@ -131,7 +131,7 @@ def track_points(
         gradient = jac.T @ (weight * e) / s2 + info_prior @ offset
         step = -np.linalg.solve(data + info_prior, gradient)
         x = x + step
-        if np.abs(step).max() < 1e-6:
+        if np.abs(step).max() < 1e-4:  # 0.1 mm, 0.006 deg
             break
     covariance = np.linalg.inv(data + info_prior)
     shift = math.hypot(x[0] - start[0], x[1] - start[1])
