@@ -42,7 +42,8 @@ class TrackSettings:
     """The constants of tracking (metres, radians): the association gate, the largest
     correction of a prediction, the share of returns that must meet a line, the odometry
     increment's noise (a floor plus a share of the distance and the turn), the residual
-    variance's floor, the scans a map line needs before it is aligned to (``support``)."""
+    variance's floor, the Gauss-Newton steps and the step (metres, radians) at which they
+    stop, the scans a map line needs before it is aligned to (``support``)."""
 
     gate: float = 0.15
     max_shift: float = 0.3
@@ -54,6 +55,7 @@ class TrackSettings:
     odometry_per_radian: float = 0.1
     sigma_floor: float = 0.005
     iterations: int = 10
+    tolerance: float = 1e-6
     support: int = 3
 
     def to_dict(self) -> dict[str, Any]:
@@ -131,7 +133,7 @@ def track_points(
         gradient = jac.T @ (weight * e) / s2 + info_prior @ offset
         step = -np.linalg.solve(data + info_prior, gradient)
         x = x + step
-        if np.abs(step).max() < 1e-4:  # 0.1 mm, 0.006 deg
+        if np.abs(step).max() < settings.tolerance:
             break
     covariance = np.linalg.inv(data + info_prior)
     shift = math.hypot(x[0] - start[0], x[1] - start[1])
