@@ -6,7 +6,7 @@ from typing import Annotated
 
 import typer
 
-from scanlines.cli import bench, evaluate, extract, logs, maps, ros2, view
+from scanlines.cli import bench, evaluate, extract, localize, logs, maps, ros2, view
 
 app = typer.Typer(
     name="scanlines",
@@ -43,6 +43,7 @@ def root(
 extract.register(app)
 logs.register(app)
 maps.register(app)
+localize.register(app)
 evaluate.register(app)
 bench.register(app)
 view.register(app)

@@ -16,6 +16,7 @@ from scanlines.cli.eval_reports import (
     _print_tables,
 )
 from scanlines.cli.maps import AlignOption, MapLogOption, MapPosesOption
+from scanlines.cli.trajectory import ReferenceOption, TrajectoryOption
 
 if TYPE_CHECKING:
     from scanlines.evaluation.evaluate import EvalResult
@@ -176,9 +177,17 @@ def eval_command(
     map_log: MapLogOption = None,
     poses: MapPosesOption = None,
     align: AlignOption = False,
+    trajectory: TrajectoryOption = None,
+    reference: ReferenceOption = None,
 ) -> None:
     from scanlines.errors import ParameterError
     from scanlines.evaluation.specs import TRUTH, parse_specs
+
+    if trajectory is not None or reference is not None:
+        from scanlines.cli.trajectory import evaluate_trajectory_command
+
+        others = map_log or real or labels or family or scenes is not None or method or config
+        return evaluate_trajectory_command(trajectory, reference, out, bool(others))
     from scanlines.sensor_profile import read_profile
 
     configured = _config_specs(config or [])

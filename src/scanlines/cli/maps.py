@@ -55,8 +55,27 @@ AlignOption = Annotated[
     bool,
     typer.Option(
         "--align",
-        help="With --map: align each scan to the map so far before fusing it; the held-out "
-        "scans are then scored at their poses and also localised (aligned to the map).",
+        help="With --map: track each scan on the map so far before fusing it (as `scanlines "
+        "map --align`); the held-out scans are then scored at their predicted poses and also "
+        "localised (aligned to the finished map).",
+    ),
+]
+TrackOption = Annotated[
+    bool,
+    typer.Option(
+        "--align",
+        help="Track: each scan's pose predicted by composing the odometry increment (of the "
+        "log's poses, --poses or scan registration) onto the last corrected pose, then aligned "
+        "to the map built so far; a scan that does not fit is kept out of the map. Off by "
+        "default (corrected poses are used as given).",
+    ),
+]
+PosesOutOption = Annotated[
+    Path | None,
+    typer.Option(
+        "--poses-out",
+        help="With --align: write the tracked poses (TUM, world frame, readable by evo) and "
+        "their covariances beside it (NAME.cov.json).",
     ),
 ]
 FirstScansOption = Annotated[
@@ -90,16 +109,28 @@ def map_command(
     on_error: OnErrorOption = "fail",
     max_beams: MaxBeamsOption = None,
     topic: TopicOption = None,
+    align: TrackOption = False,
+    poses_out: PosesOutOption = None,
 ) -> None:
     from scanlines.cli.common import writable
+    from scanlines.errors import ParameterError
     from scanlines.map.export import check_map_format, naming_output, write_map
 
     check_map_format(out)  # an unknown suffix (or DXF without ezdxf) before the log is read
+    if poses_out is not None and not align:
+        raise ParameterError("--poses-out writes the tracked poses; it needs --align")
     writable(out, overwrite)
     writable(plot, overwrite)
+    writable(poses_out, overwrite)
+    if poses_out is not None:
+        writable(poses_out.with_name(poses_out.stem + ".cov.json"), overwrite)
     options = reader_options(topic=topic, on_error=on_error, max_beams=max_beams)
     prepared = prepare(log, options, poses, min_scans, method, preset, param, config,
                        sensor_profile, scans)  # fmt: skip
+    if align:
+        from scanlines.map.tracking import TrackSettings
+
+        prepared["track"] = TrackSettings()
     build = run_build(log, options, prepared, scans)
     lines = build.line_map.lines()
     meta = map_meta(log, build, prepared)
@@ -119,6 +150,46 @@ def map_command(
         typer.echo(f"poses: {build.pose_note}", err=True)
     if build.without_pose:
         typer.echo(f"{build.without_pose} scans had no pose and were not mapped", err=True)
+    if build.track is not None:
+        _report_tracking(build, meta["tracking"], poses_out)
+
+
+def _report_tracking(build, summary: dict[str, Any], poses_out: Path | None) -> None:
+    """The summary of a tracked map: how far alignment moved the poses, the scans that did
+    not fit (on stderr), and the poses written."""
+    from scanlines.map.export import naming_output
+    from scanlines.map.tracking import write_tracked
+
+    def mm(spread: dict[str, float | None]) -> str:
+        m, top = spread["median"], spread["max"]
+        return (
+            "-"
+            if m is None or top is None
+            else f"median {1000 * m:.1f} mm, max {1000 * top:.1f} mm"
+        )
+
+    def deg(spread: dict[str, float | None]) -> str:
+        m, top = spread["median"], spread["max"]
+        return "-" if m is None or top is None else f"median {m:.2f} deg, max {top:.2f} deg"
+
+    typer.echo(
+        f"tracked: {summary['aligned']} scans aligned, {summary['first_unaligned']} first "
+        f"mapped at their odometry; alignment moved each pose from its prediction by "
+        f"{mm(summary['correction_m'])} ({deg(summary['correction_deg'])}); from the log's "
+        f"poses by {mm(summary['from_source_m'])}"
+    )
+    if build.not_aligned:
+        typer.echo(
+            f"{build.not_aligned} scans did not fit the map and were kept out of it "
+            "(their poses predicted by odometry)",
+            err=True,
+        )
+    if poses_out is not None:
+        with naming_output(poses_out, "the poses"):
+            path, sidecar, untimed = write_tracked(build.tracked, build.frame, poses_out)
+        typer.echo(f"wrote {path} and {sidecar}")
+        if untimed:
+            typer.echo(f"{untimed} scans had no timestamp and were left out of {path}", err=True)
 
 
 def prepare(
@@ -166,13 +237,20 @@ def run_build(log: Path, options: ReaderOptions, prepared: dict[str, Any], scans
         indexed = reader.enumerate() if scans is None else islice(reader.enumerate(), scans)
         return build_map(
             indexed, prepared["extractor"], poses=prepared["poses"], settings=prepared["settings"],
-            source=str(log),
+            track=prepared.get("track"), source=str(log),
         )  # fmt: skip
 
 
 def map_meta(log: Path, build, prepared: dict[str, Any]) -> dict[str, Any]:
     extractor = prepared["extractor"]
+    tracking = {}
+    if build.track is not None:
+        from scanlines.map.tracking import tracking_summary
+
+        summary = tracking_summary(build.tracked, build.frame)
+        tracking = {"tracking": {**summary, "settings": build.track.to_dict()}}
     return {
+        **tracking,
         "log": log.name,
         "poses": build.poses,
         "poses_note": build.pose_note,
@@ -200,9 +278,9 @@ def evaluate_map_command(
 
     from scanlines.errors import ParameterError
     from scanlines.io import open_log
-    from scanlines.map.align import AlignSettings
     from scanlines.map.export import dumps, naming_output
     from scanlines.map.holdout import evaluate_map
+    from scanlines.map.tracking import TrackSettings
     from scanlines.outputs import write_text_atomically
 
     if spec.is_truth:
@@ -217,7 +295,7 @@ def evaluate_map_command(
     score, build = evaluate_map(
         lambda: open_log(log), prepared["extractor"], profile.sigma_at,
         poses=prepared["poses"], settings=prepared["settings"], limit=scans,
-        align=AlignSettings() if align else None, source=str(log),
+        track=TrackSettings() if align else None, source=str(log),
     )  # fmt: skip
     seconds = time.perf_counter() - started
     table = Table(title=f"line map of {log.name}: {score.poses}", show_header=False)
@@ -255,8 +333,9 @@ def evaluate_map_command(
         "origin": list(build.frame.origin),
         "segments_mapped": build.segments,
         "segments_per_line": build.segments / max(score.lines, 1),
-        "align": None if build.align is None else build.align.to_dict(),
+        "tracking": None if build.track is None else build.track.to_dict(),
         "scans_aligned": build.aligned,
+        "scans_not_aligned": build.not_aligned,
         "seconds": seconds,
     }
     with naming_output(path, "the map's score"):
@@ -266,10 +345,11 @@ def evaluate_map_command(
 
 def _localised_rows(score, build) -> list[tuple[str, str]]:
     """The rows of a map built with alignment: the held-out scans localised on the map."""
-    if build.align is None:
+    if build.track is None:
         return []
     return [
         ("scans aligned while mapping", f"{build.aligned} / {build.scans}"),
+        ("scans that did not fit (not mapped)", f"{build.not_aligned}"),
         ("localised: held-out scans aligned", f"{score.localised_scans}"),
         ("localised: coverage", f"{score.localised_coverage:.3f}"),
         ("localised: median distance, mm", f"{1000 * score.localised_median_distance:.1f}"),

@@ -11,7 +11,10 @@
 
 Modules: ``fusion`` (association and fusion, :class:`LineMap`), ``poses`` (where each scan
 stood), ``build`` (a log to a map), ``export`` (GeoJSON, SVG, DXF, JSON), ``holdout``
-(the map scored on scans it did not see: ``scanlines eval --map``).
+(the map scored on scans it did not see: ``scanlines eval --map``), ``align`` (a scan
+pulled onto the map from its pose), ``tracking`` (odometry as the prior, each scan aligned:
+``scanlines map --align``), ``localize`` (a log tracked on a saved map:
+``scanlines localize``).
 """
 
 from scanlines.map.build import MapBuild, build_map

@@ -13,6 +13,7 @@ from scanlines.io.transform import points_to_world
 from scanlines.map.align import AlignSettings, LineSet, align_scan, nearest_segments
 from scanlines.map.build import MapBuild, build_map
 from scanlines.map.fusion import FusionSettings, MapLines
+from scanlines.map.tracking import TrackSettings, track_points
 from scanlines.scan import Scan
 
 __all__ = ["MapScore", "distances_to_lines", "evaluate_map", "loop_lines", "score_held_out"]
@@ -77,6 +78,7 @@ def score_held_out(
     lines = build.line_map.lines()
     target = LineSet(lines.rho, lines.alpha, lines.start, lines.end)
     locate = None if build.align is None else replace(build.align, damping=1.0)
+    priors = {t.index: t.covariance for t in build.tracked if t.status == "held out"}
     distances, tolerances, ranges, localised = [], [], [], []
     moved = 0
     for index, scan in indexed:
@@ -88,8 +90,11 @@ def score_held_out(
         distances.append(distances_to_lines(points_to_world(scan.points[valid], pose), lines))
         tolerances.append(np.maximum(3.0 * sigma_at(r), MIN_TOLERANCE))
         ranges.append(r)
-        if locate is not None:
-            fit = align_scan(scan, pose, target, locate)
+        if locate is not None or build.track is not None:
+            fit = (
+                align_scan(scan, pose, target, locate) if locate is not None
+                else track_points(scan.points[valid], pose, priors[index], target, build.track)
+            )  # fmt: skip
             moved += fit.used
             world = points_to_world(scan.points[valid], fit.pose)
             localised.append(distances_to_lines(world, lines))
@@ -141,13 +146,16 @@ def evaluate_map(
     every: int = 10,
     limit: int | None = None,
     align: AlignSettings | None = None,
+    track: TrackSettings | None = None,
     source: str | None = None,
 ) -> tuple[MapScore, MapBuild]:
     """Build the map from all scans but every ``every``-th, then score it on those.
 
     ``open_indexed()`` opens the log afresh (a context manager giving a reader with
     ``enumerate()``); the log is read twice, one scan in memory at a time; ``limit``: only
-    its first scans; ``source``: the log's name, for error messages.
+    its first scans; ``source``: the log's name, for error messages; ``align`` or
+    ``track``: how the map is built (:func:`~scanlines.map.build.build_map`), the held-out
+    scans then also localised the same way.
     """
     from itertools import islice
 
@@ -157,7 +165,7 @@ def evaluate_map(
     with open_indexed() as reader:
         build = build_map(
             indexed(reader), extractor, poses=poses, settings=settings,
-            hold_out=lambda index: index % every == 0, align=align, source=source,
+            hold_out=lambda index: index % every == 0, align=align, track=track, source=source,
         )  # fmt: skip
     with open_indexed() as reader:
         score = score_held_out(indexed(reader), build, sigma_at)

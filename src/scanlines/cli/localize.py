@@ -1,0 +1,92 @@
+"""``scanlines localize LOG --map MAP.json --initial-pose T,X,Y,YAW --out poses.tum``."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from scanlines.cli.common import LogArgument, OverwriteOption, guarded
+
+
+def register(app: typer.Typer) -> None:
+    app.command(
+        "localize",
+        help="Track a log on a saved line map (the .json `scanlines map` writes) from a given "
+        "pose: odometry as the prior, each scan aligned to the map's lines; writes the poses "
+        "(TUM) and their covariances (NAME.cov.json).",
+    )(guarded(localize_command))
+
+
+def parse_initial_pose(text: str) -> tuple[float, tuple[float, float, float]]:
+    """``T,X,Y,YAW`` (seconds, metres, metres, radians) as ``(t, (x, y, yaw))``."""
+    from scanlines.errors import ParameterError
+
+    fields = text.split(",")
+    try:
+        values = [float(v) for v in fields]
+    except ValueError:
+        values = []
+    if len(values) != 4 or not all(math.isfinite(v) for v in values):
+        raise ParameterError(
+            f"--initial-pose: {text!r} is not T,X,Y,YAW (four finite numbers: the time in "
+            "seconds, the position in metres, the heading in radians)"
+        )
+    return values[0], (values[1], values[2], values[3])
+
+
+def localize_command(
+    log: LogArgument,
+    map_file: Annotated[
+        Path, typer.Option("--map", help="The line map: the .json `scanlines map` writes.")
+    ],
+    initial_pose: Annotated[
+        str,
+        typer.Option(
+            "--initial-pose",
+            help="T,X,Y,YAW: where the robot stands (map frame, metres, heading in radians) "
+            "at time T (seconds of the log's clock); earlier scans are skipped.",
+        ),
+    ],
+    out: Annotated[Path, typer.Option(help="The poses (TUM); covariances in NAME.cov.json.")],
+    overwrite: OverwriteOption = False,
+) -> None:
+    import time
+
+    from scanlines.cli.common import writable
+    from scanlines.io import open_log
+    from scanlines.map.export import naming_output
+    from scanlines.map.localize import localize, read_line_map
+    from scanlines.map.tracking import write_tracked
+
+    initial = parse_initial_pose(initial_pose)
+    writable(out, overwrite)
+    writable(out.with_name(out.stem + ".cov.json"), overwrite)
+    lines, frame = read_line_map(map_file)
+    started = time.perf_counter()
+    with open_log(log) as reader:
+        run = localize(reader.enumerate(), lines, frame, initial)
+    seconds = time.perf_counter() - started
+    if not run.tracked:
+        from scanlines.errors import ParameterError
+
+        raise ParameterError(f"{log}: no scan with a pose at or after time {initial[0]!r}")
+    with naming_output(out, "the poses"):
+        path, sidecar, _ = write_tracked(run.tracked, frame, out)
+    read = len(run.tracked) + run.skipped + run.without_pose
+    aligned = sum(1 for t in run.tracked if t.aligned)
+    typer.echo(
+        f"{len(run.tracked)} scans localised on {len(lines.rho)} map lines ({aligned} aligned), "
+        f"{run.skipped} before time {initial[0]:g} skipped; {read / seconds:.0f} scans/s; "
+        f"wrote {path} and {sidecar}"
+    )
+    if run.not_fit:
+        typer.echo(
+            f"{run.not_fit} scans did not fit the map (their poses predicted by odometry, "
+            "status 'did not fit' in the covariances)",
+            err=True,
+        )
+    if run.without_pose:
+        typer.echo(f"{run.without_pose} scans carry no odometry pose and were left out", err=True)
