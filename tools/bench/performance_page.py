@@ -103,7 +103,7 @@ def render_markdown(result: BenchResult) -> str:
         parts += [
             "## What a run costs besides the kernels\n",
             "`scanlines run` on the intel excerpt by stage, end to end by output format, by "
-            "jobs (with the load average: the machine is shared), the floor (one compiled "
+            "jobs (with the load average: the machine is shared), the floor (one numpy "
             "pass over the returns) and the cold start in a fresh process "
             "(`scanlines.evaluation.bench_pipeline`).\n",
             *[t.to_markdown() for t in result.pipeline.tables()],
