@@ -109,12 +109,6 @@ inline BreakpointRule breakpoint_rule_of(const nb::handle& rule) {
             real(7)};
 }
 
-inline nb::tuple breakpoint_rule_to_tuple(const BreakpointRule& rule) {
-    return nb::make_tuple(rule.kind, rule.k, rule.margin_sigmas, rule.tolerance_sigmas,
-                          nb::make_tuple(rule.noise.sigma0, rule.noise.per_metre),
-                          rule.abd_lambda, rule.pdbs_c0, rule.jump_distance);
-}
-
 // A RunCost from the moments' table and the noise sums (both empty: the plain error).
 inline RunCost run_cost_of(Index fit, const In<double, nb::ndim<2>>& table, double ox, double oy,
                            const InReals& inv_r2, const InReals& variances) {

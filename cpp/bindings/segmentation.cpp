@@ -34,11 +34,6 @@ void bind_segmentation(nb::module_& m) {
         return flags_array(
             break_flags(returns_of(index, r, x, y), vector_of(gap), step, breakpoint_rule_of(rule)));
     });
-    m.def("scan_rule", [](const nb::dict& spec, const InInts& index, const InReals& r,
-                          const InReals& x, const InReals& y, const InInts& gap, NoisePair noise) {
-        return breakpoint_rule_to_tuple(scan_rule(rule_spec_of(spec), returns_of(index, r, x, y),
-                                                  vector_of(gap), {noise.first, noise.second}));
-    });
     m.def("cluster_returns", [](const InInts& index, const InReals& r, const InReals& x,
                                 const InReals& y, Index n_beams, double step, bool full_circle,
                                 nb::handle rule, Index ring_window,
@@ -59,9 +54,6 @@ void bind_segmentation(nb::module_& m) {
         return to_numpy(turn_scores(vector_of(x), vector_of(y), moments_of(table, ox, oy),
                                     vector_of(start), vector_of(end), window));
     });
-    m.def("turn_window", [](const InReals& x, const InReals& y, const InInts& index, double sigma) {
-        return turn_window(vector_of(x), vector_of(y), vector_of(index), sigma);
-    });
     m.def("peak_positions", [](const InReals& score, const InInts& start, const InInts& end) {
         return to_numpy(peak_positions(vector_of(score), vector_of(start), vector_of(end)));
     });
@@ -75,16 +67,6 @@ void bind_segmentation(nb::module_& m) {
         return runs_to_numpy(split_at_farthest(vector_of(x), vector_of(y),
                                                moments_of(table, ox, oy), runs, threshold,
                                                reference));
-    });
-    m.def("cut_at", [](const InInts& start, const InInts& end, const InInts& corners, bool shared) {
-        return runs_to_numpy(cut_at(vector_of(start), vector_of(end), vector_of(corners), shared));
-    });
-    m.def("refine_cuts", [](Index fit, const InTable& table, double ox, double oy,
-                            const InReals& inv_r2, const InReals& variances, const InInts& a,
-                            const InInts& b, const InInts& owner) {
-        auto [new_a, new_b] = refine_cuts(run_cost_of(fit, table, ox, oy, inv_r2, variances),
-                                          vector_of(a), vector_of(b), vector_of(owner));
-        return nb::make_tuple(to_numpy(std::move(new_a)), to_numpy(std::move(new_b)));
     });
     m.def("merge_by_chi_square", [](const InInts& index, const InReals& r, const InReals& x,
                                     const InReals& y, const InTable& table, double ox, double oy,

@@ -174,12 +174,8 @@ nb::tuple parabola_at_centre_binding(const InInts& index, const InReals& r, Inde
 void bind_steps(nb::module_& m) {
     m.def("fit_run", &fit_run_binding);
     m.def("hesse_difference", &hesse_difference);
-    m.def("line_intersection", &line_intersection);
     m.def("offset_power_sums", &offset_power_sums_binding);
     m.def("parabola_at_centre", &parabola_at_centre_binding);
-    m.def("return_sigmas", [](const InReals& r, NoisePair noise) {
-        return to_numpy(return_sigmas(vector_of(r), {noise.first, noise.second}));
-    });
     m.def("residual_tolerances", [](const InReals& r, NoisePair noise, double floor) {
         return to_numpy(residual_tolerances(vector_of(r), {noise.first, noise.second}, floor));
     });

@@ -63,7 +63,6 @@ __all__ = [
     "RuleSpec",
     "auto_abd_lambda",
     "break_flags",
-    "scan_rule",
     "threshold",
 ]
 
@@ -182,15 +181,3 @@ def break_flags(returns: Returns, gap: np.ndarray, step: float, rule: Breakpoint
     wall; a depth jump or a spike is neither.
     """
     return _core.break_flags(*returns, int64s(gap), float(step), rule)
-
-
-def scan_rule(spec: RuleSpec, returns: Returns, gap: np.ndarray, noise: NoiseLine):
-    """The :class:`BreakpointRule` of ``spec``, its noise ``noise`` (a sensor profile's, or
-    NaN: measured from the scan, only when the rule uses it); the margin is ``noise_k``
-    standard deviations of a difference of two ranges (``sqrt(2) sigma``), the line
-    tolerance ``line_k`` standard deviations of an extrapolation from two points
-    (``sqrt(5) sigma``). :data:`NO_RULE` gives a rule that cuts at missing beams only."""
-    kind, k, margin, tolerance, line, lam, c0, jump = _core.scan_rule(
-        spec._asdict(), *returns, int64s(gap), tuple(noise)
-    )
-    return BreakpointRule(kind, k, margin, tolerance, NoiseLine(*line), lam, c0, jump)

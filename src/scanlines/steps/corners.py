@@ -36,7 +36,6 @@ __all__ = [
     "peak_positions",
     "slope_scores",
     "turn_scores",
-    "turn_window",
 ]
 
 SCORES = ("turn", "dk", "dk_signed")
@@ -59,18 +58,6 @@ def turn_scores(x, y, moments: Moments, start, end, window: int) -> np.ndarray:
     fitted once, except the shortened ones at a cluster's ends.
     """
     return _core.turn_scores(float64s(x), float64s(y), *moments, int64s(start), int64s(end), window)
-
-
-def turn_window(x, y, index, sigma: float) -> int:
-    """Points fitted on each side for the turn score, grown with the noise.
-
-    A line through ``w`` points ``h`` apart with noise ``sigma`` has a direction
-    error near ``sigma / (h w^1.5 / sqrt(12))``; the window is
-    ``w = 3 + 6 sigma / h`` (``h`` the median spacing of adjacent beams, ``w`` in
-    3..15), so that at 1 deg and 1 cm noise a short wall still has a corner score,
-    and at 0.33 deg and 2 cm the score is not noise.
-    """
-    return _core.turn_window(float64s(x), float64s(y), int64s(index), float(sigma))
 
 
 def peak_positions(score, start, end) -> np.ndarray:

@@ -40,7 +40,6 @@ __all__ = [
     "fit_many",
     "fit_run",
     "hesse_difference",
-    "line_intersection",
     "paper_run",
     "prefix_moments",
     "run_covariances",
@@ -115,11 +114,6 @@ def hesse_difference(rho_1: float, alpha_1: float, rho_2: float, alpha_2: float)
     """``(rho_1 - rho_2, alpha_1 - alpha_2)`` of two Hesse lines, the angle wrapped; of the
     two forms of a line through the origin, the one with the smaller angle difference."""
     return _core.hesse_difference(rho_1, alpha_1, rho_2, alpha_2)
-
-
-def line_intersection(rho_i: float, alpha_i: float, rho_j: float, alpha_j: float):
-    """Intersection ``(x, y)`` of two Hesse lines; NaN for parallel lines."""
-    return _core.line_intersection(rho_i, alpha_i, rho_j, alpha_j)
 
 
 def run_labels(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -34,7 +34,6 @@ __all__ = [
     "offset_power_sums",
     "parabola_at_centre",
     "residual_tolerances",
-    "return_sigmas",
     "scan_noise",
 ]
 
@@ -93,11 +92,6 @@ def scan_noise(returns: Returns, gap: np.ndarray) -> NoiseLine:
     :data:`MIN_NOISE_SIGMA`.
     """
     return NoiseLine(*_core.scan_noise(*returns, int64s(gap)))
-
-
-def return_sigmas(r: np.ndarray, noise: NoiseLine) -> np.ndarray:
-    """The noise sigma of ``noise`` at each range of ``r``."""
-    return _core.return_sigmas(float64s(r), tuple(noise))
 
 
 def residual_tolerances(r: np.ndarray, noise: NoiseLine, floor: float) -> np.ndarray:

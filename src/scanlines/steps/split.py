@@ -34,15 +34,13 @@ from __future__ import annotations
 
 from scanlines import _core
 from scanlines.steps.arrays import float64s, int64s
-from scanlines.steps.fit import Moments, RunCost
+from scanlines.steps.fit import Moments
 
 __all__ = [
     "CHORD",
     "LINE",
     "REFERENCE_CODES",
     "chord_distance",
-    "cut_at",
-    "refine_cuts",
     "split_at_farthest",
 ]
 
@@ -72,23 +70,3 @@ def split_at_farthest(x, y, moments: Moments, a, b, group, threshold: float, ref
         float64s(x), float64s(y), *moments, int64s(a), int64s(b), int64s(group), float(threshold),
         int(reference),
     )  # fmt: skip
-
-
-def cut_at(start, end, corners, shared: bool):
-    """Runs ``[a, b]`` and their cluster number after cutting the clusters at ``corners``.
-
-    ``shared``: the corner point ends one run and starts the next.
-    """
-    return _core.cut_at(int64s(start), int64s(end), int64s(corners), bool(shared))
-
-
-def refine_cuts(cost: RunCost, a, b, owner):
-    """Move each cut (end ``b[k]`` / start ``a[k+1]``) by one position where that fits better.
-
-    Every cut is judged against the original neighbours; two cuts moving
-    towards each other that would leave a run of one point both stay put.
-    """
-    fit, moments, inv_r2, variances = cost
-    return _core.refine_cuts(
-        fit, *moments, float64s(inv_r2), float64s(variances), int64s(a), int64s(b), int64s(owner)
-    )
