@@ -1,0 +1,328 @@
+#include "scanlines/methods/penalised.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "scanlines/steps/returns.hpp"
+
+namespace scanlines::penalised {
+
+namespace {
+
+constexpr double INF = std::numeric_limits<double>::infinity();
+constexpr double PI = 3.141592653589793;
+const double GRAZING_ANGLE = 10.0 * (PI / 180.0);  // as math.radians(10.0) rounds
+constexpr double CUT_SIGMAS = 5.0;
+constexpr Index LOOK_BACK = 256;
+constexpr int ROUNDS = 3;
+constexpr int C = Sums::COLUMNS;
+
+
+double run_cost(const Sums& sums, Index a, Index b, const Objective& o) {
+    double held = sums.at(b + 1, 6) - sums.at(a, 6);
+    Scatter s = scatter(sums, a, b);
+    double chi2 = o.residual == Residual::ACROSS_LINE
+                      ? eigenvalues(s.sxx, s.sxy, s.syy).first
+                      : along_beam_chi2(s, sums.at(b + 1, 7) - sums.at(a, 7), sums.x0, sums.y0,
+                                        o.model_error);
+    return 0.5 * chi2 + o.clutter_cost * (static_cast<double>(b - a + 1) - held) + o.penalty;
+}
+
+Runs joined_runs(const Sums& sums, const Flags& opens, const Runs& runs, const Objective& o) {
+    const std::size_t count = runs.a.size();
+    if (count < 2) return runs;
+    Runs out = runs;
+    std::size_t m = 0;
+    for (std::size_t k = 1; k < count; ++k) {
+        bool touching = out.b[m] + 1 == runs.a[k] && !opens[runs.a[k]];
+        if (touching && run_cost(sums, out.a[m], runs.b[k], o) <=
+                            run_cost(sums, out.a[m], out.b[m], o) +
+                                run_cost(sums, runs.a[k], runs.b[k], o)) {
+            out.b[m] = runs.b[k];
+        } else {
+            ++m;
+            out.a[m] = runs.a[k];
+            out.b[m] = runs.b[k];
+        }
+    }
+    out.a.resize(m + 1);
+    out.b.resize(m + 1);
+    return out;
+}
+
+// Whether each return lies in its run's fit (returns outside the runs: true).
+Flags inside_fit(const Returns& ret, const Sums& sums, const Reals& sigma, double model_error,
+                 const Runs& runs, double clutter_cost) {
+    Flags out(ret.x.size(), true);
+    const double floor = model_error * model_error;
+    for (std::size_t k = 0; k < runs.a.size(); ++k) {
+        FittedLine line = line_of(sums, runs.a[k], runs.b[k]);
+        double c = std::cos(line.alpha), si = std::sin(line.alpha);
+        for (Index p = runs.a[k]; p <= runs.b[k]; ++p) {
+            double off = ret.x[p] * c + ret.y[p] * si - line.rho;
+            out[p] = 0.5 * off * off / (sigma[p] * sigma[p] + floor) <= clutter_cost;
+        }
+    }
+    return out;
+}
+
+Runs trimmed_runs(const Flags& held, Runs runs) {
+    for (std::size_t k = 0; k < runs.a.size(); ++k) {
+        while (runs.a[k] < runs.b[k] && !held[runs.a[k]]) ++runs.a[k];
+        while (runs.b[k] > runs.a[k] && !held[runs.b[k]]) --runs.b[k];
+    }
+    return runs;
+}
+
+// Returns outside every run are left out of the next round's sums, so that a run may span
+// them at the clutter cost.
+void outside_runs_left_out(const Runs& runs, Flags& held) {
+    Flags inside(held.size(), false);
+    for (std::size_t k = 0; k < runs.a.size(); ++k)
+        for (Index p = runs.a[k]; p <= runs.b[k]; ++p) inside[p] = true;
+    for (std::size_t p = 0; p < held.size(); ++p) held[p] = held[p] && inside[p];
+}
+
+}  // namespace
+
+Sums weighted_sums(const Returns& ret, const Reals& sigma, const Reals& footprint,
+                   double model_error, const Flags& held) {
+    const Reals& x = ret.x;
+    const Reals& y = ret.y;
+    const Index n = static_cast<Index>(x.size());
+    Sums out{Reals(static_cast<std::size_t>(C * (n + 1)), 0.0), n ? x[0] : 0.0, n ? y[0] : 0.0};
+    const double floor = model_error * model_error;
+    double* o = out.v.data();
+    for (Index p = 0; p < n; ++p) {
+        double w = held[p] ? footprint[p] / (sigma[p] * sigma[p] + floor) : 0.0;
+        double u = x[p] - x[0], v = y[p] - y[0];
+        const double* prev = o + C * p;
+        double* next = o + C * (p + 1);
+        next[0] = prev[0] + w;
+        next[1] = prev[1] + w * u;
+        next[2] = prev[2] + w * v;
+        next[3] = prev[3] + w * u * u;
+        next[4] = prev[4] + w * u * v;
+        next[5] = prev[5] + w * v * v;
+        next[6] = prev[6] + (held[p] ? 1.0 : 0.0);
+        next[7] = prev[7] + (held[p] ? footprint[p] : 0.0);
+    }
+    return out;
+}
+
+Scatter scatter(const Sums& sums, Index a, Index b) {
+    double w = sums.at(b + 1, 0) - sums.at(a, 0);
+    double mx = (sums.at(b + 1, 1) - sums.at(a, 1)) / w;
+    double my = (sums.at(b + 1, 2) - sums.at(a, 2)) / w;
+    double sxx = sums.at(b + 1, 3) - sums.at(a, 3) - w * mx * mx;
+    double sxy = sums.at(b + 1, 4) - sums.at(a, 4) - w * mx * my;
+    double syy = sums.at(b + 1, 5) - sums.at(a, 5) - w * my * my;
+    return {w, mx, my, sxx, sxy, syy};
+}
+
+std::pair<double, double> eigenvalues(double sxx, double sxy, double syy) {
+    double half = 0.5 * (sxx + syy);
+    double spread = std::sqrt(0.25 * (sxx - syy) * (sxx - syy) + sxy * sxy);
+    return {std::max(half - spread, 0.0), half + spread};
+}
+
+double along_beam_chi2(const Scatter& s, double footprints, double x0, double y0,
+                       double model_error) {
+    // Range noise moves a return along its beam: regress the depth along the mean bearing
+    // (cx, cy) on the lateral position, so that a short piece of a densely sampled wall
+    // cannot turn its line towards the beams to explain the noise. The scatter in that
+    // frame, each term scaled by |c|^2 (which cancels from the slope).
+    double cx = s.mx + x0, cy = s.my + y0;
+    double norm2 = cx * cx + cy * cy;
+    if (!(norm2 > 0.0)) return eigenvalues(s.sxx, s.sxy, s.syy).first;
+    double depth = cx * cx * s.sxx + 2.0 * cx * cy * s.sxy + cy * cy * s.syy;
+    double lateral = cy * cy * s.sxx - 2.0 * cx * cy * s.sxy + cx * cx * s.syy;
+    double both = cx * cy * (s.syy - s.sxx) + (cx * cx - cy * cy) * s.sxy;
+    if (!(lateral > 0.0)) return std::max(depth / norm2, 0.0);
+    double slope = both / lateral;
+    double residual = std::max((depth - both * slope) / norm2, 0.0);
+    // The weights took each return's variance as sigma^2 + model_error^2 (their mean: the
+    // footprints over the weights); the model error lies across the wall, so along the
+    // beams it grows by the slope: sigma^2 + model_error^2 (1 + slope^2).
+    double assumed = footprints / s.w;
+    double spread = model_error * model_error * slope * slope;
+    return residual * (assumed / (assumed + spread));
+}
+
+FittedLine line_of(const Sums& sums, Index a, Index b) {
+    Scatter s = scatter(sums, a, b);
+    double alpha = 0.5 * std::atan2(-2.0 * s.sxy, s.syy - s.sxx);
+    double rho = (s.mx + sums.x0) * std::cos(alpha) + (s.my + sums.y0) * std::sin(alpha);
+    if (rho < 0.0) {
+        rho = -rho;
+        alpha = alpha + PI;
+    }
+    double large = eigenvalues(s.sxx, s.sxy, s.syy).second;
+    return {rho, alpha, large > 0.0 ? 1.0 / large : INF, s.w};
+}
+
+bool continuous(const Returns& ret, Index p, Index q, Index beams, double step,
+                const Reals& sigma, double sigmas) {
+    double turn = static_cast<double>(beams) * step;
+    if (turn >= GRAZING_ANGLE) return false;
+    double reach = std::min(ret.r[p], ret.r[q]) * std::sin(turn) / std::sin(GRAZING_ANGLE - turn);
+    double apart = std::hypot(ret.x[q] - ret.x[p], ret.y[q] - ret.y[p]);
+    double spread = sigmas * std::sqrt(sigma[p] * sigma[p] + sigma[q] * sigma[q]);
+    return apart <= reach + spread;
+}
+
+Runs optimal_runs(const Sums& sums, const Flags& opens, const Objective& o) {
+    const Index n = static_cast<Index>(sums.v.size() / C) - 1;
+    Reals best(n + 1), cost(n + 1);
+    Ints start(n + 1), candidates(n + 1), expires(n + 1, n + 1);
+    best[0] = 0.0;
+    Index count = 0;
+    const double* prefix = sums.v.data();
+    const bool across = o.residual == Residual::ACROSS_LINE;
+    for (Index t = 1; t <= n; ++t) {
+        if (opens[t - 1]) count = 0;
+        candidates[count++] = t - 1;
+        // The prefix sums up to t, read once (the same arithmetic as scatter(sums, s, t - 1)).
+        double end[C];
+        std::copy(prefix + C * t, prefix + C * t + C, end);
+        double best_t = best[t - 1] + o.clutter_cost;
+        Index start_t = -1;
+        Index kept = 0;
+        for (Index c = 0; c < count; ++c) {
+            const Index s = candidates[c];
+            if (expires[s] <= t || t - s > LOOK_BACK) continue;
+            candidates[kept] = s;
+            double value = INF;
+            const double* from = prefix + C * s;
+            const double held = end[6] - from[6];
+            if (held >= static_cast<double>(o.min_points)) {
+                const double w = end[0] - from[0];
+                const double mx = (end[1] - from[1]) / w;
+                const double my = (end[2] - from[2]) / w;
+                const double sxx = end[3] - from[3] - w * mx * mx;
+                const double sxy = end[4] - from[4] - w * mx * my;
+                const double syy = end[5] - from[5] - w * my * my;
+                double chi2 = across ? eigenvalues(sxx, sxy, syy).first
+                                     : along_beam_chi2({w, mx, my, sxx, sxy, syy},
+                                                       end[7] - from[7], sums.x0, sums.y0,
+                                                       o.model_error);
+                value = best[s] + 0.5 * chi2;
+                value += o.clutter_cost * (static_cast<double>(t - s) - held);
+                if (value + o.penalty < best_t) {
+                    best_t = value + o.penalty;
+                    start_t = s;
+                }
+            }
+            cost[kept] = value;
+            ++kept;
+        }
+        best[t] = best_t;
+        start[t] = start_t;
+        count = kept;
+        for (Index c = 0; c < count; ++c)  // prune the starts that t dominates (PELT)
+            if (cost[c] >= best_t && cost[c] < INF && expires[candidates[c]] > n)
+                expires[candidates[c]] = t + o.min_points;
+    }
+    Runs out;
+    Index t = n;
+    while (t > 0) {
+        if (start[t] < 0) {
+            --t;
+            continue;
+        }
+        out.a.push_back(start[t]);
+        out.b.push_back(t - 1);
+        t = start[t];
+    }
+    std::reverse(out.a.begin(), out.a.end());
+    std::reverse(out.b.begin(), out.b.end());
+    return out;
+}
+
+Partition best_partition(const Returns& ret, const Reals& sigma, const Reals& footprint,
+                         Index n_beams, double step, const Objective& o) {
+    const Index n = ret.size();
+    Ints gap = beam_gaps(ret.index, n_beams);
+    Flags opens(n);
+    opens[0] = true;
+    for (Index p = 1; p < n; ++p) {
+        bool bridged = gap[p - 1] <= MAX_BRIDGED_GAP;
+        bool step_ok = continuous(ret, p - 1, p, gap[p - 1], step, sigma, CUT_SIGMAS);
+        opens[p] = !(bridged && step_ok);
+    }
+    if (o.bridge_left_out)  // a lone return off the surface its neighbours share opens nothing
+        for (Index p = 1; p + 1 < n; ++p)
+            if (opens[p] && opens[p + 1] && gap[p - 1] + gap[p] <= MAX_BRIDGED_GAP + 1 &&
+                continuous(ret, p - 1, p + 1, gap[p - 1] + gap[p], step, sigma, CUT_SIGMAS))
+                opens[p] = opens[p + 1] = false;
+    Flags held(n, true);
+    Runs runs;
+    for (int round = 0; round < ROUNDS; ++round) {
+        Sums sums = weighted_sums(ret, sigma, footprint, o.model_error, held);
+        runs = optimal_runs(sums, opens, o);
+        runs = joined_runs(sums, opens, runs, o);
+        Flags fits = inside_fit(ret, sums, sigma, o.model_error, runs, o.clutter_cost);
+        if (o.bridge_left_out) outside_runs_left_out(runs, fits);
+        bool changed = fits != held;
+        held = fits;
+        if (!changed) break;
+    }
+    Sums sums = weighted_sums(ret, sigma, footprint, o.model_error, held);
+    runs = trimmed_runs(held, runs);
+    std::fill(held.begin(), held.end(), false);  // returns outside the runs are outliers too
+    for (std::size_t k = 0; k < runs.a.size(); ++k)
+        for (Index p = runs.a[k]; p <= runs.b[k]; ++p) held[p] = true;
+    Flags fits = inside_fit(ret, sums, sigma, o.model_error, runs, o.clutter_cost);
+    for (Index p = 0; p < n; ++p) held[p] = held[p] && fits[p];
+    runs = trimmed_runs(held, runs);  // a run's end may have left its fit
+    return {runs, held, sums, gap};
+}
+
+std::pair<Returns, bool> seam_at_widest_gap(Returns ret, const Ints& gap, Index n_beams) {
+    const Index n = ret.size();
+    if (n < 2) return {ret, false};
+    Index widest = 0;
+    for (std::size_t p = 0; p < gap.size(); ++p)
+        if (gap[p] > gap[widest]) widest = static_cast<Index>(p);
+    Index closing = py_mod(ret.index[0] - ret.index[n - 1], n_beams);
+    if (closing >= gap[widest]) return {ret, closing <= MAX_BRIDGED_GAP};
+    return {rotated(ret, widest + 1), gap[widest] <= MAX_BRIDGED_GAP};
+}
+
+Index corner_between(const Returns& ret, const Sums& sums, const Reals& sigma, const Runs& runs,
+                     Index i, Index j, double sigmas) {
+    const Reals& x = ret.x;
+    const Reals& y = ret.y;
+    FittedLine li = line_of(sums, runs.a[i], runs.b[i]);
+    FittedLine lj = line_of(sums, runs.a[j], runs.b[j]);
+    double turn = lj.alpha - li.alpha;
+    turn -= PI * std::floor(turn / PI + 0.5);  // undirected: in [-pi/2, pi/2)
+    if (std::fabs(turn) <= sigmas * std::sqrt(li.direction_variance + lj.direction_variance))
+        return -1;
+    double det = std::sin(lj.alpha - li.alpha);
+    double cx = (li.rho * std::sin(lj.alpha) - lj.rho * std::sin(li.alpha)) / det;
+    double cy = (lj.rho * std::cos(li.alpha) - li.rho * std::cos(lj.alpha)) / det;
+    Index end = runs.b[i], begin = runs.a[j];
+    double spacing = std::hypot(x[begin] - x[end], y[begin] - y[end]);
+    double reach = spacing + sigmas * std::max(sigma[end], sigma[begin]);
+    double to_end = std::hypot(cx - x[end], cy - y[end]);
+    double to_begin = std::hypot(cx - x[begin], cy - y[begin]);
+    if (to_end > reach || to_begin > reach) return -1;
+    return to_end <= to_begin ? end : begin;
+}
+
+Flags kept_runs(const Returns& ret, const Flags& held, const Runs& runs, Index min_points,
+                double min_length) {
+    Flags keep(runs.a.size());
+    for (std::size_t k = 0; k < runs.a.size(); ++k) {
+        Index count = 0;
+        for (Index p = runs.a[k]; p <= runs.b[k]; ++p) count += held[p];
+        double length = std::hypot(ret.x[runs.b[k]] - ret.x[runs.a[k]],
+                                   ret.y[runs.b[k]] - ret.y[runs.a[k]]);
+        keep[k] = count >= min_points && length >= min_length;
+    }
+    return keep;
+}
+
+}  // namespace scanlines::penalised

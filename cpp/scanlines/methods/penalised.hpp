@@ -1,0 +1,99 @@
+// The penalised-likelihood partition of a scan's returns into line segments and left-out
+// returns: the objective and its exact optimum, shared by the methods built on it
+// (scanlines/methods/partition.py and surfaces.py describe it).
+#pragma once
+
+#include <utility>
+
+#include "scanlines/core.hpp"
+
+namespace scanlines::penalised {
+
+// How a segment's residual is measured: across its total-least-squares line, or along
+// the beams (the depth along the segment's mean bearing against the lateral position).
+enum class Residual { ACROSS_LINE, ALONG_BEAM };
+
+struct Objective {
+    double penalty, clutter_cost, model_error;
+    Index min_points;
+    Residual residual;
+    // A return left out (a lone spike, a mixed pixel) does not cut the surface its
+    // neighbours share: it opens no new cluster, and a run may span it.
+    bool bridge_left_out;
+};
+
+// Prefix sums (rows 0..n) of w, wx, wy, wxx, wxy, wyy about (x0, y0), the held count and
+// the held returns' footprint weights; row-major x COLUMNS.
+struct Sums {
+    static constexpr int COLUMNS = 8;
+    Reals v;
+    double x0, y0;
+    double at(Index row, int column) const { return v[COLUMNS * row + column]; }
+};
+
+struct Runs {
+    Ints a, b;
+};
+
+struct Scatter {
+    double w, mx, my, sxx, sxy, syy;
+};
+
+// Each return's weight is footprint[p] / (sigma[p]^2 + model_error^2) while held, else 0.
+Sums weighted_sums(const Returns& ret, const Reals& sigma, const Reals& footprint,
+                   double model_error, const Flags& held);
+
+
+// The weighted scatter of the returns of runs [a, b] (about their weighted mean).
+Scatter scatter(const Sums& sums, Index a, Index b);
+
+// The smaller and larger eigenvalue of the scatter [[sxx, sxy], [sxy, syy]].
+std::pair<double, double> eigenvalues(double sxx, double sxy, double syy);
+
+// A segment's chi2 along the beams from its weighted scatter s (about its mean, which is
+// relative to (x0, y0)) and the sum of its returns' footprint weights.
+double along_beam_chi2(const Scatter& s, double footprints, double x0, double y0,
+                       double model_error);
+
+struct FittedLine {
+    double rho, alpha, direction_variance, w;
+};
+
+// The weighted total-least-squares line of run [a, b].
+FittedLine line_of(const Sums& sums, Index a, Index b);
+
+// Whether returns p and q (beams apart) may lie on one surface: no farther apart than a
+// surface seen at up to 80 deg of incidence puts them, plus sigmas of their difference.
+bool continuous(const Returns& ret, Index p, Index q, Index beams, double step,
+                const Reals& sigma, double sigmas);
+
+// The optimal runs [a, b]: the dynamic programme with PELT pruning.
+Runs optimal_runs(const Sums& sums, const Flags& opens, const Objective& objective);
+
+struct Partition {
+    Runs runs;
+    Flags held;
+    Sums sums;
+    Ints gap;
+};
+
+// The best partition of a scan's returns: runs chosen, outliers left out, up to three
+// rounds; footprint: each return's weight in the objective (1: one return, one observation).
+Partition best_partition(const Returns& ret, const Reals& sigma, const Reals& footprint,
+                         Index n_beams, double step, const Objective& objective);
+
+// A full circle's returns rotated to start after their widest gap, and whether they close
+// into a ring.
+std::pair<Returns, bool> seam_at_widest_gap(Returns ret, const Ints& gap, Index n_beams);
+
+// The position of the corner where neighbouring runs i and j meet, or -1: their lines turn
+// by more than sigmas standard deviations of the turn and cross within the facing returns'
+// spacing plus sigmas noise sigmas of them.
+Index corner_between(const Returns& ret, const Sums& sums, const Reals& sigma, const Runs& runs,
+                     Index i, Index j, double sigmas);
+
+// Which runs hold at least min_points returns in their fit and are at least min_length long.
+Flags kept_runs(const Returns& ret, const Flags& held, const Runs& runs, Index min_points,
+                double min_length);
+
+}  // namespace scanlines::penalised
