@@ -200,7 +200,7 @@ LAYERS = (
     ("scanlines.steps",),
     ("scanlines.methods",),
     ("scanlines.extractor", "scanlines.sensor_profile", "scanlines.sensor_mounting",
-     "scanlines.config", "scanlines.config_positions", "scanlines.sim"),
+     "scanlines.learned_noise", "scanlines.config", "scanlines.config_positions", "scanlines.sim"),
     ("scanlines.io", "scanlines.data"),
     ("scanlines.runner", "scanlines.evaluation", "scanlines.fleet",
      "scanlines.fleet_executors", "scanlines.fleet_inputs",

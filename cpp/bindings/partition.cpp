@@ -2,6 +2,7 @@
 
 #include "arrays.hpp"
 #include "scanlines/methods/partition.hpp"
+#include "scanlines/methods/surfaces.hpp"
 
 namespace scanlines::bind {
 
@@ -29,6 +30,29 @@ void bind_partition(nb::module_& m) {
             return table_to_numpy(std::move(table));
         },
         "The partition method on each row of a stack of scans: one flat table.");
+    m.def(
+        "surfaces_stack",
+        [](const In<double, nb::ndim<2>>& ranges, const In<bool, nb::ndim<2>>& valid,
+           const In<double, nb::ndim<1>>& cos, const In<double, nb::ndim<1>>& sin, double step,
+           bool full_circle, double angle_min, std::pair<double, double> noise,
+           const nb::dict& settings) {
+            Stack stack = stack_of(ranges, valid, cos, sin, step, full_circle, angle_min, noise);
+            SurfacesSettings s{setting<double>(settings, "penalty"),
+                               setting<double>(settings, "clutter_cost"),
+                               setting<double>(settings, "model_error"),
+                               setting<double>(settings, "footprint"),
+                               setting<Index>(settings, "min_points"),
+                               setting<double>(settings, "min_length"),
+                               setting<double>(settings, "noise_sigma"),
+                               setting<double>(settings, "range_sigma")};
+            Table table;
+            {
+                nb::gil_scoped_release unlocked;
+                table = surfaces_stack(stack, s);
+            }
+            return table_to_numpy(std::move(table));
+        },
+        "The surfaces method on each row of a stack of scans: one flat table.");
     m.def(
         "partition_optimal_runs",
         [](const In<double, nb::ndim<1>>& x, const In<double, nb::ndim<1>>& y,

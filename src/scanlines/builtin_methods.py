@@ -16,6 +16,7 @@ BUILTIN_METHODS = (
     "ransac",
     "hough",
     "partition",
+    "surfaces",
 )
 
 #: The method used where none is named: ``Extractor()``, ``scanlines run``, a configuration.

@@ -17,6 +17,7 @@ import numpy as np
 from scanlines.builtin_methods import BUILTIN_METHODS, DEFAULT_METHOD
 from scanlines.errors import ParameterError, ScanError
 from scanlines.extraction import Extraction, ExtractionTable
+from scanlines.learned_noise import NoiseLearner
 from scanlines.methods import REGISTRY, method_class
 from scanlines.params import resolve
 from scanlines.scan import Scan, as_array, valid_returns
@@ -103,7 +104,10 @@ class Extractor:
     sensor_profile:
         A :class:`~scanlines.sensor_profile.SensorProfile` (or the path of one saved
         by ``scanlines calibrate``): the range noise every threshold and covariance
-        takes. Without one, each scan's noise is measured from that scan alone.
+        takes. Without one, each scan's noise is measured from that scan alone; a method
+        that learns the noise (the default ``surfaces``) measures it that way for each
+        sensor's first :data:`~scanlines.learned_noise.LEARNED_SCANS` scans and then
+        keeps the noise line learned from them, as a profile.
     **params:
         Overrides of single parameters (see :func:`method_info`).
 
@@ -141,6 +145,9 @@ class Extractor:
         self._tables: dict[tuple[int, float], tuple[np.ndarray, np.ndarray]] = {}
         noise = None if self.sensor_profile is None else self.sensor_profile.noise
         self._method = cls(self.params, noise)
+        learns = self.sensor_profile is None and cls.learns_noise
+        self._learner = NoiseLearner() if learns else None
+        self._learned: dict[tuple[int, float, float], Any] = {}
 
     def __reduce__(self) -> tuple[Any, ...]:
         rebuild = (self.method, self.preset, dict(self.params), self.sensor_profile)
@@ -158,7 +165,27 @@ class Extractor:
         step, angle_min = float32(scan.angle_increment), float32(scan.angle_min)
         valid = valid_returns(ranges, float32(scan.range_min), float32(scan.range_max))
         cos, sin = self._bearings(len(scan), step)
-        return self._method.extract(ranges, valid, cos, sin, step, angle_min)
+        method = self._method_for(scan)
+        if method is not None:
+            return method.extract(ranges, valid, cos, sin, step, angle_min)
+        extraction = self._method.extract(ranges, valid, cos, sin, step, angle_min)
+        self._learner.learn(scan)
+        return extraction
+
+    def _method_for(self, scan: Scan) -> Any:
+        """The method to extract ``scan`` with; None while its sensor's noise is learned
+        (extract with the scan's own noise, then learn from it)."""
+        if self._learner is None:
+            return self._method
+        geometry = NoiseLearner.geometry(scan)
+        if not self._learner.frozen(geometry):
+            return None
+        method = self._learned.get(geometry)
+        if method is None:
+            line = self._learner.line(geometry)
+            method = self._method if line is None else type(self._method)(self.params, line)
+            self._learned[geometry] = method
+        return method
 
     def warm_up(self) -> None:
         """Extract a small synthetic scan once, so that the lazy imports are done before the
@@ -199,17 +226,20 @@ class Extractor:
         cos, sin = self._bearings(stack.shape[1], step)
         if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
             raise ParameterError(f"jobs must be an integer >= 1, got {jobs!r}")
-        parts = min(jobs, len(stack))
-        if parts <= 1:
-            return self._method.extract_many(stack, valid, cos, sin, step, angle_min)
-        bounds = np.linspace(0, len(stack), parts + 1).astype(int)
-
-        def part(k: int) -> ExtractionTable:
-            rows = slice(bounds[k], bounds[k + 1])
-            return self._method.extract_many(stack[rows], valid[rows], cos, sin, step, angle_min)
-
-        with ThreadPoolExecutor(parts) as pool:
-            return ExtractionTable.join(list(pool.map(part, range(parts))))
+        tables, row = [], 0
+        fields = (sensor.angle_min, sensor.angle_increment, sensor.range_min, sensor.range_max)
+        while row < len(stack) and self._method_for(sensor) is None:  # the noise still learned
+            rows = slice(row, row + 1)
+            tables.append(
+                self._method.extract_many(stack[rows], valid[rows], cos, sin, step, angle_min)
+            )
+            self._learner.learn(Scan(stack[row], *fields))
+            row += 1
+        if row < len(stack) or not tables:
+            method, rows = self._method_for(sensor), slice(row, None)
+            arrays = (stack[rows], valid[rows], cos, sin, step, angle_min)
+            tables.append(_extract_stack(method, arrays, jobs))
+        return tables[0] if len(tables) == 1 else ExtractionTable.join(tables)
 
     def _bearings(self, n_beams: int, increment: float) -> tuple[np.ndarray, np.ndarray]:
         key = (n_beams, increment)
@@ -221,6 +251,23 @@ class Extractor:
                 self._tables.clear()
             self._tables[key] = table
         return table
+
+
+def _extract_stack(method: Any, arrays: tuple[Any, ...], jobs: int) -> ExtractionTable:
+    """``method`` on a stack of scans (stack, valid, cos, sin, step, angle_min), its rows
+    split over ``jobs`` threads (the kernels release the GIL)."""
+    stack, valid, *sensor = arrays
+    parts = min(jobs, len(stack))
+    if parts <= 1:
+        return method.extract_many(stack, valid, *sensor)
+    bounds = np.linspace(0, len(stack), parts + 1).astype(int)
+
+    def part(k: int) -> ExtractionTable:
+        rows = slice(bounds[k], bounds[k + 1])
+        return method.extract_many(stack[rows], valid[rows], *sensor)
+
+    with ThreadPoolExecutor(parts) as pool:
+        return ExtractionTable.join(list(pool.map(part, range(parts))))
 
 
 def _warm_up_scan() -> Scan:

@@ -304,6 +304,19 @@ def scan_noise_line(scan: Scan) -> NoiseLine:
     return NoiseLine(*(float(v) for v in scan_noise(*_returns_of(scan))))
 
 
+def noise_samples(scan: Scan) -> tuple[np.ndarray, np.ndarray]:
+    """One scan's range-noise samples and the ranges they were taken at (what
+    :func:`estimate_profile` pools over scans)."""
+    return local_residuals(*_returns_of(scan))
+
+
+def pooled_noise_line(samples: list[np.ndarray], at: list[np.ndarray]) -> NoiseLine | None:
+    """The noise line of pooled per-scan samples, as :func:`estimate_profile` measures it;
+    None when they are too few."""
+    bins = _noise_bins(samples, at)
+    return NoiseLine(*_noise_line(bins)) if bins else None
+
+
 def _returns_of(scan: Scan):
     n = len(scan)
     local = scan.angle_increment * np.arange(n)

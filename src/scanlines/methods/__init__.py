@@ -24,6 +24,7 @@ from scanlines.methods.partition import Partition
 from scanlines.methods.pdbs import Pdbs
 from scanlines.methods.ransac import Ransac
 from scanlines.methods.split_merge import SplitMerge
+from scanlines.methods.surfaces import Surfaces
 
 __all__ = [
     "REGISTRY",
@@ -47,6 +48,7 @@ REGISTRY: dict[str, type[Method]] = {
         Ransac,
         Hough,
         Partition,
+        Surfaces,
     )
 }
 

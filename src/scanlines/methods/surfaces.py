@@ -1,0 +1,91 @@
+"""Line segments of the surfaces a scan sees, found by one penalised-likelihood objective.
+
+The method cuts the returns, in beam order, into runs that are line segments and single
+returns left out as clutter, minimising :mod:`~scanlines.methods.partition`'s cost
+
+    sum over segments of  (chi2 / 2 + penalty)  +  clutter_cost x (returns left out)
+
+exactly (dynamic programming with PELT pruning), with three changes that make it the
+default:
+
+* **The residual is measured along the beams.** Range noise moves a return along its beam,
+  so a segment's ``chi2`` is the weighted least-squares residual of the depth along the
+  segment's mean bearing against the lateral position (O(1) from the same prefix sums). A
+  short piece of a wall sampled more densely than its noise can no longer turn its line
+  towards the beams to explain the noise, so dense walls stay whole at any beam count.
+* **A return weighs its footprint.** Each return counts ``min(1, r x increment /
+  footprint)`` observations (in the chi2 and in the clutter cost alike): the errors of a
+  finely sampled wall (millimetres of waviness, the beam's spot) are correlated along it,
+  and counting thousands of returns as independent would turn that waviness into cuts.
+* **Events mark where surfaces end.** Breakpoints and corners are read between the held
+  returns of neighbouring segments, so a spike or a mixed pixel left out inside a wall is
+  no event; a breakpoint where the facing returns are farther apart than a surface seen at
+  up to 80 deg of incidence can put them (plus three sigmas), a corner where the two lines
+  turn by more than three standard deviations and meet between the facing returns.
+
+And one output rule: **pieces of one surface share one line.** Neighbouring segments
+(with returns of something else or missing beams between them, as a wall behind a chair
+leg) whose returns one line explains for less than the price of a segment (``penalty``)
+are reported each with that common line, its covariance and its rms, fitted to the
+returns of all of them.
+
+Weights are ``footprint / (sigma(r)^2 + model_error^2)`` with ``sigma(r)`` the measured
+range noise: a sensor profile's noise line, else the scan's own (:mod:`scanlines.steps.noise`);
+an :class:`~scanlines.Extractor` without a profile learns the line from the first scans it
+extracts. The kernel is C++ (``cpp/scanlines/methods/surfaces.cpp``, the objective shared
+with ``partition`` in ``penalised.cpp``): one call per stack of scans, without the GIL.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+from scanlines._core import surfaces_stack
+from scanlines.methods.base import CompiledMethod, kernel_values
+from scanlines.params import MAX_METRES, Param, auto_or, number, segment_params
+
+__all__ = ["Surfaces"]
+
+PARAMETERS: dict[str, Param] = {
+    "penalty": Param(
+        50.0, number(low=0.0, high=1e6), "cost of one more segment (nats of likelihood)"
+    ),
+    "clutter_cost": Param(
+        20.0,
+        number(low=0.0, low_open=True, high=1e6),
+        "cost of leaving one return out as clutter (nats per observation)",
+    ),
+    "model_error": Param(
+        0.002,
+        number(low=0.0, high=MAX_METRES),
+        "how far real walls depart from a line (m), added to the range noise in quadrature",
+    ),
+    "footprint": Param(
+        0.05,
+        number(low=0.0, high=MAX_METRES),
+        "wall length of one independent observation (m); 0: every return is one",
+    ),
+    **segment_params(3),
+    "noise_sigma": Param(
+        "auto",
+        auto_or(number(low=0.0, low_open=True, high=MAX_METRES)),
+        "range noise (m), or auto: the sensor profile's noise line, else the one learned",
+    ),
+}
+
+
+class Surfaces(CompiledMethod):
+    """The surfaces a scan sees as line segments, by one penalised-likelihood objective
+    (module docstring)."""
+
+    name = "surfaces"
+    parameters: ClassVar[dict[str, Param]] = PARAMETERS
+    presets: ClassVar[dict[str, dict[str, Any]]] = {}
+    learns_noise = True
+
+    def kernel_arguments(self) -> tuple[Any, ...]:
+        return (kernel_values(self.settings),)
+
+    @staticmethod
+    def kernel(*arguments):
+        return surfaces_stack(*arguments)

@@ -1,0 +1,112 @@
+"""The surfaces method (the default): dense and wavy walls whole, pieces of one wall on one
+line, no events inside a wall, and the noise an extractor learns."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from scanlines import Extractor, Scan, extract, learned_noise
+from scanlines.data import sample
+from scanlines.io import open_log
+from scanlines.sensor_profile import estimate_profile
+
+
+def _wall_ranges(bearings, distance, normal, waviness=0.0, period=0.5):
+    """Ranges of a wall ``distance`` from the sensor, its normal at ``normal`` rad, bent
+    across by ``waviness`` m (a sine of ``period`` m along it)."""
+    ranges = distance / np.cos(bearings - normal)
+    along = ranges * np.sin(bearings - normal)
+    bend = waviness * np.sin(2.0 * math.pi * along / period)
+    return (distance + bend) / np.cos(bearings - normal)
+
+
+@pytest.mark.parametrize("increment_deg", [0.1, 0.25, 0.5])
+@pytest.mark.parametrize("seed", range(3))
+def test_a_wall_with_millimetres_of_smooth_waviness_comes_out_whole(increment_deg, seed):
+    bearings = np.radians(np.arange(-50.0, 50.0, increment_deg))
+    ranges = _wall_ranges(bearings, 3.0, 0.2, waviness=0.003)
+    ranges += np.random.default_rng(seed).normal(0.0, 0.005, ranges.shape)
+    scan = Scan(ranges, bearings[0], math.radians(increment_deg), range_max=30.0)
+    result = extract(scan, "surfaces")
+    assert len(result) == 1
+    assert result.n_points[0] >= 0.95 * np.count_nonzero(scan.valid)
+
+
+def test_a_wall_seen_in_two_pieces_behind_a_post_gets_one_line():
+    bearings = np.radians(np.arange(-45.0, 45.0, 0.5))
+    ranges = _wall_ranges(bearings, 4.0, 0.1)
+    post = np.abs(bearings) < math.radians(4.0)
+    ranges[post] = 1.5 / np.cos(bearings[post])
+    ranges += np.random.default_rng(1).normal(0.0, 0.01, ranges.shape)
+    scan = Scan(ranges, bearings[0], math.radians(0.5), range_max=30.0)
+    result = extract(scan, "surfaces")
+    wall = result.lines[:, 0] > 3.0
+    assert np.count_nonzero(wall) == 2
+    (left, right) = result.lines[wall]
+    assert left[0] == right[0]  # one estimate, reported twice
+    assert left[1] == right[1]
+    assert left[0] == pytest.approx(4.0, abs=0.005)
+    assert left[1] == pytest.approx(0.1, abs=0.002)
+    own = extract(Scan(np.where(bearings < 0, ranges, np.nan), bearings[0], math.radians(0.5),
+                       range_max=30.0), "surfaces")  # fmt: skip
+    pooled_sigma = result.covariances[wall][0, 0, 0]
+    assert pooled_sigma < own.covariances[0, 0, 0]  # the pooled line is better determined
+
+
+def test_a_spike_left_out_of_a_wall_is_no_breakpoint():
+    bearings = np.radians(np.arange(-40.0, 40.0, 0.5))
+    ranges = _wall_ranges(bearings, 3.0, 0.0)
+    ranges += np.random.default_rng(2).normal(0.0, 0.005, ranges.shape)
+    ranges[80] = 1.2
+    scan = Scan(ranges, bearings[0], math.radians(0.5), range_max=30.0)
+    result = extract(scan, "surfaces")
+    assert len(result) == 1
+    assert result.breakpoints.size == 0
+    assert 80 in result.outliers.tolist()
+    assert extract(scan, "partition").breakpoints.size > 0  # the partition's events do report it
+
+
+@pytest.mark.parametrize("beams", [100_000, 300_000])
+def test_a_densely_sampled_square_room_is_four_walls(beams):
+    """The reliability issue's room: 5 m from the sensor, 1 cm range noise, one full turn."""
+    step = 2.0 * math.pi / beams
+    bearings = -math.pi + step * np.arange(beams)
+    facing = np.round(bearings / (math.pi / 2)) * (math.pi / 2)
+    ranges = 5.0 / np.cos(bearings - facing)
+    ranges += np.random.default_rng(3).normal(0.0, 0.01, beams)
+    scan = Scan(ranges, -math.pi, step, range_max=30.0)
+    result = extract(scan, "surfaces")
+    assert len(result) == 4
+    assert result.n_points.sum() >= 0.99 * beams
+
+
+def test_an_extractor_without_a_profile_learns_the_noise_run_measures(monkeypatch):
+    monkeypatch.setattr(learned_noise, "LEARNED_SCANS", 20)
+    scans = list(open_log(sample("intel")))[:30]
+    profile = estimate_profile(scans[:20], max_scans=20)
+    learning, profiled = Extractor("surfaces"), Extractor("surfaces", sensor_profile=profile)
+    own = Extractor("surfaces", noise_sigma=0.01)  # differs from both: the check can fail
+    for k, scan in enumerate(scans):
+        extraction = learning(scan)
+        if k >= 20:
+            assert extraction.lines.tolist() == profiled(scan).lines.tolist()
+    geometry = learned_noise.NoiseLearner.geometry(scans[0])
+    assert learning._learner.line(geometry) == profile.noise
+    assert own(scans[-1]).lines.tolist() != profiled(scans[-1]).lines.tolist()
+
+
+def test_batch_learns_as_the_scans_one_by_one_do(monkeypatch):
+    monkeypatch.setattr(learned_noise, "LEARNED_SCANS", 5)
+    scans = list(open_log(sample("intel")))[:12]
+    extractor = Extractor("surfaces")
+    one_by_one = [extractor(scan) for scan in scans]
+    first = scans[0]
+    stack = np.stack([scan.ranges for scan in scans])
+    sensor = (first.angle_min, first.angle_increment, first.range_min, first.range_max)
+    table = Extractor("surfaces").batch(stack, *sensor, jobs=2)
+    for k, extraction in enumerate(one_by_one):
+        assert table[k].lines.tolist() == extraction.lines.tolist()
+        assert table[k].breakpoints.tolist() == extraction.breakpoints.tolist()
