@@ -140,14 +140,15 @@ double along_beam_chi2(const Scatter& s, double footprints, double x0, double y0
     double lateral = cy * cy * s.sxx - 2.0 * cx * cy * s.sxy + cx * cx * s.syy;
     double both = cx * cy * (s.syy - s.sxx) + (cx * cx - cy * cy) * s.sxy;
     if (!(lateral > 0.0)) return std::max(depth / norm2, 0.0);
-    double slope = both / lateral;
-    double residual = std::max((depth - both * slope) / norm2, 0.0);
-    // The weights took each return's variance as sigma^2 + model_error^2 (their mean: the
-    // footprints over the weights); the model error lies across the wall, so along the
-    // beams it grows by the slope: sigma^2 + model_error^2 (1 + slope^2).
-    double assumed = footprints / s.w;
-    double spread = model_error * model_error * slope * slope;
-    return residual * (assumed / (assumed + spread));
+    // The residual (depth - both^2 / lateral) / norm2, scaled by assumed / (assumed + spread):
+    // the weights took each return's variance as sigma^2 + model_error^2 (their mean,
+    // `assumed`: the footprints over the weights); the model error lies across the wall,
+    // so along the beams it grows by the slope both / lateral: sigma^2 + model_error^2
+    // (1 + slope^2). One division for all of it.
+    double residual = std::max(depth * lateral - both * both, 0.0);
+    double spread = model_error * model_error * s.w * both * both;
+    return residual * footprints * lateral /
+           (norm2 * (footprints * lateral * lateral + spread));
 }
 
 FittedLine line_of(const Sums& sums, Index a, Index b) {
