@@ -65,3 +65,36 @@ def test_map_offsets_gives_one_map_at_every_offset_and_refuses_beyond_the_limit(
     assert rows[0][2] == rows[1][2]  # the same lines
     assert float(rows[1][3]) < 1e-6
     assert "beyond the map's limit" in rows[2][6]
+
+
+def test_real_table_runs_both_modes_over_the_logs_it_finds(tmp_path):
+    # A data folder holding two of the shared logs' places, filled with shipped excerpts.
+    data = Path(__file__).parent.parent / "src" / "scanlines" / "data"
+    places = {
+        "intel_excerpt.clf.gz": "intel-research-lab/original/intel-corrected.log.gz",
+        "fr079_excerpt.log.gz": "freiburg-079/original/fr079.log.gz",
+    }
+    for name, place in places.items():
+        (tmp_path / place).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / place).write_bytes((data / name).read_bytes())
+    table = tmp_path / "table.md"
+    args = ["--scans", "24", "--pairs", "6", "-m", "iepf", "-m", "partition?penalty=30@p30"]
+    run("real_table.py", str(tmp_path), *args, "--out", str(table), "--cache", str(tmp_path))
+    lines = table.read_text().splitlines()
+    rows = [line.split(" | ") for line in lines if line.startswith(("| Intel", "| Freiburg"))]
+    assert [(row[0], row[1]) for row in rows] == [
+        ("| Intel corrected", "profiled"),
+        ("| Intel corrected", "bare"),
+        ("| Freiburg 079 raw", "profiled"),
+        ("| Freiburg 079 raw", "bare"),
+    ]
+    for row in rows:
+        assert row[3] == "6"  # pairs scored
+        for cell in row[4:]:
+            strict, coverage, _, fidelity = (float(v) for v in cell.strip(" |").split(" / "))
+            assert 0.0 <= strict <= 1.0
+            assert 0.5 < coverage <= 1.0
+            assert 0.0 < fidelity < 30.0
+    assert rows[1][2] == "no profile"
+    assert rows[0][2].endswith("% of range")
+    assert len(list(tmp_path.glob("*.pkl"))) == 2  # the registered pairs, kept for next time

@@ -208,8 +208,10 @@ def test_strict_measure_weighs_length_and_compares_rho_at_the_origin():
 def test_max_pairs_spreads_the_pairs_over_the_log():
     scene = random_scene(1, "lms_1deg", kind="room")
     scans = [(k, scene.scan(seed=0).scan) for k in range(300)]
-    chosen = candidate_pairs(scans, RepeatTolerances(max_pairs=50))
-    assert len(chosen) == len(set(chosen)) == 50
+    pairs, _ = register_pairs(scans, RepeatTolerances(max_pairs=50))
+    chosen = [(p.i, p.j) for p in pairs]
+    assert len(chosen) == len(set(chosen)) == 50  # every one used: one tried per slot
+    assert all(p.used for p in pairs)
     assert all(1 <= b - a <= 3 for a, b in chosen)
     starts = [a for a, _ in chosen]
     assert starts == sorted(starts)
@@ -243,6 +245,9 @@ SUMMARY_COLUMNS = {
     "strict",
     "repeated_metres",
     "strict_pairs",
+    "mode",
+    "fidelity_mm",
+    "fidelity_segments",
 }
 
 

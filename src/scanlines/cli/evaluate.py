@@ -8,19 +8,19 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from scanlines.cli.common import NPZ_HELP, guarded, jobs_option
+from scanlines.cli.common import guarded, jobs_option
+from scanlines.cli.eval_real import BareOption, PairsOption, RealOption
 from scanlines.cli.eval_reports import (
     TABLE_WIDTH,
     _print_family,
-    _print_repeatability,
     _print_tables,
+    _progress,
 )
 from scanlines.cli.maps import AlignOption, MapLogOption, MapPosesOption
 from scanlines.cli.trajectory import ReferenceOption, TrajectoryOption
 
 if TYPE_CHECKING:
     from scanlines.evaluation.evaluate import EvalResult
-    from scanlines.evaluation.repeatability import RepeatabilityResult
     from scanlines.evaluation.scenes import SceneSet
     from scanlines.evaluation.scores import Tolerances
 
@@ -101,30 +101,13 @@ def eval_command(
     ] = None,
     worst: Annotated[int, typer.Option(help="Scans in worst.png.")] = 4,
     plots: Annotated[bool, typer.Option(help="Write bars.png and worst.png.")] = True,
-    real: Annotated[
-        list[Path] | None,
-        typer.Option(
-            "--real",
-            help="A real log (any format 'scanlines info' reads), repeatable: measure the "
-            "scan-to-scan repeatability of the methods instead (label-free; pairs 1-3 records "
-            "apart registered by ICP from the log's poses, or ICP alone). Writes "
-            "repeatability.csv, repeatability_pairs.csv and repeatability.json into --out. "
-            + NPZ_HELP,
-        ),
-    ] = None,
+    real: RealOption = None,
     scans: Annotated[
         int | None,
         typer.Option("--scans", min=2, help="With --real: the first N scans of each log."),
     ] = None,
-    pairs: Annotated[
-        int | None,
-        typer.Option(
-            "--pairs",
-            min=1,
-            help="With --real: register and score only N pairs spread evenly over each log "
-            "(the strict measure's 200, say); default every pair.",
-        ),
-    ] = None,
+    pairs: PairsOption = None,
+    bare: BareOption = False,
     family: Annotated[
         bool,
         typer.Option(
@@ -180,6 +163,7 @@ def eval_command(
     trajectory: TrajectoryOption = None,
     reference: ReferenceOption = None,
 ) -> None:
+    from scanlines.cli.eval_real import check_bare, repeatability_with_progress
     from scanlines.errors import ParameterError
     from scanlines.evaluation.specs import TRUTH, parse_specs
 
@@ -204,6 +188,7 @@ def eval_command(
         return
     if poses is not None or align:
         raise ParameterError("--poses and --align go with a --map LOG")
+    check_bare(bare, real, sensor_profile)
     profile = None if sensor_profile is None else read_profile(sensor_profile)
     if labels:
         _check_real_options(sensor, scenes_per_sensor, seed, scenes, save_scenes, noise, specs)
@@ -214,7 +199,9 @@ def eval_command(
     if real:
         _check_real_options(sensor, scenes_per_sensor, seed, scenes, save_scenes, noise, specs)
         _refuse_tolerances("--real", tol_beams=tol_beams, tol_rho=tol_rho, tol_alpha=tol_alpha)
-        results = [_repeatability_with_progress(log, specs, scans, profile, pairs) for log in real]
+        results = [
+            repeatability_with_progress(log, specs, scans, profile, pairs, bare) for log in real
+        ]
         from scanlines.evaluation.repeatability import write_results
 
         for path in write_results(results, out):
@@ -442,51 +429,6 @@ def _labelled(names: list[str], specs, tolerance: int, profile, out: Path) -> No
     console.print(table)
     out.mkdir(parents=True, exist_ok=True)
     typer.echo(f"wrote {result.to_csv(out / 'labelled.csv')}")
-
-
-def _repeatability_with_progress(
-    log: Path, specs, scans: int | None, profile=None, pairs: int | None = None
-) -> RepeatabilityResult:
-    from scanlines.evaluation.repeatability import RepeatTolerances, repeatability
-
-    tol = RepeatTolerances(max_pairs=pairs)
-    with _progress(f"{log.name}: pairs, then scans per method", unit="steps") as advance:
-        result = repeatability(
-            log, specs, scans, tol=tol, on_progress=advance, sensor_profile=profile
-        )
-    _print_repeatability(result)
-    return result
-
-
-class _progress:
-    """A transient rich progress bar (on stderr); gives ``advance(done, total)``."""
-
-    def __init__(self, description: str, unit: str = "scenes") -> None:
-        self.description = description
-        self.unit = unit
-
-    def __enter__(self):
-        from rich.console import Console
-        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
-
-        self.bar = Progress(
-            "{task.description}",
-            BarColumn(),
-            MofNCompleteColumn(),
-            self.unit,
-            TimeElapsedColumn(),
-            transient=True,
-            console=Console(stderr=True),
-        )
-        self.bar.__enter__()
-        self.task = self.bar.add_task(self.description, total=None)
-        return self.advance
-
-    def advance(self, done: int, total: int) -> None:
-        self.bar.update(self.task, completed=done, total=total)
-
-    def __exit__(self, *exc: object) -> None:
-        self.bar.__exit__(*exc)
 
 
 def _write_outputs(result: EvalResult, out: Path, worst: int | None) -> list[Path]:

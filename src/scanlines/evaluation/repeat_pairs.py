@@ -43,6 +43,8 @@ class RepeatTolerances:
     occlusion_margin: float = 0.2
     max_pairs: int | None = None
     strict_distance: float = 0.03
+    fidelity_band: float = 0.10
+    fidelity_returns: int = 5
 
     def to_dict(self) -> dict[str, Any]:
         """The tolerances by name, with ``alpha_deg``."""
@@ -56,6 +58,7 @@ class RepeatTolerances:
             f"{math.degrees(self.alpha):g} deg, line distance at the shared middle <= "
             f"{100 * self.distance:g} cm, overlap / shorter >= {self.overlap:g}; pairs used: "
             f"view overlap >= {self.view_overlap:g}, ICP inliers >= {self.min_inliers:g}"
+            + ("" if self.max_pairs is None else f", {self.max_pairs} spread over the log")
         )
 
 
@@ -168,88 +171,129 @@ def _better(a: Registration, b: Registration) -> Registration:
     return a if (a.rms if math.isfinite(a.rms) else math.inf) <= b.rms else b
 
 
+class _Registrar:
+    """Registers pairs of positions in ``scans`` on demand, each once.
+
+    With the log's poses, from their relative pose. Without: ``(a, a + 1)`` from the
+    identity and from the refined pose of ``(a - 1, a)`` when that one is registered and
+    good (constant velocity), keeping the fit with more inliers; ``(a, a + k)`` from the
+    chain of the refined consecutive poses (registered first when they are not yet).
+    """
+
+    def __init__(self, scans: Sequence[tuple[int, Scan]], tol: RepeatTolerances, settings):
+        self.scans, self.tol, self.settings = scans, tol, settings
+        self.with_poses = all(scan.pose is not None for _, scan in scans)
+        self.fits: dict[tuple[int, int], Registration] = {}
+        self._targets: dict[int, LineTarget] = {}
+
+    def _target(self, a: int) -> LineTarget:
+        if a not in self._targets:
+            self._targets[a] = line_target(self.scans[a][1], self.settings)
+        return self._targets[a]
+
+    def fit(self, a: int, b: int) -> Registration:
+        if (a, b) in self.fits:
+            return self.fits[(a, b)]
+        (_, scan_i), (_, scan_j) = self.scans[a], self.scans[b]
+        source, target = scan_j.points[scan_j.valid], self._target(a)
+        if self.with_poses:
+            found = icp(source, target, relative_pose(scan_i.pose, scan_j.pose), self.settings)
+        elif b == a + 1:
+            found = icp(source, target, IDENTITY, self.settings)
+            before = self.fits.get((a - 1, a))
+            if before is not None and before.inlier_fraction >= self.tol.min_inliers:
+                found = _better(found, icp(source, target, before.pose, self.settings))
+        else:
+            chain = IDENTITY
+            for step in range(a, b):
+                chain = compose(chain, self.fit(step, step + 1).pose)
+            found = icp(source, target, chain, self.settings)
+        self.fits[(a, b)] = found
+        return found
+
+    def record(self, a: int, b: int) -> PairRecord:
+        fit = self.fit(a, b)
+        (i, scan_i), (j, scan_j) = self.scans[a], self.scans[b]
+        overlap = view_overlap(scan_i, scan_j, fit.pose, self.tol.occlusion_margin)
+        used = overlap >= self.tol.view_overlap and fit.inlier_fraction >= self.tol.min_inliers
+        return PairRecord(
+            i,
+            j,
+            fit.initial,
+            fit.pose,
+            fit.rms,
+            fit.inlier_fraction,
+            fit.iterations,
+            fit.converged,
+            overlap,
+            used,
+        )
+
+
 def register_pairs(
     scans: Sequence[tuple[int, Scan]],
     tol: RepeatTolerances | None = None,
     settings: IcpSettings | None = None,
     on_pair: OnProgress | None = None,
 ) -> tuple[tuple[PairRecord, ...], str]:
-    """Every candidate pair of ``scans`` (``(record, scan)`` in log order), registered.
+    """The pairs of ``scans`` (``(record, scan)`` in log order) that were registered.
 
-    Returns the pairs and the pose source: ``"log poses + ICP"`` when every scan has a
-    pose, else ``"ICP alone"`` (see :mod:`scanlines.evaluation.repeatability` for the
-    initial guesses).
+    Without ``tol.max_pairs``: every candidate pair (:func:`candidate_pairs`), each
+    marked ``used`` or not. With it: the candidates are cut into ``max_pairs`` slots of
+    consecutive pairs (:func:`pair_slots`), and each slot's candidates are registered in
+    turn until one is used; the tried pairs are returned, so that ``max_pairs`` pairs
+    (fewer only where a whole slot has none) are used, spread evenly over the log.
+    Also returns the pose source: ``"log poses + ICP"`` when every scan has a pose,
+    else ``"ICP alone"`` (see :mod:`scanlines.evaluation.repeatability`).
     """
     tol = tol or RepeatTolerances()
     settings = settings or IcpSettings()
-    with_poses = all(scan.pose is not None for _, scan in scans)
-    targets: dict[int, LineTarget] = {}
-    sources: dict[int, np.ndarray] = {}
-    for index, scan in scans:
-        targets[index] = line_target(scan, settings)
-        sources[index] = scan.points[scan.valid]
+    registrar = _Registrar(scans, tol, settings)
     candidates = candidate_pairs(scans, tol)
-    consecutive: dict[int, Pose] = {}  # record i -> refined pose of the next record in i
-    previous: Pose | None = None
-    pairs = []
-    for done, (a, b) in enumerate(sorted(candidates, key=lambda ab: (ab[1] - ab[0], ab))):
-        (i, scan_i), (j, scan_j) = scans[a], scans[b]
-        if with_poses:
-            fit = icp(sources[j], targets[i], relative_pose(scan_i.pose, scan_j.pose), settings)
-        elif b == a + 1:
-            fit = icp(sources[j], targets[i], IDENTITY, settings)
-            if previous is not None:
-                fit = _better(fit, icp(sources[j], targets[i], previous, settings))
-            previous = fit.pose if fit.inlier_fraction >= tol.min_inliers else None
-            consecutive[i] = fit.pose
-        else:
-            chain = IDENTITY
-            for step in range(a, b):
-                chain = compose(chain, consecutive.get(scans[step][0], IDENTITY))
-            fit = icp(sources[j], targets[i], chain, settings)
-        overlap = view_overlap(scan_i, scan_j, fit.pose, tol.occlusion_margin)
-        used = overlap >= tol.view_overlap and fit.inlier_fraction >= tol.min_inliers
-        pairs.append(
-            PairRecord(
-                i,
-                j,
-                fit.initial,
-                fit.pose,
-                fit.rms,
-                fit.inlier_fraction,
-                fit.iterations,
-                fit.converged,
-                overlap,
-                used,
-            )
-        )
-        if on_pair is not None:
-            on_pair(done + 1, len(candidates))
-    pairs.sort(key=lambda p: (p.i, p.j))
-    return tuple(pairs), "log poses + ICP" if with_poses else "ICP alone"
+    tried: list[PairRecord] = []
+    if tol.max_pairs is None or len(candidates) <= tol.max_pairs:
+        # The consecutive pairs first, so that the longer ones chain refined poses.
+        ordered = sorted(candidates, key=lambda ab: (ab[1] - ab[0], ab))
+        for done, (a, b) in enumerate(ordered):
+            tried.append(registrar.record(a, b))
+            if on_pair is not None:
+                on_pair(done + 1, len(ordered))
+    else:
+        slots = pair_slots(candidates, tol.max_pairs, tol.max_gap)
+        for done, slot in enumerate(slots):
+            for a, b in slot:
+                tried.append(registrar.record(a, b))
+                if tried[-1].used:
+                    break
+            if on_pair is not None:
+                on_pair(done + 1, len(slots))
+    tried.sort(key=lambda p: (p.i, p.j))
+    return tuple(tried), "log poses + ICP" if registrar.with_poses else "ICP alone"
 
 
 def candidate_pairs(scans: Sequence[tuple[int, Scan]], tol: RepeatTolerances) -> list:
-    """Positions ``(a, b)`` of the pairs to register: every pair 1 to ``max_gap`` records
-    apart, or with ``max_pairs`` that many spread evenly over the log (the gap cycling
-    through 1 .. ``max_gap``), so that a long log costs no more than a short one."""
-    every = [
+    """Positions ``(a, b)`` of every pair 1 to ``max_gap`` records apart, in log order."""
+    return [
         (a, b)
         for a in range(len(scans))
         for b in range(a + 1, min(a + 1 + tol.max_gap, len(scans)))
         if 1 <= scans[b][0] - scans[a][0] <= tol.max_gap
     ]
-    if tol.max_pairs is None or len(every) <= tol.max_pairs:
-        return every
-    by_start: dict[int, list[tuple[int, int]]] = {}
-    for a, b in every:
-        by_start.setdefault(a, []).append((a, b))
-    starts = sorted(by_start)
-    chosen = []
-    for k in range(tol.max_pairs):
-        options = by_start[starts[k * len(starts) // tol.max_pairs]]
-        chosen.append(options[k % len(options)])
-    return chosen
+
+
+def pair_slots(candidates: Sequence[tuple[int, int]], slots: int, max_gap: int = 3) -> list:
+    """``candidates`` (in log order) cut into ``slots`` runs of consecutive pairs, so that
+    one pair of each spreads the pairs evenly over the log; in each run the pairs whose
+    gap is the slot's turn (cycling through 1 .. ``max_gap``) come first, then the
+    others, each in log order."""
+    cut = [k * len(candidates) // slots for k in range(slots + 1)]
+    out = []
+    for k in range(slots):
+        run = list(candidates[cut[k] : cut[k + 1]])
+        turn = k % max_gap
+        run.sort(key=lambda ab: ((ab[1] - ab[0] - 1 - turn) % max_gap, ab))
+        out.append(run)
+    return out
 
 
 # --------------------------------------------------------------------------- matching

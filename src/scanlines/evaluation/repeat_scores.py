@@ -63,6 +63,8 @@ class MethodRepeatability:
     strict: float = math.nan
     repeated_metres: float = math.nan
     strict_pairs: int = 0
+    fidelity_mm: float = math.nan
+    fidelity_segments: int = 0
 
     def to_dict(self) -> dict[str, Any]:
         """Flat row for CSV (spec columns first)."""
@@ -129,7 +131,7 @@ def _score_method(
         ends[index] = segment_ends
         if on_scan is not None:
             on_scan()
-    strict, metres, strict_pairs = _strict_scores(ends, dict(scans), pairs, tol)
+    strict, metres, strict_pairs, fidelity = _strict_scores(ends, dict(scans), pairs, tol)
     partners: dict[int, list[PairRecord]] = {}
     for pair in pairs:
         if pair.used:
@@ -166,6 +168,8 @@ def _score_method(
         strict=strict,
         repeated_metres=metres,
         strict_pairs=strict_pairs,
+        fidelity_mm=1000.0 * float(np.median(fidelity)) if fidelity else math.nan,
+        fidelity_segments=len(fidelity),
     )
 
 
@@ -178,7 +182,7 @@ def _strict_scores(
     scans: Mapping[int, Scan],
     pairs: Sequence[PairRecord],
     tol: RepeatTolerances,
-) -> tuple[float, float, int]:
+) -> tuple[float, float, int, list[float]]:
     """The strict measure: each used pair scored on its own, in both directions.
 
     In direction ``i -> j`` the trials are ``i``'s long segments whose surface ``j``
@@ -188,10 +192,12 @@ def _strict_scores(
     in Hesse form in ``i``'s frame (``|d rho| <= strict_distance``). A pair scores the
     mean of its two directions' repeated length over trial length; the log, the mean over
     pairs (``strict``) and the mean repeated metres per scan and direction
-    (``repeated_metres``); also the number of pairs scored.
+    (``repeated_metres``); also the number of pairs scored, and the fidelity of every
+    long segment of either direction (:func:`segment_fidelity`, metres; segments with
+    too few of the other scan's returns near them left out).
     """
     hesse = replace(tol, distance_at="origin", distance=tol.strict_distance)
-    scores, metres = [], []
+    scores, metres, fidelity = [], [], []
     for pair in pairs:
         if not pair.used:
             continue
@@ -200,10 +206,9 @@ def _strict_scores(
             (ends[pair.i], ends[pair.j], pair.pose, scans[pair.j]),
             (ends[pair.j], ends[pair.i], invert(pair.pose), scans[pair.i]),
         ):
-            trial, repeated = _direction(
-                mine, _moved(theirs, pose), invert(pose), other, tol, hesse
-            )
+            trial, repeated, fits = _direction(mine, theirs, pose, other, tol, hesse)
             repeated_lengths.append(repeated)
+            fidelity.extend(fits)
             if trial > 0:
                 ratios.append(repeated / trial)
         metres.append(float(np.mean(repeated_lengths)))
@@ -213,15 +218,21 @@ def _strict_scores(
         float(np.mean(scores)) if scores else math.nan,
         float(np.mean(metres)) if metres else math.nan,
         len(scores),
+        fidelity,
     )
 
 
-def _direction(mine, theirs, to_other, other, tol, hesse) -> tuple[float, float]:
-    """Trial and repeated length of one direction of a pair (see :func:`_strict_scores`)."""
+def _direction(mine, theirs, pose, other, tol, hesse) -> tuple[float, float, list[float]]:
+    """Trial and repeated length of one direction of a pair (see :func:`_strict_scores`),
+    and the fidelity of ``mine``'s long segments; ``pose`` moves ``other`` into ``mine``'s
+    frame."""
     lengths = np.hypot(*(mine[:, 2:4] - mine[:, 0:2]).T) if len(mine) else np.zeros(0)
     long = np.flatnonzero(np.isfinite(lengths) & (lengths >= tol.min_length))
     if len(long) == 0:
-        return 0.0, 0.0
+        return 0.0, 0.0, []
+    returns = transform_points(other.points[other.valid], pose)
+    fits = segment_fidelity(mine[long], returns, tol.fidelity_band, tol.fidelity_returns)
+    to_other = invert(pose)
     share = np.linspace(0.0, 1.0, SURFACE_SAMPLES)[:, None]
     observed = np.zeros(len(long), dtype=bool)
     for k, m in enumerate(long):
@@ -229,10 +240,37 @@ def _direction(mine, theirs, to_other, other, tol, hesse) -> tuple[float, float]
         moved = transform_points(samples, to_other)
         observed[k] = _share_in_view(moved, other, tol.occlusion_margin) >= 0.5
     long = long[observed]
+    fidelity = fits[np.isfinite(fits)].tolist()
     if len(long) == 0:
-        return 0.0, 0.0
-    hit = match_segments(mine[long], theirs, hesse).any(axis=1)
-    return float(lengths[long].sum()), float(lengths[long][hit].sum())
+        return 0.0, 0.0, fidelity
+    hit = match_segments(mine[long], _moved(theirs, pose), hesse).any(axis=1)
+    return float(lengths[long].sum()), float(lengths[long][hit].sum()), fidelity
+
+
+def segment_fidelity(
+    ends: np.ndarray, returns: np.ndarray, band: float = 0.10, least: int = 5
+) -> np.ndarray:
+    """How well each segment describes another scan's view of its surface: the RMS
+    distance to the segment's line of the ``returns`` that fall within its extent (their
+    projection onto the line between its ends) and within ``band`` of its line; NaN for a
+    segment with fewer than ``least`` such returns.
+
+    ``ends`` are ``N x 4`` (start x, y, end x, y) and ``returns`` ``K x 2``, in one frame.
+    """
+    ends = np.asarray(ends, dtype=np.float64).reshape(-1, 4)
+    returns = np.asarray(returns, dtype=np.float64).reshape(-1, 2)
+    out = np.full(len(ends), math.nan)
+    for k, (ax, ay, bx, by) in enumerate(ends):
+        length = math.hypot(bx - ax, by - ay)
+        if not length > 0.0:
+            continue
+        ux, uy = (bx - ax) / length, (by - ay) / length
+        dx, dy = returns[:, 0] - ax, returns[:, 1] - ay
+        along, across = dx * ux + dy * uy, uy * dx - ux * dy
+        near = (along >= 0.0) & (along <= length) & (np.abs(across) <= band)
+        if np.count_nonzero(near) >= least:
+            out[k] = math.sqrt(float(np.mean(across[near] ** 2)))
+    return out
 
 
 def _ratio(a: float, b: float) -> float:

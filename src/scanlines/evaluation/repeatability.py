@@ -18,6 +18,14 @@ registered by ICP alone: ``(i, i + 1)`` from the identity and from the previous
 consecutive estimate (constant velocity), keeping the fit with more inliers;
 ``(i, i + k)`` from the chain of the refined consecutive poses.
 
+With ``max_pairs`` (``--pairs 200``) the candidate pairs, in log order, are cut into
+``max_pairs`` slots of consecutive pairs, and each slot's pairs are registered in turn
+(the gap cycling through 1 .. ``max_gap`` from slot to slot) until one is *used*: so
+``max_pairs`` pairs are scored, spread evenly over the log, fewer only where a whole
+slot has no usable pair. (Until 2026-12-04 ``max_pairs`` candidates were drawn and only
+those of them that were used were scored: 59 of 200 on the Intel log, whose keyframes
+turn 30 deg and more; see ``docs/decisions/strict-repeatability.md``.)
+
 The *view overlap* of a pair is the smaller of two shares: of ``j``'s valid returns
 that, moved into ``i``'s frame, fall inside ``i``'s field of view and range limits and
 are not hidden behind ``i``'s own returns (farther than the largest range of the three
@@ -43,6 +51,15 @@ match when all three hold:
   compares ``|drho|`` of the two lines in Hesse form in ``i``'s frame instead (stricter
   for segments far from the foot of their normal; a sensitivity check).
 
+Sensor profile (``mode``)
+-------------------------
+``"profiled"`` (the default): every method extracts with one sensor profile measured
+from the log's first scans, as ``scanlines run`` does (or the one given: ``"given"``).
+``"bare"``: each method gets one ``Extractor()`` with no profile, as ``extract(scan)``,
+a bare :class:`~scanlines.Extractor` and the ROS 2 node without ``--sensor-profile`` use
+it, fed the scans of the used pairs in log order (an extractor that learns from the
+scans it has seen learns as it would on the log).
+
 Scores (per method spec)
 ------------------------
 * ``repeatability``: a *long* segment (``min_length``, 0.5 m) of a scan with at least
@@ -55,6 +72,13 @@ Scores (per method spec)
   segments whose line is NaN, which match nothing: the paper preset returns many on
   3-return runs); ``short_share``: segments fitted to fewer than ``few_points`` (5) returns
   over all segments; ``per_scan``: segments per scan;
+* ``fidelity_mm``: in each direction of each used pair, every long segment of one scan
+  with at least ``fidelity_returns`` (5) of the other scan's returns (moved into its
+  frame by the refined pose) within its extent and within ``fidelity_band`` (10 cm) of
+  its line gives the RMS distance of those returns to its line
+  (:func:`~.repeat_scores.segment_fidelity`); the median over all of them, in mm. It
+  holds the ICP's residual error as well as the segment's: compare methods on one log,
+  not logs with each other;
 * ``per_metre``: segments over *surface length*, the length of the polyline through
   consecutive valid returns (beam order) that both lie on segments, without the steps
   that cross a breakpoint the method reported (depth gaps); steps at corners count.
@@ -119,15 +143,21 @@ class RepeatabilityResult:
     log:
         The log's path as given.
     scans:
-        Scans read (the first ``max_scans`` of the log, or all).
+        Scans extracted (the first ``max_scans`` of the log, or all; with ``max_pairs``
+        the scans of the used pairs).
     pose_source:
         ``"log poses + ICP"`` or ``"ICP alone"``.
     pairs:
-        Every candidate pair with its registration (:class:`PairRecord`).
+        Every registered pair with its registration (:class:`PairRecord`).
     methods:
         One :class:`MethodRepeatability` per spec, in the order given.
     tol, icp:
         The tolerances and ICP settings used.
+    mode:
+        ``"profiled"`` (a profile measured from the log), ``"given"`` (the profile
+        given) or ``"bare"`` (no profile); see :mod:`scanlines.evaluation.repeatability`.
+    profile:
+        The sensor profile every method extracted with (``None``: none).
     """
 
     log: str
@@ -137,6 +167,8 @@ class RepeatabilityResult:
     methods: tuple[MethodRepeatability, ...]
     tol: RepeatTolerances
     icp: IcpSettings
+    mode: str = "profiled"
+    profile: SensorProfile | None = None
 
     @property
     def used_pairs(self) -> tuple[PairRecord, ...]:
@@ -171,6 +203,7 @@ class RepeatabilityResult:
     def summary_rows(self) -> list[dict[str, Any]]:
         """One row per method, with the log, pose source and used pairs."""
         head = {"log": self.log, "scans": self.scans, "pose_source": self.pose_source}
+        head["mode"] = self.mode
         pairs = {"pairs_used": len(self.used_pairs)}
         return [head | m.to_dict() | pairs for m in self.methods]
 
@@ -185,6 +218,8 @@ class RepeatabilityResult:
                 "log": self.log,
                 "scans": self.scans,
                 "pose_source": self.pose_source,
+                "mode": self.mode,
+                "profile": None if self.profile is None else self.profile.to_dict(),
                 "tolerances": self.tol.to_dict(),
                 "icp": self.icp.to_dict(),
                 "pairs": self.pair_stats(),
@@ -194,14 +229,24 @@ class RepeatabilityResult:
         )
 
     def title(self) -> str:
-        """One line: the log, scans, pose source and pairs."""
+        """One line: the log, scans, pose source, mode and pairs."""
         stats = self.pair_stats()
         return (
-            f"{self.log}: {self.scans} scans, {self.pose_source}, {stats['used_pairs']} of "
+            f"{self.log}: {self.scans} scans, {self.pose_source}, {self.noise()}, "
+            f"{stats['used_pairs']} of "
             f"{stats['candidate_pairs']} pairs used ({stats['rejected_view']} view overlap, "
             f"{stats['rejected_icp']} ICP), median motion {number(stats['median_motion_m'])} "
             f"m / {number(stats['median_turn_deg'], '.1f')} deg, ICP rms "
             f"{number(100 * stats['median_icp_rms_m'], '.1f')} cm"
+        )
+
+    def noise(self) -> str:
+        """The mode in words, with the profile's noise line."""
+        if self.profile is None:
+            return "bare: no profile" if self.mode == "bare" else f"{self.mode}: none measured"
+        return (
+            f"{self.mode}: {1000 * self.profile.noise_sigma0:.1f} mm + "
+            f"{100 * self.profile.noise_per_metre:.2f} % of range"
         )
 
     def table(self) -> list[list[str]]:
@@ -218,6 +263,7 @@ TABLE_COLUMNS: tuple[tuple[str, Callable[[MethodRepeatability], float], str], ..
     ("repeat.", lambda m: m.repeatability, ".3f"),
     ("per pair", lambda m: m.per_pair, ".3f"),
     ("coverage", lambda m: m.coverage, ".3f"),
+    ("fidelity mm", lambda m: m.fidelity_mm, ".1f"),
     ("median m", lambda m: m.median_length, ".2f"),
     ("< 5 returns", lambda m: m.short_share, ".3f"),
     ("seg/scan", lambda m: m.per_scan, ".1f"),
@@ -230,11 +276,13 @@ TABLE_CAPTION = (
     "strict: each used pair scored on its own, both directions averaged, length-weighted, "
     "lines compared in Hesse form (|d rho| at the origin), only long segments the other scan "
     "observed; repeated m/scan: metres of long segments repeated per scan and direction; "
-    "repeat.: long segments repeated in any used later pair / long segments; per pair: the "
-    "same per (segment, pair); coverage: valid returns on segments; median m: median segment "
-    "length; < 5 returns: share of segments; seg/m: segments per metre of surface (polyline "
-    "through consecutive returns on segments, not across breakpoints); long: long segments "
-    "of scans with a used pair."
+    "fidelity mm: median over long segments of the rms distance to their line of the other "
+    "scan's returns within their extent and 10 cm of the line (at least 5); repeat.: long "
+    "segments repeated in any used later pair / long segments; per pair: the same per "
+    "(segment, pair); coverage: valid returns on segments; median m: median segment length; "
+    "< 5 returns: share of segments; seg/m: segments per metre of surface (polyline through "
+    "consecutive returns on segments, not across breakpoints); long: long segments of scans "
+    "with a used pair."
 )
 
 
@@ -247,19 +295,27 @@ def repeatability_of_scans(
     settings: IcpSettings | None = None,
     on_progress: OnProgress | None = None,
     sensor_profile: SensorProfile | None = None,
+    bare: bool = False,
+    registered: tuple[Sequence[PairRecord], str] | None = None,
 ) -> RepeatabilityResult:
     """Repeatability of ``specs`` on ``(record, scan)`` pairs in log order, every spec with
-    ``sensor_profile`` (``None``: one measured from the scans, as ``scanlines run`` does)."""
+    ``sensor_profile`` (``None``: one measured from the scans, as ``scanlines run`` does);
+    ``bare``: with no profile at all (one ``Extractor()`` per spec, fed the scans of the
+    used pairs in log order). ``registered``: what :func:`register_pairs` gave for these
+    scans, ``tol`` and ``settings`` (to score more specs or the other mode without
+    registering the pairs again)."""
     parsed = parse_specs(specs)
     tol = tol or RepeatTolerances()
     settings = settings or IcpSettings()
     scans = list(scans)
-    profile = sensor_profile or _log_profile(scans, log)
-    if tol.max_pairs is not None:  # only the scans of the chosen pairs are extracted
-        chosen = {position for pair in candidate_pairs(scans, tol) for position in pair}
-        scans = [scans[position] for position in sorted(chosen)]
-    n_candidates = len(candidate_pairs(scans, tol))
-    total = n_candidates + len(scans) * len(parsed)
+    if bare and sensor_profile is not None:
+        raise ValueError("bare mode extracts with no sensor profile; give none")
+    mode = "bare" if bare else "profiled" if sensor_profile is None else "given"
+    profile = None if bare else sensor_profile or _log_profile(scans, log)
+    slots = len(candidate_pairs(scans, tol))
+    if tol.max_pairs is not None:
+        slots = min(slots, tol.max_pairs)
+    total = slots + len(scans) * len(parsed)
     done = 0
 
     def tick(step: int = 1) -> None:
@@ -268,9 +324,19 @@ def repeatability_of_scans(
         if on_progress is not None:
             on_progress(done, total)
 
-    pairs, source = register_pairs(scans, tol, settings, on_pair=lambda _done, _total: tick())
+    if registered is None:
+        registered = register_pairs(scans, tol, settings, on_pair=lambda _d, _t: tick())
+    else:
+        tick(slots)
+    pairs, source = tuple(registered[0]), registered[1]
+    if tol.max_pairs is not None:  # only the scans of the used pairs are extracted
+        used = {record for pair in pairs if pair.used for record in (pair.i, pair.j)}
+        scans = [(record, scan) for record, scan in scans if record in used]
+        total = done + len(scans) * len(parsed)
     methods = tuple(_score_method(spec, scans, pairs, tol, tick, profile) for spec in parsed)
-    return RepeatabilityResult(log, len(scans), source, pairs, methods, tol, settings)
+    return RepeatabilityResult(
+        log, len(scans), source, pairs, methods, tol, settings, mode, profile
+    )
 
 
 def _log_profile(scans: Sequence[tuple[int, Scan]], log: str) -> SensorProfile | None:
@@ -291,6 +357,7 @@ def repeatability(
     settings: IcpSettings | None = None,
     on_progress: OnProgress | None = None,
     sensor_profile: SensorProfile | None = None,
+    bare: bool = False,
     **reader_options: Any,
 ) -> RepeatabilityResult:
     """Scan-to-scan repeatability of method specs on a log (any file ``open_log`` reads).
@@ -307,6 +374,8 @@ def repeatability(
         :class:`RepeatTolerances` and :class:`~.registration.IcpSettings`.
     sensor_profile:
         The profile every spec extracts with; ``None``: measured from the scans read.
+    bare:
+        Extract with no profile at all (the *bare* mode); excludes ``sensor_profile``.
     on_progress:
         Called with ``(done, total)`` after each pair registered and each scan extracted.
     **reader_options:
@@ -320,7 +389,7 @@ def repeatability(
     scans = list(islice(reader.enumerate(), max_scans))
     return repeatability_of_scans(
         scans, specs, log=str(log_path), tol=tol, settings=settings, on_progress=on_progress,
-        sensor_profile=sensor_profile,
+        sensor_profile=sensor_profile, bare=bare,
     )  # fmt: skip
 
 
