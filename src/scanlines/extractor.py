@@ -105,9 +105,9 @@ class Extractor:
         A :class:`~scanlines.sensor_profile.SensorProfile` (or the path of one saved
         by ``scanlines calibrate``): the range noise every threshold and covariance
         takes. Without one, each scan's noise is measured from that scan alone; a method
-        that learns the noise (the default ``surfaces``) measures it that way for each
-        sensor's first :data:`~scanlines.learned_noise.LEARNED_SCANS` scans and then
-        keeps the noise line learned from them, as a profile.
+        that learns the noise (``surfaces``) takes each scan's noise from the sensor's
+        scans before it, up to :data:`~scanlines.learned_noise.LEARNED_SCANS` of them
+        (:class:`~scanlines.learned_noise.NoiseLearner`), then keeps that line.
     **params:
         Overrides of single parameters (see :func:`method_info`).
 
@@ -147,7 +147,7 @@ class Extractor:
         self._method = cls(self.params, noise)
         learns = self.sensor_profile is None and cls.learns_noise
         self._learner = NoiseLearner() if learns else None
-        self._learned: dict[tuple[int, float, float], Any] = {}
+        self._learned: dict[Any, Any] = {}  # noise line -> the method with it
 
     def __reduce__(self) -> tuple[Any, ...]:
         rebuild = (self.method, self.preset, dict(self.params), self.sensor_profile)
@@ -165,26 +165,24 @@ class Extractor:
         step, angle_min = float32(scan.angle_increment), float32(scan.angle_min)
         valid = valid_returns(ranges, float32(scan.range_min), float32(scan.range_max))
         cos, sin = self._bearings(len(scan), step)
-        method = self._method_for(scan)
-        if method is not None:
-            return method.extract(ranges, valid, cos, sin, step, angle_min)
-        extraction = self._method.extract(ranges, valid, cos, sin, step, angle_min)
-        self._learner.learn(scan)
+        extraction = self._method_for(scan).extract(ranges, valid, cos, sin, step, angle_min)
+        if self._learner is not None:
+            self._learner.learn(scan)
         return extraction
 
     def _method_for(self, scan: Scan) -> Any:
-        """The method to extract ``scan`` with; None while its sensor's noise is learned
-        (extract with the scan's own noise, then learn from it)."""
+        """The method to extract ``scan`` with: with the noise learned from the sensor's
+        scans before it, if the extractor learns the noise."""
         if self._learner is None:
             return self._method
-        geometry = NoiseLearner.geometry(scan)
-        if not self._learner.frozen(geometry):
-            return None
-        method = self._learned.get(geometry)
+        line = self._learner.line(NoiseLearner.geometry(scan))
+        if line is None:
+            return self._method
+        method = self._learned.get(line)
         if method is None:
-            line = self._learner.line(geometry)
-            method = self._method if line is None else type(self._method)(self.params, line)
-            self._learned[geometry] = method
+            if len(self._learned) > 64:
+                self._learned.clear()
+            method = self._learned[line] = type(self._method)(self.params, line)
         return method
 
     def warm_up(self) -> None:
@@ -228,12 +226,14 @@ class Extractor:
             raise ParameterError(f"jobs must be an integer >= 1, got {jobs!r}")
         tables, row = [], 0
         fields = (sensor.angle_min, sensor.angle_increment, sensor.range_min, sensor.range_max)
-        while row < len(stack) and self._method_for(sensor) is None:  # the noise still learned
+        learner = self._learner
+        while learner is not None and row < len(stack) and not learner.frozen(
+            NoiseLearner.geometry(sensor)
+        ):  # the noise still learned: row by row
             rows = slice(row, row + 1)
-            tables.append(
-                self._method.extract_many(stack[rows], valid[rows], cos, sin, step, angle_min)
-            )
-            self._learner.learn(Scan(stack[row], *fields))
+            method = self._method_for(sensor)
+            tables.append(method.extract_many(stack[rows], valid[rows], cos, sin, step, angle_min))
+            learner.learn(Scan(stack[row], *fields))
             row += 1
         if row < len(stack) or not tables:
             method, rows = self._method_for(sensor), slice(row, None)
