@@ -227,8 +227,10 @@ class Extractor:
         tables, row = [], 0
         fields = (sensor.angle_min, sensor.angle_increment, sensor.range_min, sensor.range_max)
         learner = self._learner
-        while learner is not None and row < len(stack) and not learner.frozen(
-            NoiseLearner.geometry(sensor)
+        while (
+            learner is not None
+            and row < len(stack)
+            and not learner.frozen(NoiseLearner.geometry(sensor))
         ):  # the noise still learned: row by row
             rows = slice(row, row + 1)
             method = self._method_for(sensor)
