@@ -52,7 +52,7 @@ nb::tuple track_scan_binding(const InReals& state, const InTable& covariance,
                              const InReals& settings, Index max_points) {
     constexpr std::size_t n = TRACK_STATE;
     if (state.shape(0) != n || covariance.shape(0) != n || covariance.shape(1) != n)
-        throw nb::value_error("the state has 5 values and its covariance 5 x 5");
+        throw nb::value_error("the state has 7 values and its covariance 7 x 7");
     if (increment.shape(0) != 3) throw nb::value_error("an increment is x, y, theta");
     if (x.shape(0) != y.shape(0)) throw nb::value_error("x and y must have one length");
     const std::size_t lines = rho.shape(0);

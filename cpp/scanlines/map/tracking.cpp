@@ -64,23 +64,36 @@ bool inverse(const TrackMatrix& a, TrackMatrix& out) {
     return true;
 }
 
-// The prediction: the state moved by the odometry increment, corrected by the drift and the
-// scale; the covariance F C F' + G Q G' plus the random walk of drift and scale.
+// The prediction: the sensor moved by the odometry increment, corrected by the drift and the
+// scale, and carried round the lever; the covariance F C F' + G Q G' plus the random walk of
+// drift and scale. The sensor's move in its own frame is (t + (R(turn) - I) l, turn), with t
+// the scaled translation, turn the corrected turn and l the lever.
 void predict(TrackVector& x, TrackMatrix& c, const double* inc, const TrackParams& p) {
     const double dx = inc[0], dy = inc[1], dt = inc[2];
     const double d = std::hypot(dx, dy);
-    const double ix = (1.0 + x[4]) * dx, iy = (1.0 + x[4]) * dy;
+    const double turn = dt + x[3] * d;
+    const double ct = std::cos(turn), st = std::sin(turn);
+    const double lx = x[5], ly = x[6];
+    const double ix = (1.0 + x[4]) * dx + (ct - 1.0) * lx - st * ly;
+    const double iy = (1.0 + x[4]) * dy + st * lx + (ct - 1.0) * ly;
+    const double tx = -st * lx - ct * ly, ty = ct * lx - st * ly;  // d(ix, iy) / d(turn)
     const double co = std::cos(x[2]), si = std::sin(x[2]);
     TrackMatrix f{};
     for (Index i = 0; i < N; ++i) f[i * N + i] = 1.0;
     f[0 * N + 2] = -si * ix - co * iy;
     f[1 * N + 2] = co * ix - si * iy;
+    f[0 * N + 3] = (co * tx - si * ty) * d;
+    f[1 * N + 3] = (si * tx + co * ty) * d;
     f[2 * N + 3] = d;
     f[0 * N + 4] = co * dx - si * dy;
     f[1 * N + 4] = si * dx + co * dy;
+    f[0 * N + 5] = co * (ct - 1.0) - si * st;
+    f[1 * N + 5] = si * (ct - 1.0) + co * st;
+    f[0 * N + 6] = -co * st - si * (ct - 1.0);
+    f[1 * N + 6] = -si * st + co * (ct - 1.0);
     x[0] += co * ix - si * iy;
     x[1] += si * ix + co * iy;
-    x[2] = wrap(x[2] + dt + x[3] * d);
+    x[2] = wrap(x[2] + turn);
     TrackMatrix fc{}, next{};
     for (Index i = 0; i < N; ++i)
         for (Index j = 0; j < N; ++j) {
@@ -94,11 +107,19 @@ void predict(TrackVector& x, TrackMatrix& c, const double* inc, const TrackParam
             for (Index k = 0; k < N; ++k) v += fc[i * N + k] * f[j * N + k];
             next[i * N + j] = v;
         }
+    // G Q G': the increment's noise (x, y isotropic; the turn's also moves the sensor by
+    // the lever).
     const double xy = p.odometry_floor + p.odometry_per_metre * d;
     const double th = p.turn_floor + p.turn_per_radian * std::fabs(dt) + p.turn_per_metre * d;
-    // G Q G' with G the rotation of the increment's x, y: an isotropic xy noise stays one.
-    next[0 * N + 0] += xy * xy;
-    next[1 * N + 1] += xy * xy;
+    const double g0 = co * tx - si * ty, g1 = si * tx + co * ty;
+    next[0 * N + 0] += xy * xy + g0 * g0 * th * th;
+    next[1 * N + 1] += xy * xy + g1 * g1 * th * th;
+    next[0 * N + 1] += g0 * g1 * th * th;
+    next[1 * N + 0] += g0 * g1 * th * th;
+    next[0 * N + 2] += g0 * th * th;
+    next[2 * N + 0] += g0 * th * th;
+    next[1 * N + 2] += g1 * th * th;
+    next[2 * N + 1] += g1 * th * th;
     next[2 * N + 2] += th * th;
     next[3 * N + 3] += p.drift_walk * p.drift_walk * d;
     next[4 * N + 4] += p.scale_walk * p.scale_walk * d;

@@ -9,9 +9,11 @@
 
 namespace scanlines {
 
-// The filter's state: x, y, theta (metres, radians), the odometry's heading drift per metre
-// driven (radians per metre) and its distance scale error (a share: 0.02 = 2 % too long).
-constexpr Index TRACK_STATE = 5;
+// The filter's state: the sensor's x, y, theta (metres, radians), the odometry's heading drift
+// per metre driven (radians per metre), its distance scale error (a share: 0.02 = 2 % too
+// long), and where the sensor sits in the odometry's frame (x, y metres: the lever that
+// moves the sensor when the robot turns in place).
+constexpr Index TRACK_STATE = 7;
 using TrackVector = std::array<double, TRACK_STATE>;
 using TrackMatrix = std::array<double, TRACK_STATE * TRACK_STATE>;  // row-major
 

@@ -81,6 +81,7 @@ class FilterSettings:
     turn_per_metre: float = 0.02
     drift_sigma: float = 0.1
     scale_sigma: float = 0.05
+    lever_sigma: float = 0.2
     drift_walk: float = 0.0005
     scale_walk: float = 0.0005
     normal_window: int = 2
@@ -227,10 +228,11 @@ class LineMapFilter:
         """Start (or restart) at the local ``pose`` with standard deviations ``sigma``
         (metres, radians); the odometry's errors start at zero with the settings' priors."""
         s = self.settings
-        self.state = np.array([*map(float, pose), 0.0, 0.0])
+        self.state = np.array([*map(float, pose), 0.0, 0.0, 0.0, 0.0])
         self.covariance = np.diag(
-            [sigma[0] ** 2, sigma[0] ** 2, sigma[1] ** 2, s.drift_sigma**2, s.scale_sigma**2]
-        )
+            [sigma[0] ** 2, sigma[0] ** 2, sigma[1] ** 2, s.drift_sigma**2, s.scale_sigma**2,
+             s.lever_sigma**2, s.lever_sigma**2]
+        )  # fmt: skip
         self._first = True
 
     def step(self, points: np.ndarray, increment: Pose | None) -> FilterStep:

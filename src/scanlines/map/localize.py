@@ -10,11 +10,14 @@
         run = localize(reader.enumerate(), lines, frame, (t0, (x0, y0, yaw0)))
     run.tracked                                            # poses, covariances, status
 
-The run starts at the first scan whose time is at or after ``t0`` (less
-:data:`START_TOLERANCE`; earlier scans are skipped); from there every scan is tracked in
-the log's order, whatever its clock says: a raw log's clock may step back (the raw Intel
-scans' by up to 0.9 s, 265 times) while its odometry runs on, and the log's order is the
-order of the odometry. Each scan goes through :class:`~scanlines.map.filter.LineMapFilter`:
+The run starts at the scan of time ``t0``: the first (in the log's order) within
+:data:`START_TOLERANCE` of it, else the first after it; the scans before it are skipped.
+From there every scan is tracked in the log's order, whatever its clock says: a raw log's
+clock may step back (the raw Intel scans' by up to 0.9 s, 265 times) while its odometry
+runs on, and the log's order is the order of the odometry. So the start is chosen among
+the scans up to :data:`START_WINDOW` past ``t0``: on the raw Intel scans the scan stamped
+33.108 s comes before the one stamped 32.907 s, and the robot turned 6.7 degrees between
+them. Each scan goes through :class:`~scanlines.map.filter.LineMapFilter`:
 the pose predicted from the last one by the odometry increment (corrected by the odometry's
 heading drift and scale, which the filter learns), then its returns matched to the map's
 lines. A scan that does not fit is reported (``status`` ``"did not fit"``), not forced: its
@@ -47,8 +50,10 @@ from scanlines.scan import Scan
 
 __all__ = ["Localisation", "MapFileError", "localize", "read_line_map"]
 
-#: A scan this much (seconds) before the initial time still starts the run.
+#: A scan this close (seconds) to the initial time is the scan of the initial pose.
 START_TOLERANCE = 0.01
+#: The scans read past the initial time (seconds of the log's clock) to find its scan.
+START_WINDOW = 1.0
 
 
 class MapFileError(ScanlinesError, ValueError):
@@ -109,6 +114,28 @@ class Localisation:
         return sum(1 for t in self.tracked if t.status == "did not fit")
 
 
+def _from_start(indexed: Iterable[tuple[int, Scan]], t0: float, run: Localisation):
+    """``indexed`` from the scan of time ``t0`` on (module docstring), counting the scans
+    skipped before it in ``run``."""
+    scans = iter(indexed)
+    pending: list[tuple[int, Scan]] = []
+    for index, scan in scans:
+        t = scan.timestamp
+        if not pending and (t is None or t < t0 - START_TOLERANCE):
+            run.skipped += 1
+            continue
+        pending.append((index, scan))
+        if t is not None and t > t0 + START_WINDOW:
+            break
+    times = [scan.timestamp for _, scan in pending]
+    near = [k for k, t in enumerate(times) if t is not None and abs(t - t0) <= START_TOLERANCE]
+    after = [k for k, t in enumerate(times) if t is not None and t >= t0]
+    first = near[0] if near else after[0] if after else len(pending)
+    run.skipped += first
+    yield from pending[first:]
+    yield from scans
+
+
 def localize(
     indexed: Iterable[tuple[int, Scan]],
     lines: LineSet,
@@ -127,12 +154,7 @@ def localize(
     tracker = LineMapFilter(lines, settings)
     odometry_of = poses or (lambda index, scan: scan.pose)
     last_odometry: Pose | None = None
-    for index, scan in indexed:
-        if last_odometry is None and (
-            scan.timestamp is None or scan.timestamp < t0 - START_TOLERANCE
-        ):
-            run.skipped += 1
-            continue
+    for index, scan in _from_start(indexed, t0, run):
         odometry = odometry_of(index, scan)
         if odometry is None:
             run.without_pose += 1
