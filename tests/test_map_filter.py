@@ -5,6 +5,7 @@ starts at the scan of the initial time even where the clock steps back."""
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -33,7 +34,8 @@ def test_the_grid_lists_every_line_within_reach_of_a_point(walls, points, reach,
     end = np.array([w[2:] for w in walls])
     lines = LineSet(np.zeros(len(walls)), np.zeros(len(walls)), start, end)
     grid = line_grid(lines, reach, cell)
-    assert grid.cell_start[0] == 0 and grid.cell_start[-1] == len(grid.cell_lines)
+    assert grid.cell_start[0] == 0
+    assert grid.cell_start[-1] == len(grid.cell_lines)
     assert np.all(np.diff(grid.cell_start) >= 0)
     for point in points:
         p = np.array([point])
@@ -92,7 +94,7 @@ def _odometry(truth, scale=1.0, drift=0.0, lever=(0.0, 0.0)):
     inverse = relative_pose(offset, (0.0, 0.0, 0.0))
     robot = [compose(pose, inverse) for pose in truth]
     odometry = [robot[0]]
-    for a, b in zip(robot[:-1], robot[1:], strict=True):
+    for a, b in itertools.pairwise(robot):
         step = relative_pose(a, b)
         d = math.hypot(step[0], step[1])
         odometry.append(compose(odometry[-1], (scale * step[0], scale * step[1],
@@ -133,7 +135,7 @@ def test_dead_reckoning_on_the_learnt_odometry_beats_the_raw_one():
     learnt = frozen = tuple(truth[299])
     # Past the map: the odometry's increments alone, corrected by the learnt state or not.
     drift, scale = tracker.state[3], tracker.state[4]
-    for a, b in zip(odometry[299:-1], odometry[300:], strict=True):
+    for a, b in itertools.pairwise(odometry[299:]):
         step = relative_pose(a, b)
         d = math.hypot(step[0], step[1])
         learnt = compose(learnt, ((1 + scale) * step[0], (1 + scale) * step[1],
@@ -198,12 +200,14 @@ def test_the_kernel_refuses_arguments_of_the_wrong_shape():
             lines.rho, lines.alpha, lines.start, lines.end, grid.shape, grid.cell_start,
             grid.cell_lines, tracker.settings.kernel_values(), 0]  # fmt: skip
     _core.track_scan(*args)
-    for position, wrong in [(0, np.zeros(5)), (2, np.zeros(2)), (5, np.zeros(3)),
-                            (6, lines.rho[:-1]), (11, grid.cell_start[:-1]),
-                            (13, np.zeros(5))]:  # fmt: skip
+    for position, wrong, message in [
+        (0, np.zeros(5), "state has 7 values"), (2, np.zeros(2), "increment"),
+        (5, np.zeros(3), "one length"), (6, lines.rho[:-1], "same lines"),
+        (11, grid.cell_start[:-1], "cell starts"), (13, np.zeros(5), "23 settings"),
+    ]:  # fmt: skip
         bad = list(args)
         bad[position] = wrong
-        with pytest.raises(ValueError):
+        with pytest.raises(ValueError, match=message):
             _core.track_scan(*bad)
 
 

@@ -108,6 +108,11 @@ class Localisation:
     tracked: list[TrackedPose] = field(default_factory=list)
     skipped: int = 0
     without_pose: int = 0
+    #: The odometry's errors as learnt at the end (:class:`~scanlines.map.filter.
+    #: LineMapFilter`): heading drift (radians per metre), scale error, the sensor's lever.
+    drift: float = 0.0
+    scale: float = 0.0
+    lever: tuple[float, float] = (0.0, 0.0)
 
     @property
     def not_fit(self) -> int:
@@ -171,4 +176,7 @@ def localize(
             TrackedPose(index, scan.timestamp, frame.pose(odometry), step.predicted, step.pose,
                         step.covariance, status)
         )  # fmt: skip
+    if tracker.state is not None:
+        run.drift, run.scale = float(tracker.state[3]), float(tracker.state[4])
+        run.lever = (float(tracker.state[5]), float(tracker.state[6]))
     return run
