@@ -10,15 +10,17 @@ the prior, the odometry's own errors learnt on the way.
     step = tracker.step(points, increment)         # each scan: sensor-frame returns, the
     step.pose, step.covariance, step.status        # odometry's move since the last scan
 
-The state is the pose and the odometry's two systematic errors: a heading drift per metre
-driven (a wheel a little larger than the other turns the robot as it drives) and a distance
-scale. An extended Kalman filter predicts each scan's state from the odometry increment,
-corrected by the drift and the scale, with the increment's noise (:class:`FilterSettings`);
-the scan's returns then correct it (a few Gauss-Newton steps on their distances to their map
-lines, the prediction's covariance as the prior). What a scene does not pin (a corridor's
-axis, a room the map lacks) stays with the odometry, whose errors the filter has been
-learning wherever the map pinned the pose: on the raw Intel log, the odometry turns 3.3
-degrees too little per metre and over-counts distance by 4 % (docs/MEASUREMENTS.md).
+The state is the sensor's pose and what is systematically wrong with the odometry: a
+heading drift per metre driven (a wheel a little larger than the other turns the robot as it
+drives), a distance scale, and where the sensor sits on the odometry's frame (a lever: a
+sensor ahead of the wheels' axle moves sideways when the robot turns in place). An extended
+Kalman filter predicts each scan's state from the odometry increment, corrected by these,
+with the increment's noise (:class:`FilterSettings`); the scan's returns then correct it (a
+few Gauss-Newton steps on their distances to their map lines, the prediction's covariance as
+the prior). What a scene does not pin (a corridor's axis, a room the map lacks) stays with
+the odometry, whose errors the filter has been learning wherever the map pinned the pose: on
+the raw Intel log it learns that the odometry turns 3.3 degrees too little per metre,
+over-counts distance by 3.8 % and sits 9 cm behind the laser (docs/MEASUREMENTS.md).
 
 Matching, made to refuse rather than pull wrongly:
 
