@@ -19,10 +19,10 @@ the scans up to :data:`START_WINDOW` past ``t0``: on the raw Intel scans the sca
 33.108 s comes before the one stamped 32.907 s, and the robot turned 6.7 degrees between
 them. Each scan goes through :class:`~scanlines.map.filter.LineMapFilter`:
 the pose predicted from the last one by the odometry increment (corrected by the odometry's
-heading drift and scale, which the filter learns), then its returns matched to the map's
-lines. A scan that does not fit is reported (``status`` ``"did not fit"``), not forced: its
-predicted pose stands with the covariance grown by the increment's noise, which widens the
-gate of the next scans until one fits again.
+heading drift, scale and the sensor's lever, which the filter learns), then its returns
+matched to the map's lines. A scan that does not fit is reported (``status`` ``"did not
+fit"``), not forced: its predicted pose stands with the covariance grown by the increment's
+noise, which widens the gate of the next scans until one fits again.
 
 Earlier versions (docs/MEASUREMENTS.md) took only the increment's noise as each fit's prior
 and searched every map line for every return: 0.21 m RMSE over the raw Intel keyframes at
