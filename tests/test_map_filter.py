@@ -47,6 +47,14 @@ def test_the_grid_lists_every_line_within_reach_of_a_point(walls, points, reach,
         assert set(within) <= set(grid.candidates(point).tolist())
 
 
+def test_a_point_at_exactly_the_reach_of_a_line_finds_it():
+    # Found by the test above: a point just below the grid's edge, 1 m from a point-like line.
+    lines = LineSet(np.zeros(1), np.zeros(1), np.array([[0.0, 1.0]]), np.array([[0.0, 1.0]]))
+    grid = line_grid(lines, 1.0, 1.0)
+    assert grid.candidates((0.0, -2.13e-175)).tolist() == [0]
+    assert grid.candidates((1.0, 1.0)).tolist() == [0]
+
+
 def test_the_grid_of_no_lines_has_no_candidates():
     empty = LineSet(np.zeros(0), np.zeros(0), np.zeros((0, 2)), np.zeros((0, 2)))
     grid = line_grid(empty, 0.5)
@@ -239,3 +247,18 @@ def test_localize_starts_at_the_scan_of_the_initial_time_where_the_clock_steps_b
     assert run.skipped == 2
     assert run.tracked[0].index == 2
     assert len(run.tracked) == 6
+
+
+def test_a_dense_scan_is_subsampled_to_the_settings_points():
+    truth = (-1.0, 0.5, 0.3)
+    scan = view(ROOM, truth, seed=7, sigma=0.003)  # 541 returns
+    for most in (0, 60):
+        tracker = LineMapFilter(room_lines(ROOM), FilterSettings(max_points=most))
+        tracker.start((truth[0] + 0.05, truth[1] - 0.04, truth[2] + 0.02))
+        step = tracker.step(scan.points[scan.valid], None)
+        assert step.aligned
+        assert step.pose == pytest.approx(truth, abs=0.01)
+        if most:
+            assert step.pairs <= most
+        else:
+            assert step.pairs > 300

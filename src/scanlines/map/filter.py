@@ -164,12 +164,15 @@ def line_grid(lines: LineSet, reach: float, cell: float = CELL) -> LineGrid:
     if not len(start):
         shape = np.array([0.0, 0.0, cell, 1.0, 1.0])
         return LineGrid(shape, np.zeros(2, np.int64), np.zeros(0, np.int64), reach)
-    lo = np.minimum(start, end).min(axis=0) - reach
-    hi = np.maximum(start, end).max(axis=0) + reach
+    # Half a cell beyond the reach on each side: a point at exactly ``reach`` stays inside.
+    lo = np.minimum(start, end).min(axis=0) - reach - 0.5 * cell
+    hi = np.maximum(start, end).max(axis=0) + reach + 0.5 * cell
     while np.prod(np.floor((hi - lo) / cell) + 1) > MAX_CELLS:
         cell *= 2.0
     nx, ny = (int(v) for v in np.floor((hi - lo) / cell) + 1)
-    half = cell * math.sqrt(0.5)  # the centre's distance to the cell's corners
+    # The centre's distance to the cell's corners, and a hair more: the test below must
+    # not lose a line at exactly ``reach`` to rounding.
+    slack = (reach + cell * math.sqrt(0.5)) * (1.0 + 1e-9) + 1e-12
     ids, cells = [], []
     for line, (a, b) in enumerate(zip(start, end, strict=True)):
         first = np.floor((np.minimum(a, b) - reach - lo) / cell).astype(int)
@@ -180,7 +183,7 @@ def line_grid(lines: LineSet, reach: float, cell: float = CELL) -> LineGrid:
         cx, cy = lo[0] + (ix + 0.5) * cell, lo[1] + (iy + 0.5) * cell
         ab = b - a
         t = np.clip(((cx - a[0]) * ab[0] + (cy - a[1]) * ab[1]) / max(ab @ ab, 1e-18), 0.0, 1.0)
-        near = np.hypot(cx - a[0] - t * ab[0], cy - a[1] - t * ab[1]) <= reach + half
+        near = np.hypot(cx - a[0] - t * ab[0], cy - a[1] - t * ab[1]) <= slack
         cells.append((ix[near] * ny + iy[near]).ravel())
         ids.append(np.full(int(near.sum()), line, dtype=np.int64))
     cell_of = np.concatenate(cells).astype(np.int64)
