@@ -228,6 +228,8 @@ def test_settings_out_of_their_domain_are_refused():
         FilterSettings(line_sigma=-1.0)
     with pytest.raises(ParameterError, match="normal_tolerance"):
         FilterSettings(normal_tolerance=2.0)
+    with pytest.raises(ParameterError, match="normal_window: must be >= 1"):
+        FilterSettings(normal_window=0)
 
 
 def test_localize_starts_at_the_scan_of_the_initial_time_where_the_clock_steps_back():

@@ -115,8 +115,9 @@ class FilterSettings:
             raise ParameterError("FilterSettings: gate_min exceeds gate_max")
         if self.normal_tolerance > math.pi / 2:
             raise ParameterError("FilterSettings.normal_tolerance: at most 90 degrees")
-        if self.iterations < 1 or self.min_pairs < 1:
-            raise ParameterError("FilterSettings: iterations and min_pairs must be >= 1")
+        for name in ("iterations", "min_pairs", "normal_window", "line_returns"):
+            if getattr(self, name) < 1:
+                raise ParameterError(f"FilterSettings.{name}: must be >= 1")
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
