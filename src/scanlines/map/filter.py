@@ -101,7 +101,7 @@ class FilterSettings:
     iterations: int = 10
     tolerance: float = 1e-5
     min_pairs: int = 10
-    max_chi_square: float = 30.0
+    max_chi_square: float = 16.27
     max_points: int = 400
 
     def __post_init__(self) -> None:
