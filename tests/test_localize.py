@@ -107,6 +107,7 @@ def test_localize_command_on_the_intel_excerpt(tmp_path):
     )  # fmt: skip
     assert ran.returncode == 0, ran.stderr
     assert "5 before time" in ran.stdout
+    assert "odometry as learnt: heading drift" in ran.stdout
     poses = load_trajectory(tmp_path / "p.tum")
     assert len(poses.times) == 295
     covariances = json.loads((tmp_path / "p.cov.json").read_text())["records"]

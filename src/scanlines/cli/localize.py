@@ -15,8 +15,9 @@ def register(app: typer.Typer) -> None:
     app.command(
         "localize",
         help="Track a log on a saved line map (the .json `scanlines map` writes) from a given "
-        "pose: odometry as the prior, each scan aligned to the map's lines; writes the poses "
-        "(TUM) and their covariances (NAME.cov.json).",
+        "pose: odometry as the prior (its heading drift, scale and the sensor's lever learnt "
+        "on the way), each scan's returns matched to the map's lines; writes the poses (TUM) "
+        "and their covariances (NAME.cov.json).",
     )(guarded(localize_command))
 
 
@@ -81,6 +82,11 @@ def localize_command(
         f"{len(run.tracked)} scans localised on {len(lines.rho)} map lines ({aligned} aligned), "
         f"{run.skipped} before time {initial[0]:g} skipped; {read / seconds:.0f} scans/s; "
         f"wrote {path} and {sidecar}"
+    )
+    typer.echo(
+        f"odometry as learnt: heading drift {math.degrees(run.drift):+.2f} deg per metre, "
+        f"distance scale {100 * run.scale:+.1f} %, sensor at ({run.lever[0]:+.3f}, "
+        f"{run.lever[1]:+.3f}) m on the odometry's frame"
     )
     if run.not_fit:
         typer.echo(

@@ -14,7 +14,8 @@ stood), ``build`` (a log to a map), ``export`` (GeoJSON, SVG, DXF, JSON), ``hold
 (the map scored on scans it did not see: ``scanlines eval --map``), ``align`` (a scan
 pulled onto the map from its pose), ``tracking`` (odometry as the prior, each scan aligned:
 ``scanlines map --align``), ``localize`` (a log tracked on a saved map:
-``scanlines localize``).
+``scanlines localize``) and ``filter`` (its filter: the odometry's errors learnt, returns
+matched to map lines through a grid).
 """
 
 from scanlines.map.build import MapBuild, build_map

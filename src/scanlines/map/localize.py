@@ -10,19 +10,24 @@
         run = localize(reader.enumerate(), lines, frame, (t0, (x0, y0, yaw0)))
     run.tracked                                            # poses, covariances, status
 
-Each scan from time ``t0`` on (earlier scans are skipped) is predicted from the last pose
-and its odometry increment; its returns are aligned to the map's lines
-(:func:`~scanlines.map.tracking.track_points`) with the increment's noise (``Q`` of
-:class:`~scanlines.map.tracking.TrackSettings`) as the prior (the first scan: the initial
-pose's, :data:`INITIAL_SIGMA`), and the fit's covariance is the pose's. A scan that does not
-fit is reported (``status`` ``"did not fit"``), not forced: its predicted pose stands with
-its covariance propagated from the last fit (``F P F' + G Q G'``); each further miss widens
-the gate and the prior (``Q (1 + misses)``) until a scan fits again.
+The run starts at the scan of time ``t0``: the first (in the log's order) within
+:data:`START_TOLERANCE` of it, else the first after it; the scans before it are skipped.
+From there every scan is tracked in the log's order, whatever its clock says: a raw log's
+clock may step back (the raw Intel scans' by up to 0.9 s, 265 times) while its odometry
+runs on, and the log's order is the order of the odometry. So the start is chosen among
+the scans up to :data:`START_WINDOW` past ``t0``: on the raw Intel scans the scan stamped
+33.108 s comes before the one stamped 32.907 s, and the robot turned 6.7 degrees between
+them. Each scan goes through :class:`~scanlines.map.filter.LineMapFilter`:
+the pose predicted from the last one by the odometry increment (corrected by the odometry's
+heading drift, scale and the sensor's lever, which the filter learns), then its returns
+matched to the map's lines. A scan that does not fit is reported (``status`` ``"did not
+fit"``), not forced: its predicted pose stands with the covariance grown by the increment's
+noise, which widens the gate of the next scans until one fits again.
 
-The prior is the increment's noise, not the propagated covariance: with the latter (the
-first version) a corridor's weak and partly wrong pull along its axis won over the odometry,
-and on the raw Intel scans the track slid off the map at 683 s for good (RMSE 5.5 m over 345
-keyframes, against 0.21 m now: docs/MEASUREMENTS.md).
+Earlier versions (docs/MEASUREMENTS.md) took only the increment's noise as each fit's prior
+and searched every map line for every return: 0.21 m RMSE over the raw Intel keyframes at
+252 scans/s; the filter, its matching (local lines, a grid of the map's lines) and the
+odometry's learnt errors give the figures measured there now.
 """
 
 from __future__ import annotations
@@ -30,7 +35,7 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -38,23 +43,17 @@ import numpy as np
 from scanlines.errors import ScanlinesError
 from scanlines.map.align import LineSet
 from scanlines.map.build import TrackedPose
+from scanlines.map.filter import INITIAL_SIGMA, FilterSettings, LineMapFilter
 from scanlines.map.frame import LocalFrame
-from scanlines.map.tracking import TrackSettings, track_points
-from scanlines.poses import Pose, compose, relative_pose
+from scanlines.poses import Pose, relative_pose
 from scanlines.scan import Scan
 
 __all__ = ["Localisation", "MapFileError", "localize", "read_line_map"]
 
-#: The prior (standard deviations: metres, radians) about the initial pose given.
-INITIAL_SIGMA = (0.1, math.radians(3.0))
-#: The share of a scan's returns that must meet a map line: lower than a map's own
-#: (a saved map may miss what has changed since, and covers only where it was made).
-MIN_SHARE = 0.1
-#: Gauss-Newton stops at steps below this (0.1 mm, 0.006 deg): 30 % less time than
-#: the mapping default (1e-6) for the same poses on the raw Intel scans.
-TOLERANCE = 1e-4
-#: A scan this much (seconds) before the initial time still starts the run.
+#: A scan this close (seconds) to the initial time is the scan of the initial pose.
 START_TOLERANCE = 0.01
+#: The scans read past the initial time (seconds of the log's clock) to find its scan.
+START_WINDOW = 1.0
 
 
 class MapFileError(ScanlinesError, ValueError):
@@ -109,34 +108,37 @@ class Localisation:
     tracked: list[TrackedPose] = field(default_factory=list)
     skipped: int = 0
     without_pose: int = 0
+    #: The odometry's errors as learnt at the end (:class:`~scanlines.map.filter.
+    #: LineMapFilter`): heading drift (radians per metre), scale error, the sensor's lever.
+    drift: float = 0.0
+    scale: float = 0.0
+    lever: tuple[float, float] = (0.0, 0.0)
 
     @property
     def not_fit(self) -> int:
         return sum(1 for t in self.tracked if t.status == "did not fit")
 
 
-def _widened(settings: TrackSettings, misses: int) -> TrackSettings:
-    """``settings`` with the gate and the largest correction widened after ``misses``
-    scans in a row that did not fit (their poses predicted only), so that tracking can
-    catch the map again: by half the gate per miss, to at most 1 m and 30 degrees."""
-    if not misses:
-        return settings
-    grow = 1.0 + 0.5 * misses
-    return replace(
-        settings,
-        gate=min(settings.gate * grow, 1.0),
-        max_shift=min(max(settings.max_shift, settings.gate * grow), 1.0),
-        max_turn=min(settings.max_turn * grow, math.radians(30.0)),
-    )
-
-
-def _propagate(covariance: np.ndarray, pose: Pose, increment: Pose, noise: np.ndarray):
-    """The covariance of ``compose(pose, increment)`` from that of ``pose`` and ``noise``."""
-    c, s = math.cos(pose[2]), math.sin(pose[2])
-    dx, dy = increment[0], increment[1]
-    f = np.array([[1.0, 0.0, -s * dx - c * dy], [0.0, 1.0, c * dx - s * dy], [0.0, 0.0, 1.0]])
-    g = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-    return f @ covariance @ f.T + g @ noise @ g.T
+def _from_start(indexed: Iterable[tuple[int, Scan]], t0: float, run: Localisation):
+    """``indexed`` from the scan of time ``t0`` on (module docstring), counting the scans
+    skipped before it in ``run``."""
+    scans = iter(indexed)
+    pending: list[tuple[int, Scan]] = []
+    for index, scan in scans:
+        t = scan.timestamp
+        if not pending and (t is None or t < t0 - START_TOLERANCE):
+            run.skipped += 1
+            continue
+        pending.append((index, scan))
+        if t is not None and t > t0 + START_WINDOW:
+            break
+    times = [scan.timestamp for _, scan in pending]
+    near = [k for k, t in enumerate(times) if t is not None and abs(t - t0) <= START_TOLERANCE]
+    after = [k for k, t in enumerate(times) if t is not None and t >= t0]
+    first = near[0] if near else after[0] if after else len(pending)
+    run.skipped += first
+    yield from pending[first:]
+    yield from scans
 
 
 def localize(
@@ -146,42 +148,35 @@ def localize(
     initial: tuple[float, Pose],
     *,
     poses: Callable[[int, Scan], Pose | None] | None = None,
-    settings: TrackSettings | None = None,
+    settings: FilterSettings | None = None,
+    initial_sigma: tuple[float, float] = INITIAL_SIGMA,
 ) -> Localisation:
     """Track ``indexed`` scans on ``lines`` (local ``frame``) from ``initial``: a time
-    and a world pose. ``poses``: each scan's odometry (default: the pose it carries)."""
-    settings = settings or TrackSettings(min_share=MIN_SHARE, tolerance=TOLERANCE)
+    and a world pose (standard deviations ``initial_sigma``: metres, radians). ``poses``:
+    each scan's odometry (default: the pose it carries)."""
     t0, start = initial
     run = Localisation(frame)
+    tracker = LineMapFilter(lines, settings)
     odometry_of = poses or (lambda index, scan: scan.pose)
-    pose: Pose | None = None
     last_odometry: Pose | None = None
-    covariance = np.diag([INITIAL_SIGMA[0] ** 2] * 2 + [INITIAL_SIGMA[1] ** 2])
-    misses = 0
-    for index, scan in indexed:
-        if scan.timestamp is None or scan.timestamp < t0 - START_TOLERANCE:
-            run.skipped += 1
-            continue
+    for index, scan in _from_start(indexed, t0, run):
         odometry = odometry_of(index, scan)
         if odometry is None:
             run.without_pose += 1
             continue
-        first = pose is None or last_odometry is None
-        if first:
-            predicted: Pose = frame.pose(start)
+        if last_odometry is None:
+            tracker.start(frame.pose(start), initial_sigma)
+            increment = None
         else:
             increment = relative_pose(last_odometry, odometry)
-            predicted = compose(pose, increment)
-            noise = settings.increment_covariance(increment)
-            covariance = _propagate(covariance, pose, increment, noise)
-        prior = covariance if first else noise * (1.0 + misses)
-        fit = track_points(scan.points[scan.valid], predicted, prior, lines,
-                           _widened(settings, misses))  # fmt: skip
-        pose, last_odometry = fit.pose, odometry
-        if fit.used:
-            covariance = fit.covariance  # else the propagated covariance stands
-        misses = 0 if fit.used else misses + 1
-        status = "aligned" if fit.used else "did not fit"
-        run.tracked.append(TrackedPose(index, scan.timestamp, frame.pose(odometry), predicted,
-                                       fit.pose, covariance, status))  # fmt: skip
+        step = tracker.step(scan.points[scan.valid], increment)
+        last_odometry = odometry
+        status = "aligned" if step.aligned else "did not fit"
+        run.tracked.append(
+            TrackedPose(index, scan.timestamp, frame.pose(odometry), step.predicted, step.pose,
+                        step.covariance, status)
+        )  # fmt: skip
+    if tracker.state is not None:
+        run.drift, run.scale = float(tracker.state[3]), float(tracker.state[4])
+        run.lever = (float(tracker.state[5]), float(tracker.state[6]))
     return run

@@ -1,0 +1,108 @@
+// Localisation on a line map (scanlines/map/tracking.hpp): one scan's filter step, called by
+// scanlines.map.filter, which builds the grid and documents the settings.
+#include "arrays.hpp"
+#include "scanlines/map/tracking.hpp"
+
+namespace scanlines::bind {
+
+namespace {
+
+using InTable = In<double, nb::ndim<2>>;
+
+// The settings in the order of scanlines.map.filter.FilterSettings.kernel_values().
+constexpr std::size_t PARAMS = 23;
+
+TrackParams params_of(const InReals& values) {
+    if (values.shape(0) != PARAMS) throw nb::value_error("the filter takes 23 settings");
+    const double* v = values.data();
+    auto count = [](double x) { return static_cast<Index>(x); };
+    TrackParams p{};
+    p.odometry_floor = v[0];
+    p.odometry_per_metre = v[1];
+    p.turn_floor = v[2];
+    p.turn_per_radian = v[3];
+    p.turn_per_metre = v[4];
+    p.drift_walk = v[5];
+    p.scale_walk = v[6];
+    p.normal_window = count(v[7]);
+    p.neighbour_gap = v[8];
+    p.flatness = v[9];
+    p.normal_cosine = v[10];
+    p.gate_base = v[11];
+    p.gate_sigmas = v[12];
+    p.gate_min = v[13];
+    p.gate_max = v[14];
+    p.line_returns = count(v[15]);
+    p.return_sigma = v[16];
+    p.line_sigma = v[17];
+    p.huber = v[18];
+    p.iterations = count(v[19]);
+    p.tolerance = v[20];
+    p.min_pairs = count(v[21]);
+    p.max_chi_square = v[22];
+    p.max_points = 0;
+    return p;
+}
+
+nb::tuple track_scan_binding(const InReals& state, const InTable& covariance,
+                             const InReals& increment, bool first, const InReals& x,
+                             const InReals& y, const InReals& rho, const InReals& alpha,
+                             const InTable& start, const InTable& end, const InReals& shape,
+                             const InInts& cell_start, const InInts& cell_lines,
+                             const InReals& settings, Index max_points) {
+    constexpr std::size_t n = TRACK_STATE;
+    if (state.shape(0) != n || covariance.shape(0) != n || covariance.shape(1) != n)
+        throw nb::value_error("the state has 7 values and its covariance 7 x 7");
+    if (increment.shape(0) != 3) throw nb::value_error("an increment is x, y, theta");
+    if (x.shape(0) != y.shape(0)) throw nb::value_error("x and y must have one length");
+    const std::size_t lines = rho.shape(0);
+    if (alpha.shape(0) != lines || start.shape(0) != lines || end.shape(0) != lines ||
+        start.shape(1) != 2 || end.shape(1) != 2)
+        throw nb::value_error("rho, alpha, start and end must describe the same lines");
+    if (shape.shape(0) != 5) throw nb::value_error("the grid's shape is x0, y0, cell, nx, ny");
+    const Index nx = static_cast<Index>(shape.data()[3]), ny = static_cast<Index>(shape.data()[4]);
+    if (nx < 1 || ny < 1 || static_cast<Index>(cell_start.shape(0)) != nx * ny + 1)
+        throw nb::value_error("the grid has nx * ny + 1 cell starts");
+    // The grid is built once by scanlines.map.filter.LineGrid, which checks it; here only
+    // its ends (the kernel skips a cell or line id out of range rather than read past).
+    const Index total = static_cast<Index>(cell_lines.shape(0));
+    if (cell_start.data()[0] != 0 || cell_start.data()[nx * ny] != total)
+        throw nb::value_error("the grid's cell starts must run from 0 to its number of ids");
+    TrackParams params = params_of(settings);
+    params.max_points = max_points;
+    TrackVector s{};
+    TrackMatrix c{};
+    for (std::size_t i = 0; i < n; ++i) s[i] = state.data()[i];
+    for (std::size_t i = 0; i < n * n; ++i) c[i] = covariance.data()[i];
+    LineGrid grid{view(rho),
+                  view(alpha),
+                  View<double>(start.data(), static_cast<Index>(2 * lines)),
+                  View<double>(end.data(), static_cast<Index>(2 * lines)),
+                  shape.data()[0],
+                  shape.data()[1],
+                  shape.data()[2],
+                  nx,
+                  ny,
+                  view(cell_start),
+                  view(cell_lines)};
+    TrackStep step;
+    {
+        nb::gil_scoped_release unlocked;
+        step = track_scan(s, c, first ? nullptr : increment.data(), view(x), view(y), grid, params);
+    }
+    Reals out_state(step.state.begin(), step.state.end());
+    Reals out_cov(step.covariance.begin(), step.covariance.end());
+    return nb::make_tuple(to_numpy(std::move(out_state)), to_numpy(std::move(out_cov), {n, n}),
+                          nb::make_tuple(step.predicted[0], step.predicted[1], step.predicted[2]),
+                          step.pairs, step.lines, step.chi_square, static_cast<int>(step.status));
+}
+
+}  // namespace
+
+void bind_tracking(nb::module_& m) {
+    m.def("track_scan", &track_scan_binding,
+          "One step of the line-map filter (scanlines.map.filter): predict with the odometry "
+          "increment, align the scan's returns to the map's lines.");
+}
+
+}  // namespace scanlines::bind

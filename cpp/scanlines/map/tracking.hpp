@@ -1,0 +1,79 @@
+// Localisation on a line map, one scan at a time: an extended Kalman filter whose state is
+// the pose and the odometry's two systematic errors (src/scanlines/map/filter.py documents
+// the model; this is its kernel).
+#pragma once
+
+#include <array>
+
+#include "scanlines/core.hpp"
+
+namespace scanlines {
+
+// The filter's state: the sensor's x, y, theta (metres, radians), the odometry's heading drift
+// per metre driven (radians per metre), its distance scale error (a share: 0.02 = 2 % too
+// long), and where the sensor sits in the odometry's frame (x, y metres: the lever that
+// moves the sensor when the robot turns in place).
+constexpr Index TRACK_STATE = 7;
+using TrackVector = std::array<double, TRACK_STATE>;
+using TrackMatrix = std::array<double, TRACK_STATE * TRACK_STATE>;  // row-major
+
+// The map's lines and a uniform grid over them: cell (i, j) (i along x) lists the lines
+// within the grid's reach of the cell, ids cell_lines[cell_start[c] .. cell_start[c + 1]) of
+// cell c = i * ny + j.
+struct LineGrid {
+    View<double> rho, alpha, start, end;  // start, end: L x 2, row-major
+    double x0, y0, cell;
+    Index nx, ny;
+    View<Index> cell_start, cell_lines;
+};
+
+struct TrackParams {
+    // The odometry increment's noise: a floor and a share of the distance (x, y); a floor, a
+    // share of the turn and a share per metre driven (theta); the drift's and the scale's
+    // random walk per metre driven.
+    double odometry_floor, odometry_per_metre;
+    double turn_floor, turn_per_radian, turn_per_metre;
+    double drift_walk, scale_walk;
+    // Association: a return's local line (from `normal_window` neighbours each side within
+    // `neighbour_gap`, its spread across no more than `flatness` times its spread along) must
+    // lie within `normal_tolerance` (cosine) of the map line's; the gate of a return is
+    // gate_base + gate_sigmas * (its position's standard deviation), within [gate_min,
+    // gate_max]; a map line counts when at least `line_returns` returns meet it.
+    Index normal_window;
+    double neighbour_gap, flatness, normal_cosine;
+    double gate_base, gate_sigmas, gate_min, gate_max;
+    Index line_returns;
+    // The residual's noise: a return's own, and a map line's (shared by the returns on it:
+    // a line's weight is capped); the Huber width in standard deviations.
+    double return_sigma, line_sigma, huber;
+    // Gauss-Newton: the most steps and the step at which they stop; the returns a fit needs;
+    // the largest squared Mahalanobis distance of the correction from the prediction.
+    Index iterations;
+    double tolerance;
+    Index min_pairs;
+    double max_chi_square;
+    Index max_points;
+};
+
+// What became of a scan: aligned, too few returns near a map line, or a correction too far
+// from the prediction for its covariance.
+enum class TrackStatus : int { aligned = 0, too_few_pairs = 1, inconsistent = 2 };
+
+struct TrackStep {
+    TrackVector state;
+    TrackMatrix covariance;
+    std::array<double, 3> predicted;
+    Index pairs;
+    Index lines;
+    double chi_square;
+    TrackStatus status;
+};
+
+// The filter's step for one scan: predict with the odometry `increment` (x, y, theta in the
+// last pose's frame; null: the first scan, no prediction), then update with the scan's
+// returns (x, y in the sensor frame, beam order) on the map.
+TrackStep track_scan(const TrackVector& state, const TrackMatrix& covariance,
+                     const double* increment, View<double> x, View<double> y,
+                     const LineGrid& grid, const TrackParams& params);
+
+}  // namespace scanlines
