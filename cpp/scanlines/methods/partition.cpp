@@ -87,7 +87,7 @@ ScanResult partition_scan(View<double> ranges, View<bool> valid, const Stack& se
     Reals sigma(ret.r.size());
     for (std::size_t p = 0; p < sigma.size(); ++p) sigma[p] = noise_at(noise, ret.r[p]);
     const Objective objective{s.penalty, s.clutter_cost, s.model_error, s.min_points,
-                              Residual::ACROSS_LINE, false};
+                              Residual::ALONG_BEAM, false};
     Reals once(ret.r.size(), 1.0);  // every return one observation
     Partition part = best_partition(ret, sigma, once, n_beams, sensor.step, objective);
     if (ring && part.runs.a.size() > 1) {
@@ -136,7 +136,7 @@ std::pair<Ints, Ints> partition_optimal_runs(const Reals& x, const Reals& y, con
     ret.y = y;
     Sums sums = weighted_sums(ret, sigma, Reals(x.size(), 1.0), model_error, Flags(x.size(), true));
     Runs runs = optimal_runs(sums, opens,
-                             {penalty, clutter_cost, model_error, min_points, Residual::ACROSS_LINE, false});
+                             {penalty, clutter_cost, model_error, min_points, Residual::ALONG_BEAM, false});
     return {runs.a, runs.b};
 }
 

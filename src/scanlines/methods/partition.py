@@ -5,10 +5,15 @@ line segments and single returns left out as clutter, so that the total cost
 
     sum over segments of  (chi2 / 2 + penalty)  +  clutter_cost x (returns left out)
 
-is smallest. A segment's ``chi2`` is its weighted total-least-squares residual: each return
-``p`` weighs ``1 / (sigma(r_p)^2 + model_error^2)``, with ``sigma(r)`` the range noise
-measured from the data (the sensor profile's noise line, else the scan's own,
-:mod:`scanlines.steps.noise`) and ``model_error`` the flatness of real walls. The costs are
+is smallest. A segment's ``chi2`` is its weighted residual along the beams: the depth of
+its returns along their mean bearing regressed on their lateral position (range noise moves
+a return along its beam, so a short piece of a wall sampled denser than its noise cannot
+turn its line towards the beams to explain the noise), the model error, which lies across
+the wall, growing along the beams with the segment's slope. Each return ``p`` weighs
+``1 / (sigma(r_p)^2 + model_error^2)``, with ``sigma(r)`` the range noise measured from the
+data (the sensor profile's noise line, else the scan's own, :mod:`scanlines.steps.noise`)
+and ``model_error`` the flatness of real walls. The lines reported are the total-least-squares
+lines of each segment's returns. The costs are
 negative log-likelihoods in nats, so ``penalty`` and ``clutter_cost`` are nats too: a segment
 is cut where the fit improves by more than the price of one more segment, a return is left
 out where its residual costs more than ``clutter_cost`` (about ``sqrt(2 clutter_cost)``

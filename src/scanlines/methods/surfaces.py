@@ -5,18 +5,16 @@ returns left out as clutter, minimising :mod:`~scanlines.methods.partition`'s co
 
     sum over segments of  (chi2 / 2 + penalty)  +  clutter_cost x (returns left out)
 
-exactly (dynamic programming with PELT pruning), with three changes that make it the
-default:
+exactly (dynamic programming with PELT pruning), a segment's chi2 measured along the beams
+as there, with these changes:
 
-* **The residual is measured along the beams.** Range noise moves a return along its beam,
-  so a segment's ``chi2`` is the weighted least-squares residual of the depth along the
-  segment's mean bearing against the lateral position (O(1) from the same prefix sums). A
-  short piece of a wall sampled more densely than its noise can no longer turn its line
-  towards the beams to explain the noise, so dense walls stay whole at any beam count.
 * **A return weighs its footprint.** Each return counts ``min(1, r x increment /
-  footprint)`` observations (in the chi2 and in the clutter cost alike): the errors of a
-  finely sampled wall (millimetres of waviness, the beam's spot) are correlated along it,
-  and counting thousands of returns as independent would turn that waviness into cuts.
+  footprint)`` observations in the chi2 (leaving a return out costs the same for each): the
+  errors of a finely sampled wall (millimetres of waviness, the beam's spot) are correlated
+  along it, and counting thousands of returns as independent would turn that waviness into cuts
+  (at least 0.1: ten returns count as one observation at the finest sampling).
+* **A lone spike does not cut a surface.** A return off the surface its two neighbours
+  share opens no new cluster, and a run may span a left-out return at the clutter cost.
 * **Events mark where surfaces end.** Breakpoints and corners are read between the held
   returns of neighbouring segments, so a spike or a mixed pixel left out inside a wall is
   no event; a breakpoint where the facing returns are farther apart than a surface seen at
