@@ -230,7 +230,7 @@ def test_a_notebook_computes_the_tasks_on_its_own_cluster(logs, local_dataset, t
 def test_a_changed_sensor_profile_is_not_taken_for_done(logs, tmp_path) -> None:
     from scanlines.io import open_log
     from scanlines.outputs import OutputError
-    from scanlines.sensor_profile import estimate_profile
+    from scanlines.sensor.profile import estimate_profile
 
     profile = tmp_path / "sensor.json"
     estimate_profile(list(open_log(sample("intel")))).save(profile)

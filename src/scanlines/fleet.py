@@ -197,7 +197,7 @@ def _task_profile(task: ChunkTask) -> Any:
     """The sensor profile file given, else the log's own, measured from its first scans
     as ``scanlines run`` does (the same for every chunk of the log)."""
     from scanlines.runner import log_profile
-    from scanlines.sensor_profile import ProfileError, read_profile
+    from scanlines.sensor.profile import ProfileError, read_profile
 
     if task.sensor_profile is not None:
         return read_profile(task.sensor_profile)

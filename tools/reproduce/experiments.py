@@ -68,7 +68,7 @@ from scanlines.evaluation.scenes import make_scene
 from scanlines.evaluation.scores import EventScore, SimilarityScore, Tolerances
 from scanlines.evaluation.specs import MethodSpec, parse_specs
 from scanlines.evaluation.timing import REFERENCE, time_calls
-from scanlines.sensor_profile import SensorProfile, estimate_profile
+from scanlines.sensor.profile import SensorProfile, estimate_profile
 from scanlines.sim import SENSORS
 
 __all__ = [

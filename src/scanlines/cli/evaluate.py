@@ -172,7 +172,7 @@ def eval_command(
 
         others = map_log or real or labels or family or scenes is not None or method or config
         return evaluate_trajectory_command(trajectory, reference, out, bool(others))
-    from scanlines.sensor_profile import read_profile
+    from scanlines.sensor.profile import read_profile
 
     configured = _config_specs(config or [])
     specs = parse_specs([*configured, *(method or ([] if configured else ["adaptive"]))])

@@ -219,7 +219,7 @@ def calibrate_command(
     from scanlines.errors import ParameterError
     from scanlines.io import open_log
     from scanlines.runner import measure_profile, parse_slice
-    from scanlines.sensor_profile import describe
+    from scanlines.sensor.profile import describe
 
     if max_scans < 1:
         raise ParameterError(f"--max-scans must be at least 1, got {max_scans}")

@@ -30,7 +30,7 @@ from scanlines.evaluation.scores import EventScore
 from scanlines.evaluation.specs import MethodSpec, parse_specs
 from scanlines.extraction import END_X, END_Y, START_X, START_Y, Extraction
 from scanlines.scan import Scan
-from scanlines.sensor_profile import SensorProfile, estimate_profile
+from scanlines.sensor.profile import SensorProfile, estimate_profile
 
 __all__ = ["LabelledResult", "LabelledRow", "evaluate_labelled", "fragmentation"]
 

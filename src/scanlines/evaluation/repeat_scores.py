@@ -20,7 +20,7 @@ from scanlines.evaluation.repeat_pairs import (
 )
 from scanlines.evaluation.specs import MethodSpec
 from scanlines.extraction import END_X, END_Y, START_X, START_Y
-from scanlines.sensor_profile import SensorProfile
+from scanlines.sensor.profile import SensorProfile
 
 # --------------------------------------------------------------------------- scores
 

@@ -113,7 +113,7 @@ from scanlines.evaluation.repeat_scores import MethodRepeatability, _score_metho
 from scanlines.evaluation.report import number, write_csv
 from scanlines.evaluation.specs import MethodSpec, parse_specs
 from scanlines.json_values import jsonable
-from scanlines.sensor_profile import ProfileError, SensorProfile, estimate_profile
+from scanlines.sensor.profile import ProfileError, SensorProfile, estimate_profile
 
 __all__ = [
     "TABLE_COLUMNS",

@@ -26,7 +26,7 @@ if TYPE_CHECKING:  # the extraction modules: imported on first use, so that the 
     # served (and the first scan's returns drawn) while they load
     from scanlines.extractor import Extractor
     from scanlines.scan import Scan
-    from scanlines.sensor_profile import SensorProfile
+    from scanlines.sensor.profile import SensorProfile
 
 __all__ = ["MAX_WORLD_SCANS", "NoPoses", "ViewerSession", "methods"]
 
@@ -301,7 +301,7 @@ def _result(extractor: Extractor, scan: Scan) -> dict[str, Any]:
 
 
 def _noise(scan: Scan) -> dict[str, float]:
-    from scanlines.sensor_profile import scan_noise_line
+    from scanlines.sensor.profile import scan_noise_line
 
     return scan_noise_line(scan)._asdict()
 
