@@ -202,9 +202,7 @@ LAYERS = (
     ("scanlines.extractor", "scanlines.sensor", "scanlines.config", "scanlines.config_positions",
      "scanlines.sim"),
     ("scanlines.io", "scanlines.data"),
-    ("scanlines.runner", "scanlines.evaluation", "scanlines.fleet",
-     "scanlines.fleet_executors", "scanlines.fleet_inputs",
-     "scanlines.ros2", "scanlines.map"),
+    ("scanlines.runs", "scanlines.evaluation", "scanlines.ros2", "scanlines.map"),
     ("scanlines.viz", "scanlines.viewer"),
     ("scanlines.cli", "scanlines.__main__"),
 )  # fmt: skip

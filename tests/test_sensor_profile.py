@@ -15,7 +15,7 @@ from scanlines.data import sample
 from scanlines.evaluation.scenes import make_scene
 from scanlines.extraction import END_KINDS
 from scanlines.io import open_log
-from scanlines.runner import run_log_to_file
+from scanlines.runs.runner import run_log_to_file
 from scanlines.sensor.profile import ProfileError, SensorProfile, estimate_profile, read_profile
 from scanlines.sim import get_sensor
 from scenes import scan_of

@@ -5,7 +5,7 @@ Layout of a dataset folder::
     DATASET/segments/log=NAME/part-FIRST.parquet   one row per segment
     DATASET/events/log=NAME/part-FIRST.parquet     one row per breakpoint or corner
     DATASET/scans/log=NAME/part-FIRST.parquet      one row per scan
-    DATASET/_logs/NAME.json                        what made a log's rows (see scanlines.fleet)
+    DATASET/_logs/NAME.json                        what made a log's rows (see scanlines.runs.fleet)
     DATASET/_staging/TABLE/log=NAME/part-*.parquet the parts of a log not done yet
 
 ``FIRST`` is the first scan record of the part (zero-padded), so a part written again

@@ -69,7 +69,7 @@ class ViewerSession:
     sensor_profile:
         The profile every extraction takes; ``None``: measured from the log's first
         scans when first needed, as ``scanlines run`` measures it
-        (:func:`scanlines.runner.log_profile`).
+        (:func:`scanlines.runs.runner.log_profile`).
     config:
         The configuration the page opens with (default: the default method).
     config_later:
@@ -161,7 +161,7 @@ class ViewerSession:
     def _measure_profile(self) -> tuple[SensorProfile | None, str]:
         # From the log itself, as `scanlines run` measures it (not from the store's
         # float32 copy): the same profile, so the same features as a run.
-        from scanlines.runner import log_profile
+        from scanlines.runs.runner import log_profile
 
         try:
             profile = log_profile(self.store.path, self.store.reader_options)
