@@ -194,9 +194,10 @@ def import_cycles(graph: dict[str, list[str]]) -> list[list[str]]:
 #: below it, never one above (the first prefix that matches names a module's area).
 LAYERS = (
     ("scanlines._core", "scanlines.errors", "scanlines.json_values", "scanlines.interrupts",
-     "scanlines.outputs", "scanlines.params", "scanlines.poses", "scanlines.truth",
-     "scanlines.builtin_methods", "scanlines.reader_options"),
+     "scanlines.outputs", "scanlines.params", "scanlines.truth", "scanlines.builtin_methods",
+     "scanlines.reader_options"),
     ("scanlines.scan", "scanlines.extraction"),
+    ("scanlines.geometry",),
     ("scanlines.steps",),
     ("scanlines.methods",),
     ("scanlines.extractor", "scanlines.sensor", "scanlines.config", "scanlines.config_positions",

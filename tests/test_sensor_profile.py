@@ -239,7 +239,7 @@ def _robot_logs(tmp_path, mounting):
     """The Intel excerpt's first scans driven along a curve, logged twice: as FLASER
     records with the laser's and the robot's pose, and as ODOM + RAWLASER1 records (the
     robot's pose only)."""
-    from scanlines.poses import compose
+    from scanlines.geometry.poses import compose
 
     flaser, rawlaser = [], []
     for k, scan in enumerate(_scans("intel")[:12]):

@@ -13,7 +13,6 @@ them). The truth types they score against are :mod:`scanlines.truth`::
     machine           the machine a time was measured on
     report            markdown tables, number formats, JSON values, CSV files
     cases             a scan with truth, labels or neither, and one method's score on it
-    registration      a point-to-line ICP: the relative pose of two scans
     repeatability     scan-to-scan repeatability on real logs, no labels (eval --real)
     bench             the speed of every method (scanlines bench)
     bench_results     what bench measured, as JSON and tables
@@ -29,7 +28,6 @@ __all__ = [
     "evaluate",
     "machine",
     "metrics",
-    "registration",
     "repeatability",
     "report",
     "scenes",

@@ -35,7 +35,7 @@ Frames
 ------
 Pass extractions in the sensor frame, as :func:`scanlines.extract` returns
 them. With ``frame="world"`` the writer moves segments (with
-:func:`scanlines.io.transform.to_world`) and breakpoint/corner points into the
+:func:`scanlines.geometry.transform.to_world`) and breakpoint/corner points into the
 log's world frame using ``scan.pose``; a scan without a pose is then an error.
 Do not transform beforehand as well.
 

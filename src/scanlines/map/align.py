@@ -15,8 +15,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from scanlines.io.transform import points_to_world
-from scanlines.poses import Pose
+from scanlines.geometry.poses import Pose
+from scanlines.geometry.transform import points_to_world
 
 __all__ = [
     "AlignSettings",

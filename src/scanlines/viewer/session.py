@@ -223,7 +223,7 @@ class ViewerSession:
             raise ParameterError(f"{self.store.path.name} has no poses: no world view")
         if first < 0 or last < first:
             raise ParameterError(f"world view takes 0 <= first <= last, got {first}..{last}")
-        from scanlines.io.transform import points_to_world, to_world
+        from scanlines.geometry.transform import points_to_world, to_world
 
         extractor = self.extractor(config)
         self.store.scan(last)  # waits for it; out of range is an error naming the log

@@ -5,7 +5,7 @@ pose of the log's poses, or the identity): the points of the *source* scan ``j``
 moved into the frame of the *target* scan ``i`` and pulled onto the local lines of
 ``i``'s returns::
 
-    from scanlines.evaluation.registration import icp, line_target, relative_pose
+    from scanlines.geometry.registration import icp, line_target, relative_pose
 
     guess = relative_pose(scan_i.pose, scan_j.pose)      # j's frame in i's frame
     fit = icp(scan_j.points[scan_j.valid], line_target(scan_i), guess)
@@ -50,7 +50,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from scanlines.poses import IDENTITY, Pose, compose, invert, relative_pose
+from scanlines.geometry.poses import IDENTITY, Pose, compose, invert, relative_pose
 from scanlines.scan import Scan
 
 __all__ = [
