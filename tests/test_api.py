@@ -195,7 +195,7 @@ def import_cycles(graph: dict[str, list[str]]) -> list[list[str]]:
 LAYERS = (
     ("scanlines._core", "scanlines.errors", "scanlines.json_values", "scanlines.interrupts",
      "scanlines.outputs", "scanlines.params", "scanlines.truth", "scanlines.builtin_methods",
-     "scanlines.reader_options"),
+     "scanlines.reader_options", "scanlines.report"),
     ("scanlines.scan", "scanlines.extraction"),
     ("scanlines.geometry",),
     ("scanlines.steps",),
@@ -203,7 +203,9 @@ LAYERS = (
     ("scanlines.extractor", "scanlines.sensor", "scanlines.config", "scanlines.config_positions",
      "scanlines.sim"),
     ("scanlines.io", "scanlines.data"),
-    ("scanlines.runs", "scanlines.evaluation", "scanlines.ros2", "scanlines.map"),
+    ("scanlines.runs", "scanlines.ros2", "scanlines.map"),
+    ("scanlines.bench",),
+    ("scanlines.evaluation",),
     ("scanlines.viz", "scanlines.viewer"),
     ("scanlines.cli", "scanlines.__main__"),
 )  # fmt: skip

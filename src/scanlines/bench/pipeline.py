@@ -36,9 +36,9 @@ from typing import Any
 
 import numpy as np
 
+from scanlines.bench.machine import cores_busy
 from scanlines.builtin_methods import DEFAULT_METHOD
-from scanlines.evaluation.machine import cores_busy
-from scanlines.evaluation.report import TableData
+from scanlines.report import TableData
 from scanlines.runs.runner import CHUNK_SCANS
 
 __all__ = ["ColdStart", "PipelineResult", "cold_start", "measure_pipeline", "one_pass"]

@@ -1,6 +1,6 @@
 """Writing results down: markdown tables, number formats, CSV files.
 
-Every report of :mod:`scanlines.evaluation` (the ``eval`` outputs, ``RESULTS.md``,
+Every report (the ``eval`` outputs, the ``bench`` tables, ``RESULTS.md``,
 ``PERFORMANCE.md``) and the command line tables write through this one module:
 
 * :func:`number` formats a value, or gives ``-`` when there is none (``None``, NaN,
