@@ -12,8 +12,8 @@ from typing import Annotated, Any, Literal, TypeVar
 import typer
 
 from scanlines.builtin_methods import BUILTIN_METHODS
+from scanlines.cli.interrupts import Terminated, any_terminated, is_interrupt
 from scanlines.errors import ParameterError, ScanlinesError
-from scanlines.interrupts import Terminated, any_terminated, is_interrupt
 from scanlines.reader_options import ReaderOptions
 
 F = TypeVar("F", bound=Callable[..., Any])

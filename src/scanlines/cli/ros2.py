@@ -26,7 +26,7 @@ from scanlines.cli.common import (
     guarded,
     method_options,
 )
-from scanlines.interrupts import is_interrupt
+from scanlines.cli.interrupts import is_interrupt
 
 #: Where :class:`RosArgsCommand` leaves the words of the ``--ros-args`` sections.
 ROS_ARGS = "scanlines.ros_args"
