@@ -193,9 +193,9 @@ def import_cycles(graph: dict[str, list[str]]) -> list[list[str]]:
 #: The package's areas from the bottom up: a module may import its own area and those
 #: below it, never one above (the first prefix that matches names a module's area).
 LAYERS = (
-    ("scanlines._core", "scanlines.errors", "scanlines.json_values",
-     "scanlines.outputs", "scanlines.params", "scanlines.truth", "scanlines.builtin_methods",
-     "scanlines.reader_options", "scanlines.report"),
+    ("scanlines._core", "scanlines.errors", "scanlines.outputs", "scanlines.params",
+     "scanlines.truth", "scanlines.builtin_methods", "scanlines.reader_options",
+     "scanlines.report"),
     ("scanlines.scan", "scanlines.extraction"),
     ("scanlines.geometry",),
     ("scanlines.steps",),

@@ -111,8 +111,7 @@ from scanlines.evaluation.repeat_pairs import (
 from scanlines.evaluation.repeat_scores import MethodRepeatability, _score_method
 from scanlines.evaluation.specs import MethodSpec, parse_specs
 from scanlines.geometry.registration import IcpSettings
-from scanlines.json_values import jsonable
-from scanlines.report import number, write_csv
+from scanlines.report import jsonable, number, write_csv
 from scanlines.sensor.profile import ProfileError, SensorProfile, estimate_profile
 
 __all__ = [

@@ -231,7 +231,7 @@ def _version() -> str:
 
 
 def _jsonable(values: Any) -> Any:
-    from scanlines.json_values import jsonable
+    from scanlines.report import jsonable
 
     return jsonable(values)
 

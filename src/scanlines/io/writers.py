@@ -113,7 +113,6 @@ from scanlines.io.feature_records import (
     json_record,
     json_records,
 )
-from scanlines.json_values import jsonable
 from scanlines.outputs import (
     OutputError,
     check_output,
@@ -123,6 +122,7 @@ from scanlines.outputs import (
     umask,
     write_error,
 )
+from scanlines.report import jsonable
 from scanlines.scan import Scan
 
 __all__ = [

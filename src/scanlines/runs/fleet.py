@@ -229,7 +229,7 @@ def checksum(path: Path) -> str:
 
 
 def _fingerprint(task: ChunkTask, digest: str) -> dict[str, Any]:
-    from scanlines.json_values import jsonable
+    from scanlines.report import jsonable
 
     profile = task.sensor_profile
     return jsonable({"input_sha256": digest, "method": task.method, "preset": task.preset,
