@@ -263,15 +263,6 @@ def test_plot_title_counts_features_in_words():
     assert title == "wall\n1 segment, 0 breakpoints, 0 corners"
 
 
-def test_calling_the_methods_package_is_a_deprecated_alias_of_method_names():
-    import scanlines.methods.adaptive as adaptive_module
-
-    assert adaptive_module.Adaptive.name == "adaptive"
-    with pytest.warns(DeprecationWarning, match="method_names"):
-        listed = scanlines.methods()
-    assert listed == scanlines.method_names()
-
-
 def test_an_extractor_pickles_with_its_parameters():
     import pickle
 
