@@ -62,7 +62,6 @@ __all__ = [
     "STAGING",
     "TABLES",
     "commit_log",
-    "dataset_exists",
     "discard_staged",
     "part_name",
     "remove_empty_folders",
@@ -234,11 +233,6 @@ def _jsonable(values: Any) -> Any:
     from scanlines.report import jsonable
 
     return jsonable(values)
-
-
-def dataset_exists(dataset: Path) -> bool:
-    """True when ``dataset`` holds any table folder."""
-    return any((dataset / name).is_dir() for name in TABLES) if dataset.is_dir() else False
 
 
 def commit_log(dataset: Path, log: str) -> None:
