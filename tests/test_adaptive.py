@@ -331,7 +331,7 @@ def test_constant_noise_model_changes_little_without_noise_growth():
 def test_a_wall_with_centimetres_of_noise_is_one_segment(seed):
     # 3 cm + 3 % of the range (up to 20 cm sigma at 6 m): a fixed 10 cm residual bound
     # cut this wall into pieces at the noise; the bound follows the noise instead.
-    from scanlines.sensor_profile import SensorProfile
+    from scanlines.sensor.profile import SensorProfile
 
     step = math.radians(0.5)
     angles = math.radians(20) + step * np.arange(281)  # 20 to 160 deg

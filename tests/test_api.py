@@ -5,6 +5,7 @@ from __future__ import annotations
 import ast
 import importlib
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -191,20 +192,21 @@ def import_cycles(graph: dict[str, list[str]]) -> list[list[str]]:
 
 
 #: The package's areas from the bottom up: a module may import its own area and those
-#: below it, never one above (the first prefix that matches names a module's area).
+#: below it, never one above (the first prefix that matches names a module's area). The
+#: layout table of docs/ARCHITECTURE.md gives each module and subpackage its layer here.
 LAYERS = (
-    ("scanlines._core", "scanlines.errors", "scanlines.json_values", "scanlines.interrupts",
-     "scanlines.outputs", "scanlines.params", "scanlines.poses", "scanlines.truth",
-     "scanlines.builtin_methods", "scanlines.reader_options"),
+    ("scanlines._core", "scanlines.errors", "scanlines.outputs", "scanlines.params",
+     "scanlines.truth", "scanlines.builtin_methods", "scanlines.reader_options",
+     "scanlines.report"),
     ("scanlines.scan", "scanlines.extraction"),
+    ("scanlines.geometry",),
     ("scanlines.steps",),
     ("scanlines.methods",),
-    ("scanlines.extractor", "scanlines.sensor_profile", "scanlines.sensor_mounting",
-     "scanlines.learned_noise", "scanlines.config", "scanlines.config_positions", "scanlines.sim"),
+    ("scanlines.extractor", "scanlines.sensor", "scanlines.config", "scanlines.sim"),
     ("scanlines.io", "scanlines.data"),
-    ("scanlines.runner", "scanlines.evaluation", "scanlines.fleet",
-     "scanlines.fleet_executors", "scanlines.fleet_inputs",
-     "scanlines.ros2", "scanlines.map"),
+    ("scanlines.runs", "scanlines.ros2", "scanlines.map"),
+    ("scanlines.bench",),
+    ("scanlines.evaluation",),
     ("scanlines.viz", "scanlines.viewer"),
     ("scanlines.cli", "scanlines.__main__"),
 )  # fmt: skip
@@ -240,6 +242,82 @@ def test_modules_import_without_cycles_or_upward_arrows():
         importlib.import_module(name)
 
 
+REPOSITORY = Path(__file__).parents[1]
+SOURCE = REPOSITORY / "src" / "scanlines"
+ARCHITECTURE = REPOSITORY / "docs" / "ARCHITECTURE.md"
+
+
+def test_the_top_level_holds_the_core_types_and_entry_points_only():
+    """At most 12 modules beside ``__init__.py`` and ``__main__.py``; the rest live in
+    subpackages by purpose."""
+    modules = sorted(p.name for p in SOURCE.glob("*.py"))
+    assert len(set(modules) - {"__init__.py", "__main__.py"}) <= 12, modules
+
+
+def test_no_module_is_over_500_lines():
+    lines = {p.relative_to(SOURCE): len(p.read_text().splitlines()) for p in SOURCE.rglob("*.py")}
+    assert {str(name): n for name, n in lines.items() if n > 500} == {}
+
+
+def _section(title: str) -> str:
+    text = ARCHITECTURE.read_text()
+    start = text.index(f"\n## {title}\n")
+    end = text.find("\n## ", start + 1)
+    return text[start : end if end > 0 else len(text)]
+
+
+def layout_table() -> dict[str, tuple[str, str]]:
+    """The package table of docs/ARCHITECTURE.md's "Layout": name -> (layer, what)."""
+    rows = re.findall(r"^\| (\d+|-) \| `([^`]+)` \| (.+) \|$", _section("Layout"), flags=re.M)
+    names = [name for _, name, _ in rows]
+    assert len(names) == len(set(names)), names
+    return {name: (layer, what) for layer, name, what in rows}
+
+
+def test_the_layout_table_names_every_module_and_subpackage_and_nothing_gone():
+    table = layout_table()
+    tree = {p.name for p in SOURCE.glob("*.py")} | {
+        f"{p.name}/" for p in SOURCE.iterdir() if (p / "__init__.py").is_file()
+    }
+    assert sorted(tree - table.keys()) == [], "in the tree, not in the table"
+    assert sorted(table.keys() - tree) == [], "in the table, gone from the tree"
+    for name, (layer, what) in table.items():
+        module = "scanlines." + name.removesuffix(".py").removesuffix("/")
+        expected = "-" if name == "__init__.py" else str(layer_of(module))
+        assert layer == expected, f"{name}: layer {layer} in the table, {expected} in LAYERS"
+        for inner in re.findall(r"`([\w/]+\.py)`", what):
+            path = SOURCE / inner if "/" in inner else SOURCE / name / inner
+            assert path.is_file(), f"{name}: {inner} is gone"
+
+
+def _named_path(token: str) -> bool:
+    """Whether a path the page names exists, from the repository, the package or docs/
+    (``map/fusion.LineMap``: the module ``map/fusion.py``)."""
+    head, _, name = token.rstrip("/").rpartition("/")
+    module = f"{head}/{name.split('.')[0]}.py"
+    bases = (REPOSITORY, SOURCE, REPOSITORY / "docs")
+    return any((base / token).exists() or (base / module).is_file() for base in bases)
+
+
+def test_every_path_the_architecture_page_names_exists():
+    """Paths in backquotes that start at a folder of the repository or of the package
+    (``io/writers.py``, ``cpp/bindings/``, ``map/fusion.LineMap``), and the subpackages
+    of the data-flow picture."""
+    text = ARCHITECTURE.read_text()
+    folders = {p.name for p in (*REPOSITORY.iterdir(), *SOURCE.iterdir()) if p.is_dir()}
+    paths = {
+        token
+        for token in re.findall(r"`([\w.-]+(?:/[\w.-]+)+/?)`", text)
+        if token.split("/")[0] in folders
+    }
+    assert len(paths) > 50
+    assert sorted(token for token in paths if not _named_path(token)) == []
+    (picture,) = re.findall(r"```mermaid\n(.*?)```", text, flags=re.DOTALL)
+    folders = set(re.findall(r"\b([a-z0-9_]+)/", picture.replace("<br/>", " ")))
+    assert folders >= {"io", "steps", "methods", "runs", "map", "ros2", "bench", "evaluation"}
+    assert sorted(f for f in folders if not (SOURCE / f).is_dir() and f != "cpp") == []
+
+
 def test_the_cycle_check_finds_a_planted_circle_and_an_upward_arrow(tmp_path):
     package = tmp_path / "scanlines"
     (package / "io").mkdir(parents=True)
@@ -261,15 +339,6 @@ def test_plot_title_counts_features_in_words():
     scan = scan_of([((2.0, -3.0), (2.0, 3.0))], fov_deg=90, step_deg=1.0)  # one wall
     title = plot_extraction(scan, extract(scan), title="wall").get_title()
     assert title == "wall\n1 segment, 0 breakpoints, 0 corners"
-
-
-def test_calling_the_methods_package_is_a_deprecated_alias_of_method_names():
-    import scanlines.methods.adaptive as adaptive_module
-
-    assert adaptive_module.Adaptive.name == "adaptive"
-    with pytest.warns(DeprecationWarning, match="method_names"):
-        listed = scanlines.methods()
-    assert listed == scanlines.method_names()
 
 
 def test_an_extractor_pickles_with_its_parameters():

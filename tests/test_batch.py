@@ -9,7 +9,7 @@ import scanlines
 from scanlines import Extraction, Extractor, Scan, ScanError
 from scanlines.data import sample
 from scanlines.io import open_log
-from scanlines.runner import run_log
+from scanlines.runs.runner import run_log
 from scanlines.sim import random_scene
 
 

@@ -12,11 +12,11 @@ from pathlib import Path
 import pytest
 
 import scanlines
-from scanlines.evaluation import bench
-from scanlines.evaluation.bench_results import SCHEMA
-from scanlines.evaluation.report import microseconds
+from scanlines.bench import measure
+from scanlines.bench.results import SCHEMA
 from scanlines.methods import REGISTRY
 from scanlines.methods.iepf import Iepf
+from scanlines.report import microseconds
 from tools.bench.performance_page import render_markdown
 
 pytestmark = pytest.mark.slow  # timing runs
@@ -185,10 +185,10 @@ class Boom(Iepf):
 
 def test_failing_method_is_reported_not_fatal(monkeypatch):
     monkeypatch.setitem(REGISTRY, "boom", Boom)
-    config = bench.BenchConfig.quick_config(
+    config = measure.BenchConfig.quick_config(
         methods=("iepf", "boom"), sensors=("lms_1deg",), beam_counts=(100,)
     )
-    result = bench.run(config)
+    result = measure.run(config)
     for dataset in result.datasets:
         assert dataset.timings["iepf"].ok
         assert dataset.timings["boom"].status == "error"
@@ -205,7 +205,7 @@ def test_failing_method_is_reported_not_fatal(monkeypatch):
 
 def test_import_needs_no_rich():
     code = (
-        "import sys, scanlines.evaluation.bench, tools.bench.performance_page; "
+        "import sys, scanlines.bench.measure, tools.bench.performance_page; "
         "print(sorted(m for m in sys.modules if m.startswith(('rich', 'matplotlib', 'typer'))))"
     )
     out = subprocess.run(

@@ -108,7 +108,7 @@ def test_run_csv_in_world_frame(tmp_path):
 
 def _quiet_profile(tmp_path):
     """A sensor profile file, so that `run` measures none (and says nothing about it)."""
-    from scanlines.sensor_profile import SensorProfile
+    from scanlines.sensor.profile import SensorProfile
 
     return SensorProfile(noise_sigma0=0.01, noise_per_metre=0.0).save(tmp_path / "p.json")
 

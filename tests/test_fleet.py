@@ -20,7 +20,7 @@ import pytest
 from distributed import Client, LocalCluster
 
 from scanlines.data import sample
-from scanlines.fleet import run_fleet
+from scanlines.runs.fleet import run_fleet
 
 pytestmark = pytest.mark.slow  # a Dask LocalCluster per test
 
@@ -214,7 +214,7 @@ def test_without_the_extra_the_message_names_it() -> None:
 def test_a_notebook_computes_the_tasks_on_its_own_cluster(logs, local_dataset, tmp_path) -> None:
     import dask
 
-    from scanlines.fleet import fleet_tasks
+    from scanlines.runs.fleet import fleet_tasks
 
     dataset = tmp_path / "features"
     with (
@@ -230,7 +230,7 @@ def test_a_notebook_computes_the_tasks_on_its_own_cluster(logs, local_dataset, t
 def test_a_changed_sensor_profile_is_not_taken_for_done(logs, tmp_path) -> None:
     from scanlines.io import open_log
     from scanlines.outputs import OutputError
-    from scanlines.sensor_profile import estimate_profile
+    from scanlines.sensor.profile import estimate_profile
 
     profile = tmp_path / "sensor.json"
     estimate_profile(list(open_log(sample("intel")))).save(profile)

@@ -20,7 +20,7 @@ from typer.testing import CliRunner
 from scanlines import Scan, extract
 from scanlines.cli.commands import app
 from scanlines.data import sample
-from scanlines.io.transform import to_world
+from scanlines.geometry.transform import to_world
 from scanlines.map import FusionSettings, LineMap, build_map
 from scanlines.map.export import write_map
 from scanlines.map.holdout import loop_lines

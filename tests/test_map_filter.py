@@ -14,11 +14,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from scanlines import Scan
+from scanlines.geometry.poses import compose, relative_pose
 from scanlines.map.align import LineSet, nearest_segments
 from scanlines.map.filter import FilterSettings, LineMapFilter, line_grid
 from scanlines.map.frame import LocalFrame
 from scanlines.map.localize import localize
-from scanlines.poses import compose, relative_pose
 from test_map import view
 from test_map_align import ROOM, room_lines
 

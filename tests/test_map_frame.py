@@ -123,7 +123,7 @@ def test_a_log_at_1e8_m_maps_as_fast_as_at_the_origin(tmp_path, extractor):
 
 def test_a_pose_or_segment_beyond_the_extent_names_the_source_and_scan():
     from scanlines import extract
-    from scanlines.io.transform import to_world
+    from scanlines.geometry.transform import to_world
     from scanlines.map.frame import MapError
     from test_map import view
 
@@ -190,7 +190,7 @@ def test_the_spatial_index_bounds_its_cells_for_a_huge_box():
 def test_fusion_at_the_edge_of_the_extent_maps_as_at_the_origin():
     """The same room at the local origin and 9e4 m from it: the same lines, no warning."""
     from scanlines import extract
-    from scanlines.io.transform import to_world
+    from scanlines.geometry.transform import to_world
     from test_map import view
 
     room = [((-4, -3), (4, -3)), ((4, -3), (4, 3)), ((4, 3), (-4, 3)), ((-4, 3), (-4, -3))]

@@ -14,9 +14,9 @@ from cli_helpers import scanlines
 from scanlines import Scan
 from scanlines.data import sample
 from scanlines.evaluation.trajectory import Trajectory, load_trajectory, trajectory_error
+from scanlines.geometry.poses import compose, relative_pose
 from scanlines.map import build_map
 from scanlines.map.tracking import TrackSettings, tracking_summary
-from scanlines.poses import compose, relative_pose
 from test_map import view
 from test_map_align import ROOM
 

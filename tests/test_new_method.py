@@ -20,7 +20,7 @@ from scanlines.data import sample
 from scanlines.io import open_log
 from scanlines.methods import ClusteredMethod, register, unregister
 from scanlines.params import Param, number, segment_params
-from scanlines.runner import run_log_to_file
+from scanlines.runs.runner import run_log_to_file
 from scanlines.steps.breakpoints import BREAKPOINT_PARAMS
 from scanlines.steps.events import EVENT_PARAMS
 

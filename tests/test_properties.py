@@ -86,7 +86,7 @@ def test_never_fails_and_orders_segments(configuration, scan):
 @settings_fast
 @given(scans())
 def test_every_point_of_a_segment_is_near_its_line(scan):
-    from scanlines.sensor_profile import scan_noise_line
+    from scanlines.sensor.profile import scan_noise_line
     from scanlines.steps.noise import residual_tolerances
 
     result = default(scan)

@@ -12,14 +12,6 @@ import pytest
 
 from cli_helpers import Ran, scanlines
 from scanlines import Scan
-from scanlines.evaluation.registration import (
-    compose,
-    icp,
-    invert,
-    line_target,
-    relative_pose,
-    transform_points,
-)
 from scanlines.evaluation.repeatability import (
     RepeatTolerances,
     candidate_pairs,
@@ -27,6 +19,14 @@ from scanlines.evaluation.repeatability import (
     register_pairs,
     repeatability_of_scans,
     view_overlap,
+)
+from scanlines.geometry.registration import (
+    compose,
+    icp,
+    invert,
+    line_target,
+    relative_pose,
+    transform_points,
 )
 from scanlines.sim import get_sensor, random_scene, simulate
 

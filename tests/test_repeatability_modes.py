@@ -23,7 +23,7 @@ from scanlines.evaluation.repeatability import (
 )
 from scanlines.evaluation.specs import MethodSpec
 from scanlines.io import open_log
-from scanlines.sensor_profile import estimate_profile
+from scanlines.sensor.profile import estimate_profile
 from scanlines.sim import random_scene, simulate
 
 DATA = Path(__file__).parents[1] / "src" / "scanlines" / "data"

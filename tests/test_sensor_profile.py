@@ -15,8 +15,8 @@ from scanlines.data import sample
 from scanlines.evaluation.scenes import make_scene
 from scanlines.extraction import END_KINDS
 from scanlines.io import open_log
-from scanlines.runner import run_log_to_file
-from scanlines.sensor_profile import ProfileError, SensorProfile, estimate_profile, read_profile
+from scanlines.runs.runner import run_log_to_file
+from scanlines.sensor.profile import ProfileError, SensorProfile, estimate_profile, read_profile
 from scanlines.sim import get_sensor
 from scenes import scan_of
 
@@ -239,7 +239,7 @@ def _robot_logs(tmp_path, mounting):
     """The Intel excerpt's first scans driven along a curve, logged twice: as FLASER
     records with the laser's and the robot's pose, and as ODOM + RAWLASER1 records (the
     robot's pose only)."""
-    from scanlines.poses import compose
+    from scanlines.geometry.poses import compose
 
     flaser, rawlaser = [], []
     for k, scan in enumerate(_scans("intel")[:12]):
@@ -298,7 +298,7 @@ def test_calibrate_measures_the_mounting_and_world_frame_runs_use_it(tmp_path):
 
 
 def test_a_mounting_is_only_taken_when_the_recorded_ones_agree():
-    from scanlines.sensor_profile import estimate_mounting
+    from scanlines.sensor.profile import estimate_mounting
 
     assert estimate_mounting([]) is None
     steady = [(0.1, 0.0, math.pi - 0.001), (0.1, 0.0, -math.pi + 0.001)] * 10

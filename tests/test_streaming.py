@@ -17,7 +17,7 @@ from scanlines.data import sample
 from scanlines.extraction import ExtractionTable
 from scanlines.io import open_log
 from scanlines.io.writers import CSV_COLUMNS
-from scanlines.runner import default_jobs, run_log, run_log_to_file
+from scanlines.runs.runner import default_jobs, run_log, run_log_to_file
 
 COLUMNS = ("first", "last", "n_points", "lines", "covariances", "end_kinds")
 EVENTS = ("breakpoints", "corners", "outliers")
@@ -214,6 +214,6 @@ def test_a_process_pool_maps_an_extractor_over_scans(intel):
     ],
 )
 def test_selected_count_bounds_the_progress_bar(in_file, text, expected):
-    from scanlines.runner import parse_slice, selected_count
+    from scanlines.runs.runner import parse_slice, selected_count
 
     assert selected_count(in_file, parse_slice(text)) == expected

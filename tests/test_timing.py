@@ -1,4 +1,4 @@
-"""``scanlines.evaluation.timing``: the one timing rule (the order of calls, not their speed)."""
+"""``scanlines.bench.timing``: the one timing rule (the order of calls, not their speed)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import gc
 
 import pytest
 
-from scanlines.evaluation.timing import time_calls
+from scanlines.bench.timing import time_calls
 
 
 def recorder(name: str, log: list[tuple[str, int]]):

@@ -22,7 +22,7 @@ from scanlines.config import ExtractionConfig, load_config
 from scanlines.data import sample
 from scanlines.errors import ParameterError
 from scanlines.io import open_log
-from scanlines.runner import log_profile
+from scanlines.runs.runner import log_profile
 from scanlines.viewer import ScanStore, ViewerSession
 from scanlines.viewer.app import MAX_BODY_BYTES, STATIC
 from viewer_helpers import long_carmen_log, request, serving

@@ -18,7 +18,7 @@ import pytest
 from scanlines import Extractor, method_names
 from scanlines.config import load_config
 from scanlines.data import sample
-from scanlines.runner import log_profile
+from scanlines.runs.runner import log_profile
 from viewer_helpers import serving
 
 pytestmark = pytest.mark.slow  # headless Chromium

@@ -33,6 +33,7 @@ naming the file (or the ``source`` of a dict) and, where known, the line and the
 from __future__ import annotations
 
 import numbers
+import re
 import shlex
 import tomllib
 from collections.abc import Mapping
@@ -44,7 +45,6 @@ from typing import Any
 import tomli_w
 
 from scanlines.builtin_methods import DEFAULT_METHOD
-from scanlines.config_positions import _line_of, _toml_error
 from scanlines.errors import NO_SUCH_FILE, ParameterError, describe, one_line
 from scanlines.params import Check, Choice, Either, Integer, Number, Pair, resolve
 
@@ -255,6 +255,48 @@ def load_config(path: str | Path) -> ExtractionConfig:
         message, line = _toml_error(str(error))
         raise ConfigError(f"not valid TOML: {message}", source=path, line=line) from None
     return _from_mapping(document, path, text)
+
+
+# ------------------------------------------------------- where in a file a mistake is
+
+_TOML_POSITION = re.compile(r"\s*\(at line (\d+), column (\d+)\)$")
+_TOML_END = re.compile(r"\s*\(at end of document\)$")
+
+
+def _toml_error(text: str) -> tuple[str, int | None]:
+    """tomllib's message without its position, and the line it names."""
+    match = _TOML_POSITION.search(text)
+    if match:
+        return f"{text[: match.start()]} (column {match.group(2)})", int(match.group(1))
+    return _TOML_END.sub(" (at the end of the file)", text), None
+
+
+def _line_of(text: str | None, key: str | None) -> int | None:
+    """The line of the file ``text`` that sets ``key`` (``"method"``, ``"params.k"``),
+    found by a plain scan of the lines (good for the files this module writes and what people
+    write by hand), or ``None``."""
+    if text is None or key is None:
+        return None
+    table, _, name = key.rpartition(".")
+    quoted = rf"(?:{re.escape(name)}|\"{re.escape(name)}\"|'{re.escape(name)}')"
+    assignment = re.compile(rf"\s*{quoted}\s*=")
+    dotted = re.compile(rf"\s*{re.escape(table)}\s*\.\s*{quoted}\s*=") if table else None
+    header = re.compile(r"\s*\[\s*([^\[\]]*?)\s*\]\s*(?:#.*)?$")
+    current, table_line = "", None
+    for number, line in enumerate(text.splitlines(), start=1):
+        found = header.match(line)
+        if found:
+            current = found.group(1).strip("\"'")
+            if current == key:
+                return number
+            if current == table:
+                table_line = number
+            continue
+        if current == table and assignment.match(line):
+            return number
+        if current == "" and dotted is not None and dotted.match(line):
+            return number
+    return table_line
 
 
 # ------------------------------------------------------------------- reading

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from scanlines.json_values import jsonable
+from scanlines.report import jsonable
 
 __all__ = ["END_KINDS", "Extraction", "ExtractionTable", "Segment"]
 

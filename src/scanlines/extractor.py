@@ -17,11 +17,11 @@ import numpy as np
 from scanlines.builtin_methods import BUILTIN_METHODS, DEFAULT_METHOD
 from scanlines.errors import ParameterError, ScanError
 from scanlines.extraction import Extraction, ExtractionTable
-from scanlines.learned_noise import NoiseLearner
 from scanlines.methods import REGISTRY, method_class
 from scanlines.params import resolve
 from scanlines.scan import Scan, as_array, valid_returns
-from scanlines.sensor_profile import SensorProfile, as_profile
+from scanlines.sensor.learned_noise import NoiseLearner
+from scanlines.sensor.profile import SensorProfile, as_profile
 
 __all__ = ["Extractor", "MethodInfo", "ParamInfo", "extract", "method_info", "method_names"]
 
@@ -102,12 +102,12 @@ class Extractor:
     preset:
         A named parameter set of the method (``"paper"``: the paper, literally).
     sensor_profile:
-        A :class:`~scanlines.sensor_profile.SensorProfile` (or the path of one saved
+        A :class:`~scanlines.sensor.profile.SensorProfile` (or the path of one saved
         by ``scanlines calibrate``): the range noise every threshold and covariance
         takes. Without one, each scan's noise is measured from that scan alone; a method
         that learns the noise (``surfaces``) takes each scan's noise from the sensor's
-        scans before it, up to :data:`~scanlines.learned_noise.LEARNED_SCANS` of them
-        (:class:`~scanlines.learned_noise.NoiseLearner`), then keeps that line.
+        scans before it, up to :data:`~scanlines.sensor.learned_noise.LEARNED_SCANS` of them
+        (:class:`~scanlines.sensor.learned_noise.NoiseLearner`), then keeps that line.
     **params:
         Overrides of single parameters (see :func:`method_info`).
 
@@ -332,7 +332,7 @@ def extract(
         A named parameter set of the method; ``"paper"`` runs the adaptive method
         exactly as published.
     sensor_profile:
-        A :class:`~scanlines.sensor_profile.SensorProfile`, or the path of one saved
+        A :class:`~scanlines.sensor.profile.SensorProfile`, or the path of one saved
         by ``scanlines calibrate``: the range noise thresholds and covariances use.
         Without one, the noise is measured from the scan itself.
     **params:

@@ -8,10 +8,11 @@ import math
 import numpy as np
 import pytest
 
-from scanlines import Extractor, Scan, extract, learned_noise
+from scanlines import Extractor, Scan, extract
 from scanlines.data import sample
 from scanlines.io import open_log
-from scanlines.sensor_profile import estimate_profile
+from scanlines.sensor import learned_noise
+from scanlines.sensor.profile import estimate_profile
 
 
 def _wall_ranges(bearings, distance, normal, waviness=0.0, period=0.5):

@@ -7,8 +7,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from scanlines.evaluation.bench_results import BenchResult
-from scanlines.evaluation.report import command_line
+from scanlines.bench.results import BenchResult
+from scanlines.report import command_line
 from tools.bench.performance_page import write_docs
 
 DEFAULT_PAGE = Path("docs/PERFORMANCE.md")

@@ -6,7 +6,7 @@
 481 beams: the SICK TiM571 preset (160 deg at 1/3 deg, the paper's sensor). 181 beams: the
 SICK LMS 1 deg preset widened to 181 beams (-90..+90 deg). Realistic noise, seeded scenes;
 ``repeats`` timed passes over the scans by the project's one timing rule
-(``scanlines.evaluation.timing``: every timed call right after an untimed call on the same
+(``scanlines.bench.timing``: every timed call right after an untimed call on the same
 scan), and the median of all timed calls is printed. Speed is measured here, never asserted in
 tests.
 """
@@ -20,7 +20,7 @@ import math
 import numpy as np
 
 from scanlines import Extractor
-from scanlines.evaluation.timing import time_calls
+from scanlines.bench.timing import time_calls
 from scanlines.sim import get_sensor, random_scene
 
 

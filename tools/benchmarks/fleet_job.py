@@ -68,7 +68,7 @@ def scanlines(*args: object) -> str:
 
 
 def run_once(logs: Path, dataset: Path, jobs: int, scheduler: str | None) -> dict:
-    from scanlines.fleet import run_fleet
+    from scanlines.runs.fleet import run_fleet
 
     shutil.rmtree(dataset, ignore_errors=True)
     started = time.perf_counter()

@@ -6,7 +6,7 @@ checkout against another installed version, each in its own processes, interleav
 The log: the shipped Intel excerpt's records repeated 8 times (2,400 scans), written once
 to a temporary folder. ``batch``: ``Extractor.batch`` over the whole stack with
 ``jobs=1`` and ``jobs=2`` (threads; the kernels release the GIL). ``run``:
-``scanlines.runner.run_log_to_file`` to JSON Lines with ``jobs=1`` and ``jobs=2``, reading,
+``scanlines.runs.runner.run_log_to_file`` to JSON Lines with ``jobs=1`` and ``jobs=2``, reading,
 extracting, encoding and writing (one profile measured first, as ``scanlines run`` does).
 Printed: the median over rounds of each version's scans per second, and the speed-up of
 two jobs over one.
@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 from scanlines import Extractor
 from scanlines.io import open_log
-from scanlines.runner import log_profile, run_log_to_file
+from scanlines.runs.runner import log_profile, run_log_to_file
 
 method, log = sys.argv[1], Path(sys.argv[2])
 scans = list(open_log(log))

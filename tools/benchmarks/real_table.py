@@ -61,8 +61,8 @@ def registered_pairs(path: str, scans, tol, cache: str):
     import hashlib
     import pickle
 
-    from scanlines.evaluation.registration import IcpSettings
     from scanlines.evaluation.repeatability import register_pairs
+    from scanlines.geometry.registration import IcpSettings
 
     if not cache:
         return register_pairs(scans, tol)

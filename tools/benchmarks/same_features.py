@@ -15,7 +15,7 @@ URG). The configurations (:func:`configurations`): every method with its default
 each preset; on the simulated scans also every clustering rule of the
 sequential methods, the adaptive method's alternative steps one at a time and fixed noise
 overrides; every method and preset again
-with each excerpt's sensor profile (:func:`scanlines.sensor_profile.estimate_profile`),
+with each excerpt's sensor profile (:func:`scanlines.sensor.profile.estimate_profile`),
 and through :meth:`scanlines.Extractor.batch` on each excerpt as one stack. Every array
 of every extraction (segments, lines, covariances, end kinds, breakpoints, corners,
 outliers) and each profile's noise line must be equal, NaN equal to NaN; ``compare``
@@ -36,7 +36,7 @@ from scanlines import Extractor, Scan, method_info, method_names
 from scanlines.data import sample
 from scanlines.evaluation.scenes import iter_scenes
 from scanlines.io import open_log
-from scanlines.sensor_profile import estimate_profile
+from scanlines.sensor.profile import estimate_profile
 
 FIELDS = ("first", "last", "n_points", "lines", "covariances", "end_kinds")
 FIELDS += ("breakpoints", "corners", "outliers")

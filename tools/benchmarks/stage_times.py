@@ -7,7 +7,7 @@ their own, so ``scanlines._core.adaptive_stage_seconds`` runs the whole kernel a
 each stage inside it with a steady clock (about 50 ns of clock reads per stage). The stages
 add up to the kernel without its call overhead (the conversion of the arguments and the
 boxing of the table). The whole call and the whole kernel are timed from Python by the
-package's one timing rule (:func:`scanlines.evaluation.timing.time_calls`); every row is the
+package's one timing rule (:func:`scanlines.bench.timing.time_calls`); every row is the
 median of ``repeats`` samples, passes interleaved. Speed is measured here, never asserted in
 tests.
 """
@@ -19,7 +19,7 @@ import argparse
 import numpy as np
 
 from scanlines import Extractor, _core
-from scanlines.evaluation.timing import time_calls
+from scanlines.bench.timing import time_calls
 from scanlines.scan import is_full_circle
 from scanlines.sim import random_scene
 

@@ -50,7 +50,7 @@ def reproduce_command(
         ),
     ] = None,
 ) -> None:
-    from scanlines.evaluation.report import command_line
+    from scanlines.report import command_line
     from tools.reproduce import reproduce
     from tools.reproduce.experiments import ReproduceConfig
 

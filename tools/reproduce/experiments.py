@@ -41,7 +41,7 @@ with its own don't-care rules (see :class:`~scanlines.evaluation.scores.Toleranc
 
 Timing
 ------
-All timings are taken in one process by :mod:`scanlines.evaluation.timing`: per dataset,
+All timings are taken in one process by :mod:`scanlines.bench.timing`: per dataset,
 ``repeats`` passes over every scan, interleaved between methods, every timed extraction
 directly after an untimed one of the same scan by the same method (whose result is the
 one scored). Reported: the median (and 90th percentile) of the samples, microseconds per
@@ -61,14 +61,14 @@ from typing import Any
 import numpy as np
 
 from scanlines import Extraction, ParameterError, Scan, method_names
+from scanlines.bench.machine import load_average, machine_info
+from scanlines.bench.timing import REFERENCE, time_calls
 from scanlines.evaluation.cases import Case, FrameScore, LabelledFrameLike, score_case
 from scanlines.evaluation.evaluate import EvalResult, evaluate
-from scanlines.evaluation.machine import load_average, machine_info
 from scanlines.evaluation.scenes import make_scene
 from scanlines.evaluation.scores import EventScore, SimilarityScore, Tolerances
 from scanlines.evaluation.specs import MethodSpec, parse_specs
-from scanlines.evaluation.timing import REFERENCE, time_calls
-from scanlines.sensor_profile import SensorProfile, estimate_profile
+from scanlines.sensor.profile import SensorProfile, estimate_profile
 from scanlines.sim import SENSORS
 
 __all__ = [

@@ -13,11 +13,11 @@ import math
 
 import numpy as np
 
+from scanlines.bench.timing import REFERENCE
 from scanlines.evaluation.cases import label_tolerance_caption, point_distances
 from scanlines.evaluation.evaluate import tolerance_caption
-from scanlines.evaluation.report import MISSING, markdown_table, number, percent
 from scanlines.evaluation.scores import EventScore
-from scanlines.evaluation.timing import REFERENCE
+from scanlines.report import MISSING, markdown_table, number, percent
 from tools.reproduce.experiments import (
     FIG13_METHODS,
     FIG13_RULE,
@@ -46,7 +46,7 @@ def _machine_line(result: ReproduceResult) -> str:
     return (
         f"**Machine (every time below):** {m.get('cpu')}, {cores}, {m.get('platform')}, "
         f"{m.get('python')}, numpy {m.get('numpy')}{load_text}. All times were measured in "
-        "this one process by one rule (`scanlines.evaluation.timing`): every timed extraction "
+        "this one process by one rule (`scanlines.bench.timing`): every timed extraction "
         "directly follows an untimed extraction of the same scan by the same method (whose "
         f"result is the one scored); per dataset {result.config.repeats} timed pass"
         f"{'es' if result.config.repeats != 1 else ''} over every scan, interleaved between "

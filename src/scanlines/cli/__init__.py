@@ -19,7 +19,7 @@ __all__ = ["app", "main"]
 
 def main() -> None:
     """Console entry point: SIGINT and SIGTERM stop a command cleanly (exit 130, 143)."""
-    from scanlines.interrupts import (
+    from scanlines.cli.interrupts import (
         any_terminated,
         handle_signals,
         ignore_signals,

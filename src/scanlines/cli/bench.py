@@ -10,8 +10,8 @@ import typer
 from scanlines.cli.common import guarded
 
 if TYPE_CHECKING:
-    from scanlines.evaluation.bench_results import BenchResult
-    from scanlines.evaluation.report import TableData
+    from scanlines.bench.results import BenchResult
+    from scanlines.report import TableData
 
 TABLE_WIDTH = 160
 """Console width when the output is not a terminal."""
@@ -94,8 +94,8 @@ def bench_command(
         Path | None, typer.Option("--json", help="Also write the measurements as JSON.")
     ] = None,
 ) -> object:  # the BenchResult (typer evaluates the annotation at start-up)
-    from scanlines.evaluation import bench
-    from scanlines.evaluation.report import command_line
+    from scanlines.bench import measure
+    from scanlines.report import command_line
 
     changes = {
         key: value
@@ -122,12 +122,12 @@ def bench_command(
         changes["beam_counts"] = tuple(beams)
     if no_scaling:
         changes["beam_counts"] = ()
-    make = bench.BenchConfig.quick_config if quick else bench.BenchConfig
+    make = measure.BenchConfig.quick_config if quick else measure.BenchConfig
     config = make(**changes)
     config = config.validated()  # bad input ends here, before anything is timed
 
     with _Progress() as progress:
-        result = bench.run(config, command=command_line(), progress=progress)
+        result = measure.run(config, command=command_line(), progress=progress)
     _print(result)
     if json_path is not None:
         typer.echo(f"wrote {result.to_json(json_path)}")

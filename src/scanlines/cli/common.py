@@ -12,8 +12,8 @@ from typing import Annotated, Any, Literal, TypeVar
 import typer
 
 from scanlines.builtin_methods import BUILTIN_METHODS
+from scanlines.cli.interrupts import Terminated, any_terminated, is_interrupt
 from scanlines.errors import ParameterError, ScanlinesError
-from scanlines.interrupts import Terminated, any_terminated, is_interrupt
 from scanlines.reader_options import ReaderOptions
 
 F = TypeVar("F", bound=Callable[..., Any])
@@ -101,7 +101,7 @@ def guarded(command: F) -> F:
 
 def jobs_option(jobs: int | None) -> int:
     """``--jobs``: at least 1; ``None`` is every core this process may use."""
-    from scanlines.runner import default_jobs
+    from scanlines.runs.runner import default_jobs
 
     if jobs is None:
         return default_jobs()
@@ -221,8 +221,8 @@ def reader_options(
 
 
 def profile_for_run(log: Path, options: ReaderOptions, selection: slice, given: Any):
-    """:func:`scanlines.runner.run_profile`, its note on stderr."""
-    from scanlines.runner import run_profile
+    """:func:`scanlines.runs.runner.run_profile`, its note on stderr."""
+    from scanlines.runs.runner import run_profile
 
     profile, note = run_profile(log, options, selection, given)
     if note:
@@ -231,8 +231,8 @@ def profile_for_run(log: Path, options: ReaderOptions, selection: slice, given: 
 
 
 def with_mounting(log: Path, options: ReaderOptions, profile: Any) -> ReaderOptions:
-    """:func:`scanlines.runner.mounted_options`, its note on stderr."""
-    from scanlines.runner import mounted_options
+    """:func:`scanlines.runs.runner.mounted_options`, its note on stderr."""
+    from scanlines.runs.runner import mounted_options
 
     options, note = mounted_options(log, options, profile)
     if note:

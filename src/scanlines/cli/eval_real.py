@@ -11,7 +11,7 @@ from scanlines.cli.common import NPZ_HELP
 
 if TYPE_CHECKING:
     from scanlines.evaluation.repeatability import RepeatabilityResult
-    from scanlines.sensor_profile import SensorProfile
+    from scanlines.sensor.profile import SensorProfile
 
 RealOption = Annotated[
     list[Path] | None,

@@ -75,7 +75,7 @@ def _print_family(result: EvalResult, out: Path) -> list[Path]:
 
     from scanlines.evaluation.evaluate import tolerance_caption
     from scanlines.evaluation.family import FIGURES, family_rows, worst_rows
-    from scanlines.evaluation.report import number, write_csv
+    from scanlines.report import number, write_csv
     from scanlines.sim import get_sensor
 
     console = Console()

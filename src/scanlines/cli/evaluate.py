@@ -96,9 +96,6 @@ def eval_command(
         int | None,
         typer.Option("--jobs", "-j", help="Processes scoring scenes (default: every core)."),
     ] = None,
-    workers: Annotated[
-        int | None, typer.Option(hidden=True, help="Deprecated alias of --jobs.")
-    ] = None,
     worst: Annotated[int, typer.Option(help="Scans in worst.png.")] = 4,
     plots: Annotated[bool, typer.Option(help="Write bars.png and worst.png.")] = True,
     real: RealOption = None,
@@ -172,7 +169,7 @@ def eval_command(
 
         others = map_log or real or labels or family or scenes is not None or method or config
         return evaluate_trajectory_command(trajectory, reference, out, bool(others))
-    from scanlines.sensor_profile import read_profile
+    from scanlines.sensor.profile import read_profile
 
     configured = _config_specs(config or [])
     specs = parse_specs([*configured, *(method or ([] if configured else ["adaptive"]))])
@@ -236,7 +233,7 @@ def eval_command(
         noise or "realistic",
         tol,
         scene_set,
-        _jobs(jobs, workers),
+        jobs_option(jobs),
         use_clutter,
     )
     paths: list[Path] = []
@@ -263,15 +260,6 @@ def _config_specs(paths: list[Path]) -> list:
         params = tuple(loaded.cli_values().items())
         specs.append(MethodSpec(loaded.method, loaded.preset, params, label=path.name))
     return specs
-
-
-def _jobs(jobs: int | None, workers: int | None) -> int:
-    """``--jobs``, or the deprecated ``--workers`` (said on stderr)."""
-    if workers is not None:
-        typer.echo("scanlines: --workers is deprecated; use --jobs", err=True)
-        if jobs is None:
-            jobs = workers
-    return jobs_option(jobs)
 
 
 def _family_names(count: int, seed: int) -> tuple[str, ...]:

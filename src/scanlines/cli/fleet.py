@@ -1,4 +1,4 @@
-"""``scanlines run`` on several logs: a Parquet dataset (``scanlines.fleet``), or one output
+"""``scanlines run`` on several logs: a Parquet dataset (``scanlines.runs.fleet``), or one output
 per log; one summary of them all."""
 
 from __future__ import annotations
@@ -45,7 +45,7 @@ def run_many(
     else:
         if scans is not None or frame != "sensor":
             raise ParameterError("a parquet dataset holds every scan in the sensor frame")
-        from scanlines.fleet import run_fleet
+        from scanlines.runs.fleet import run_fleet
 
         with _progress() as advance:
             summary = run_fleet(
@@ -67,9 +67,9 @@ def _one_output_per_log(logs, out, output_format, method, preset, params, option
     from scanlines.cli.common import profile_for_run, with_mounting
     from scanlines.errors import ScanlinesError
     from scanlines.extractor import Extractor
-    from scanlines.fleet import FleetSummary, LogOutcome, expand_inputs, log_names
     from scanlines.io import open_log
-    from scanlines.runner import parse_slice, run_log_to_file
+    from scanlines.runs.fleet import FleetSummary, LogOutcome, expand_inputs, log_names
+    from scanlines.runs.runner import parse_slice, run_log_to_file
 
     if not out.is_dir():
         raise ParameterError(f"{out}: several logs are written into a folder that exists")

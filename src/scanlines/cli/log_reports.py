@@ -99,7 +99,7 @@ def _run_with_progress(reader, extractor, selection, out, frame, log, jobs, over
     from rich.console import Console
     from rich.progress import Progress
 
-    from scanlines.runner import run_log, run_log_to_file, selected_count
+    from scanlines.runs.runner import run_log, run_log_to_file, selected_count
 
     total = selected_count(reader.scans_in_file, selection)
     columns = _progress_columns(total is not None)

@@ -73,7 +73,7 @@ def info_command(
     import json
 
     from scanlines.io import open_log
-    from scanlines.runner import describe_log
+    from scanlines.runs.runner import describe_log
 
     options = reader_options(
         fov, angle_convention, topic, angle_min, angle_increment, on_error, max_beams
@@ -142,7 +142,7 @@ def run_command(
     from scanlines.errors import ParameterError
     from scanlines.extractor import Extractor
     from scanlines.io import open_log
-    from scanlines.runner import parse_slice
+    from scanlines.runs.runner import parse_slice
 
     method, preset, params = method_options(method, preset, param, config)
     if _many(logs, out, output_format):
@@ -218,8 +218,8 @@ def calibrate_command(
 
     from scanlines.errors import ParameterError
     from scanlines.io import open_log
-    from scanlines.runner import measure_profile, parse_slice
-    from scanlines.sensor_profile import describe
+    from scanlines.runs.runner import measure_profile, parse_slice
+    from scanlines.sensor.profile import describe
 
     if max_scans < 1:
         raise ParameterError(f"--max-scans must be at least 1, got {max_scans}")
@@ -285,7 +285,7 @@ def plot_command(
     from scanlines.errors import ParameterError
     from scanlines.extractor import Extractor
     from scanlines.io import open_log
-    from scanlines.runner import parse_slice, select
+    from scanlines.runs.runner import parse_slice, select
     from scanlines.viz.figures import save
     from scanlines.viz.scans import plot_extraction, plot_grid
 
@@ -344,7 +344,7 @@ def demo_command(
     from scanlines.data import sample
     from scanlines.extractor import Extractor
     from scanlines.io import open_log
-    from scanlines.runner import default_jobs, run_log_to_file, select
+    from scanlines.runs.runner import default_jobs, run_log_to_file, select
     from scanlines.viz.figures import save
     from scanlines.viz.scans import plot_grid
 

@@ -26,7 +26,7 @@ from scanlines.cli.common import (
     guarded,
     method_options,
 )
-from scanlines.interrupts import is_interrupt
+from scanlines.cli.interrupts import is_interrupt
 
 #: Where :class:`RosArgsCommand` leaves the words of the ``--ros-args`` sections.
 ROS_ARGS = "scanlines.ros_args"
@@ -189,7 +189,7 @@ def _ros_arguments(words: list[str] | None):
 def _node(options, ros, domain_id, loopback, max_scans, duration) -> None:
     from scanlines.extractor import Extractor
     from scanlines.ros2 import LineNode
-    from scanlines.sensor_profile import read_profile
+    from scanlines.sensor.profile import read_profile
 
     path = options.sensor_profile
     profile = None if path is None else read_profile(path)

@@ -29,7 +29,7 @@ def play_log(
     from scanlines.errors import ParameterError
     from scanlines.io import open_log
     from scanlines.ros2 import Player
-    from scanlines.runner import parse_slice, select
+    from scanlines.runs.runner import parse_slice, select
 
     if on_error not in ("fail", "skip"):
         raise ParameterError(f"--on-error must be fail or skip, got {on_error!r}")

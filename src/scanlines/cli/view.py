@@ -69,7 +69,7 @@ def view_command(
     method, preset, params = method_options(method, preset, param, config)
     profile = None
     if sensor_profile is not None:
-        from scanlines.sensor_profile import read_profile
+        from scanlines.sensor.profile import read_profile
 
         profile = read_profile(sensor_profile)
     options = reader_options(

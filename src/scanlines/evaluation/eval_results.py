@@ -11,11 +11,10 @@ from typing import Any
 
 import numpy as np
 
-from scanlines.evaluation.report import number, write_csv
 from scanlines.evaluation.scenes import SceneCase, SceneSet, make_scene
 from scanlines.evaluation.scores import ScanScore, Summary, Tolerances
 from scanlines.evaluation.specs import MethodSpec
-from scanlines.json_values import jsonable
+from scanlines.report import jsonable, number, write_csv
 
 WORST_BY = (
     "event F1: 2 TP / (2 TP + FP + FN) with breakpoints and corners pooled "

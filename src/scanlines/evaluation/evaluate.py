@@ -18,7 +18,7 @@ like every method. :func:`worst_scans` ranks the scans by event F1; the figures 
 Timing
 ------
 ``us`` is the time of the extraction call alone, taken by
-:mod:`scanlines.evaluation.timing` (one pass per scene: every spec on the scene's scan,
+:mod:`scanlines.bench.timing` (one pass per scene: every spec on the scene's scan,
 an untimed call, then the timed one), in microseconds; summaries report its median (and
 mean) per sensor and spec. With ``workers > 1`` the processes share the machine, so
 times are less comparable; compare speeds with ``scanlines bench``. For the truth row it
@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 
 from scanlines import Extraction, ParameterError
+from scanlines.bench.timing import time_calls
 from scanlines.evaluation.eval_results import (
     TABLE_COLUMNS,
     WORST_BY,
@@ -59,7 +60,6 @@ from scanlines.evaluation.scenes import (
 )
 from scanlines.evaluation.scores import Tolerances
 from scanlines.evaluation.specs import MethodSpec, parse_specs
-from scanlines.evaluation.timing import time_calls
 from scanlines.evaluation.truth_row import truth_extraction
 from scanlines.sim import get_sensor
 
@@ -228,7 +228,7 @@ def _run_job(
 ) -> list[ScanRecord]:
     """Score every spec on one scene (generated here from its recipe, or given).
 
-    Every spec is timed on the scene's scan by :func:`~scanlines.evaluation.timing.time_calls`
+    Every spec is timed on the scene's scan by :func:`~scanlines.bench.timing.time_calls`
     (one pass: an untimed extraction, then the timed one).
     """
     case = job if isinstance(job, SceneCase) else make_scene(*job)

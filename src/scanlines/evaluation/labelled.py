@@ -25,12 +25,12 @@ from typing import Any
 import numpy as np
 
 from scanlines.evaluation.cases import score_labelled
-from scanlines.evaluation.report import write_csv
 from scanlines.evaluation.scores import EventScore
 from scanlines.evaluation.specs import MethodSpec, parse_specs
 from scanlines.extraction import END_X, END_Y, START_X, START_Y, Extraction
+from scanlines.report import write_csv
 from scanlines.scan import Scan
-from scanlines.sensor_profile import SensorProfile, estimate_profile
+from scanlines.sensor.profile import SensorProfile, estimate_profile
 
 __all__ = ["LabelledResult", "LabelledRow", "evaluate_labelled", "fragmentation"]
 

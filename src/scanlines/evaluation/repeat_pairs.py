@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from scanlines import Scan
-from scanlines.evaluation.registration import (
+from scanlines.geometry.registration import (
     IDENTITY,
     IcpSettings,
     LineTarget,

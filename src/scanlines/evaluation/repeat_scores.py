@@ -10,7 +10,6 @@ from typing import Any
 import numpy as np
 
 from scanlines import Extraction, Scan
-from scanlines.evaluation.registration import invert, transform_points
 from scanlines.evaluation.repeat_pairs import (
     PairRecord,
     RepeatTolerances,
@@ -20,7 +19,8 @@ from scanlines.evaluation.repeat_pairs import (
 )
 from scanlines.evaluation.specs import MethodSpec
 from scanlines.extraction import END_X, END_Y, START_X, START_Y
-from scanlines.sensor_profile import SensorProfile
+from scanlines.geometry.registration import invert, transform_points
+from scanlines.sensor.profile import SensorProfile
 
 # --------------------------------------------------------------------------- scores
 

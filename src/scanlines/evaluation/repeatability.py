@@ -12,7 +12,7 @@ Pairs
 -----
 Scan ``i`` is paired with each scan ``j`` 1 to ``max_gap`` (3) records later (record
 numbers of the log). Their relative pose (``j``'s sensor frame in ``i``'s) is refined by
-the point-to-line ICP of :mod:`scanlines.evaluation.registration`, starting from the
+the point-to-line ICP of :mod:`scanlines.geometry.registration`, starting from the
 relative pose of the log's poses when both scans have one. A log without poses is
 registered by ICP alone: ``(i, i + 1)`` from the identity and from the previous
 consecutive estimate (constant velocity), keeping the fit with more inliers;
@@ -99,7 +99,6 @@ from typing import Any
 import numpy as np
 
 from scanlines import Scan
-from scanlines.evaluation.registration import IcpSettings
 from scanlines.evaluation.repeat_pairs import (
     OnProgress,
     PairRecord,
@@ -110,10 +109,10 @@ from scanlines.evaluation.repeat_pairs import (
     view_overlap,
 )
 from scanlines.evaluation.repeat_scores import MethodRepeatability, _score_method
-from scanlines.evaluation.report import number, write_csv
 from scanlines.evaluation.specs import MethodSpec, parse_specs
-from scanlines.json_values import jsonable
-from scanlines.sensor_profile import ProfileError, SensorProfile, estimate_profile
+from scanlines.geometry.registration import IcpSettings
+from scanlines.report import jsonable, number, write_csv
+from scanlines.sensor.profile import ProfileError, SensorProfile, estimate_profile
 
 __all__ = [
     "TABLE_COLUMNS",

@@ -21,8 +21,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from scanlines import Extractor, ParameterError
-from scanlines.json_values import jsonable
-from scanlines.sensor_profile import SensorProfile
+from scanlines.report import jsonable
+from scanlines.sensor.profile import SensorProfile
 
 __all__ = ["TRUTH", "MethodSpec", "parse_spec", "parse_specs"]
 

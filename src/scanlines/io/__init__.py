@@ -54,6 +54,7 @@ from pathlib import Path
 from typing import Any
 
 from scanlines.errors import ParameterError
+from scanlines.geometry.transform import points_to_world, to_world
 from scanlines.io.bag_writer import Ros2BagWriter
 from scanlines.io.base import LogReader
 from scanlines.io.carmen import CarmenReader
@@ -63,7 +64,6 @@ from scanlines.io.npz import NpzReader
 from scanlines.io.rerun_writer import RerunWriter
 from scanlines.io.rosbag import RosbagReader
 from scanlines.io.tabular import CsvReader
-from scanlines.io.transform import points_to_world, to_world
 from scanlines.io.writers import (
     CSV_COLUMNS,
     CsvWriter,

@@ -12,6 +12,7 @@ from typing import Any, Literal
 import numpy as np
 
 from scanlines.errors import LogFormatError, ParameterError
+from scanlines.geometry.poses import compose
 from scanlines.io.base import (
     DEFAULT_MAX_BEAMS,
     DEFAULT_MAX_RECORD_BYTES,
@@ -45,7 +46,6 @@ from scanlines.io.carmen_messages import (
 from scanlines.io.fields import FieldLayout
 from scanlines.io.numbers import NumberFields, number_fields
 from scanlines.io.text import iter_lines, parse_floats
-from scanlines.poses import compose
 from scanlines.scan import Scan
 
 __all__ = [

@@ -11,9 +11,9 @@ from typing import Any
 import numpy as np
 
 from scanlines.errors import LogFormatError, ParameterError
+from scanlines.geometry.poses import relative_pose
 from scanlines.io.numbers import INTEGER, NumberFields
 from scanlines.io.text import parse_int
-from scanlines.poses import relative_pose
 
 #: Laser message names, in the order of preference used to choose one.
 LASER_MESSAGES = (

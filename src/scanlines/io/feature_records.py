@@ -22,7 +22,7 @@ from scanlines.extraction import (
     Extraction,
     ExtractionTable,
 )
-from scanlines.io.transform import points_to_world, to_world
+from scanlines.geometry.transform import points_to_world, to_world
 from scanlines.scan import Scan
 
 Frame = Literal["sensor", "world"]

@@ -5,7 +5,7 @@ Layout of a dataset folder::
     DATASET/segments/log=NAME/part-FIRST.parquet   one row per segment
     DATASET/events/log=NAME/part-FIRST.parquet     one row per breakpoint or corner
     DATASET/scans/log=NAME/part-FIRST.parquet      one row per scan
-    DATASET/_logs/NAME.json                        what made a log's rows (see scanlines.fleet)
+    DATASET/_logs/NAME.json                        what made a log's rows (see scanlines.runs.fleet)
     DATASET/_staging/TABLE/log=NAME/part-*.parquet the parts of a log not done yet
 
 ``FIRST`` is the first scan record of the part (zero-padded), so a part written again
@@ -62,7 +62,6 @@ __all__ = [
     "STAGING",
     "TABLES",
     "commit_log",
-    "dataset_exists",
     "discard_staged",
     "part_name",
     "remove_empty_folders",
@@ -231,14 +230,9 @@ def _version() -> str:
 
 
 def _jsonable(values: Any) -> Any:
-    from scanlines.json_values import jsonable
+    from scanlines.report import jsonable
 
     return jsonable(values)
-
-
-def dataset_exists(dataset: Path) -> bool:
-    """True when ``dataset`` holds any table folder."""
-    return any((dataset / name).is_dir() for name in TABLES) if dataset.is_dir() else False
 
 
 def commit_log(dataset: Path, log: str) -> None:

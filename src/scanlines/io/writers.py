@@ -35,7 +35,7 @@ Frames
 ------
 Pass extractions in the sensor frame, as :func:`scanlines.extract` returns
 them. With ``frame="world"`` the writer moves segments (with
-:func:`scanlines.io.transform.to_world`) and breakpoint/corner points into the
+:func:`scanlines.geometry.transform.to_world`) and breakpoint/corner points into the
 log's world frame using ``scan.pose``; a scan without a pose is then an error.
 Do not transform beforehand as well.
 
@@ -113,7 +113,6 @@ from scanlines.io.feature_records import (
     json_record,
     json_records,
 )
-from scanlines.json_values import jsonable
 from scanlines.outputs import (
     OutputError,
     check_output,
@@ -123,6 +122,7 @@ from scanlines.outputs import (
     umask,
     write_error,
 )
+from scanlines.report import jsonable
 from scanlines.scan import Scan
 
 __all__ = [

@@ -1,6 +1,7 @@
 """Scan-to-map alignment: a scan's returns pulled onto the map's lines from the log's pose.
 
-A few Gauss-Newton steps on the point-to-line distances of the scan's valid returns (moved
+A few Gauss-Newton steps (:func:`~scanlines.geometry.registration.point_to_line_step`, the
+step of the scan-to-scan ICP) on the point-to-line distances of the scan's valid returns (moved
 into the world by the pose) to their nearest map line within a gate, Huber-weighted. The
 correction is bounded (``align_max_shift``, ``align_max_turn``); when the scene does not
 constrain every direction (one wall, a corridor of parallel walls: the smallest eigenvalue
@@ -15,8 +16,9 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from scanlines.io.transform import points_to_world
-from scanlines.poses import Pose
+from scanlines.geometry.poses import Pose
+from scanlines.geometry.registration import point_to_line_step
+from scanlines.geometry.transform import points_to_world
 
 __all__ = [
     "AlignSettings",
@@ -125,13 +127,8 @@ def _step(world: np.ndarray, pose: Pose, lines: LineSet, gate: float):
     p = world[point]
     n = np.column_stack((np.cos(lines.alpha[line]), np.sin(lines.alpha[line])))
     e = np.sum(n * p, axis=1) - lines.rho[line]
-    lever = p - np.array(pose[:2])
-    jac = np.column_stack((n[:, 0], n[:, 1], n[:, 1] * lever[:, 0] - n[:, 0] * lever[:, 1]))
-    weight = np.where(np.abs(e) <= HUBER, 1.0, HUBER / np.maximum(np.abs(e), 1e-12))
-    h = jac.T @ (weight[:, None] * jac)
-    if not np.all(np.isfinite(h)) or np.linalg.det(h) <= 0:
-        return None
-    return -np.linalg.solve(h, jac.T @ (weight * e)), h, len(point)
+    found = point_to_line_step(p - np.array(pose[:2]), n, e, HUBER)  # about the sensor
+    return None if found is None else (found.update, found.normal, len(point))
 
 
 def _constrained(h: np.ndarray, pairs: int, least: float) -> bool:

@@ -9,12 +9,12 @@ from typing import NamedTuple
 import numpy as np
 
 from scanlines.extractor import Extractor
-from scanlines.io.transform import to_world
+from scanlines.geometry.poses import Pose
+from scanlines.geometry.transform import to_world
 from scanlines.map.align import AlignSettings, LineSet, align_scan
 from scanlines.map.frame import LocalFrame, MapError, check_extent, check_pose, frame_at
 from scanlines.map.fusion import FusionSettings, LineMap
 from scanlines.map.tracking import OdometryTracker, TrackFit, TrackSettings, track_points
-from scanlines.poses import Pose
 from scanlines.scan import Scan
 
 __all__ = ["MapBuild", "build_map"]

@@ -21,7 +21,6 @@ from typing import Any
 import numpy as np
 
 from scanlines.errors import ParameterError
-from scanlines.json_values import jsonable
 from scanlines.map.fusion import MapLines
 from scanlines.outputs import (
     OutputError,
@@ -32,6 +31,7 @@ from scanlines.outputs import (
     write_error,
     write_text_atomically,
 )
+from scanlines.report import jsonable
 
 __all__ = [
     "FRAME_NOTE",

@@ -53,8 +53,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from scanlines.geometry.poses import Pose
 from scanlines.map.align import LineSet
-from scanlines.poses import Pose
 
 __all__ = ["FilterSettings", "FilterStep", "LineGrid", "LineMapFilter", "line_grid"]
 

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from scanlines.io.transform import points_to_world
+from scanlines.geometry.transform import points_to_world
 from scanlines.map.align import AlignSettings, LineSet, align_scan, nearest_segments
 from scanlines.map.build import MapBuild, build_map
 from scanlines.map.fusion import FusionSettings, MapLines

@@ -41,11 +41,11 @@ from pathlib import Path
 import numpy as np
 
 from scanlines.errors import ScanlinesError
+from scanlines.geometry.poses import Pose, relative_pose
 from scanlines.map.align import LineSet
 from scanlines.map.build import TrackedPose
 from scanlines.map.filter import INITIAL_SIGMA, FilterSettings, LineMapFilter
 from scanlines.map.frame import LocalFrame
-from scanlines.poses import Pose, relative_pose
 from scanlines.scan import Scan
 
 __all__ = ["Localisation", "MapFileError", "localize", "read_line_map"]

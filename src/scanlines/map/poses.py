@@ -8,8 +8,9 @@ from pathlib import Path
 import numpy as np
 
 from scanlines.errors import ScanlinesError
+from scanlines.geometry.poses import IDENTITY, Pose, compose, relative_pose
+from scanlines.geometry.registration import icp, line_target
 from scanlines.map.frame import MapError, check_pose
-from scanlines.poses import IDENTITY, Pose, compose, relative_pose
 from scanlines.scan import Scan
 
 __all__ = [
@@ -163,7 +164,7 @@ def write_tum(path: str | Path, stamped: list[tuple[float, Pose]]) -> None:
 
 class RegistrationOdometry:
     """Poses chained from scan-to-scan registration (the point-to-line ICP of
-    :mod:`scanlines.evaluation.registration`), starting at the origin. The relative pose of
+    :mod:`scanlines.geometry.registration`), starting at the origin. The relative pose of
     the log's own odometry, where scans carry one, is the first guess."""
 
     name = "scan registration (scan to scan ICP) as odometry"
@@ -173,8 +174,6 @@ class RegistrationOdometry:
         self._pose: Pose = IDENTITY
 
     def __call__(self, index: int, scan: Scan) -> Pose | None:
-        from scanlines.evaluation.registration import icp, line_target
-
         previous, self._previous = self._previous, scan
         if previous is None:
             return self._pose

@@ -23,9 +23,9 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from scanlines.io.transform import points_to_world
+from scanlines.geometry.poses import Pose, compose, relative_pose
+from scanlines.geometry.transform import points_to_world
 from scanlines.map.align import HUBER, MIN_PAIRS, LineSet, _near, _subsample, nearest_segments
-from scanlines.poses import Pose, compose, relative_pose
 
 __all__ = [
     "OdometryTracker",

@@ -9,10 +9,6 @@ it like a built-in one (``docs/ARCHITECTURE.md`` walks through it).
 
 from __future__ import annotations
 
-import sys
-import types
-import warnings
-
 from scanlines.errors import ParameterError
 from scanlines.methods.adaptive import Adaptive
 from scanlines.methods.base import ClusteredMethod, CompiledMethod, Method
@@ -79,19 +75,3 @@ def method_class(name: str) -> type[Method]:
     except (KeyError, TypeError):
         valid = ", ".join(REGISTRY)
         raise ParameterError(f"unknown method {name!r}; valid: {valid}") from None
-
-
-class _CallableModule(types.ModuleType):
-    """``scanlines.methods()``: the listing function of earlier releases, kept as a
-    deprecated alias of :func:`scanlines.method_names` for one release."""
-
-    def __call__(self) -> tuple[str, ...]:
-        warnings.warn(
-            "scanlines.methods() is deprecated; use scanlines.method_names()",
-            DeprecationWarning,
-            stacklevel=2,
-        )
-        return tuple(REGISTRY)
-
-
-sys.modules[__name__].__class__ = _CallableModule

@@ -87,7 +87,7 @@ brackets, and ``docs/decisions/`` (300 simulated scenes per sensor preset).
 
 The range noise (all of the above) is a line ``sigma(r) = sigma0 + per_metre r``
     measured from the data (:mod:`scanlines.steps.noise`): from a
-    :class:`~scanlines.sensor_profile.SensorProfile` of the whole log when the
+    :class:`~scanlines.sensor.profile.SensorProfile` of the whole log when the
     extractor has one (``scanlines run`` measures one, or takes ``--sensor-profile``),
     else from the scan itself (each return against a parabola through its seven
     neighbours' ranges; a slope only where it stands out of the noise). Every threshold

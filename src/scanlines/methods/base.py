@@ -58,7 +58,7 @@ class Method:
     parameters: ClassVar[Mapping[str, Param]] = {}
     presets: ClassVar[Mapping[str, Mapping[str, Any]]] = {}
     #: Whether an Extractor without a sensor profile learns the noise line from its first
-    #: scans for this method (:class:`~scanlines.learned_noise.NoiseLearner`).
+    #: scans for this method (:class:`~scanlines.sensor.learned_noise.NoiseLearner`).
     learns_noise: ClassVar[bool] = False
 
     def __init__(self, params: Mapping[str, Any], noise: NoiseLine | None = None) -> None:

@@ -273,10 +273,6 @@ class World:
         """Total number of edges."""
         return len(self.edge_start)
 
-    def with_shapes(self, *shapes: Shape) -> World:
-        """A new world with ``shapes`` appended (existing edge ids are kept)."""
-        return World(self.shapes + tuple(shapes))
-
     def adjacent(self, edge_a: np.ndarray, edge_b: np.ndarray) -> np.ndarray:
         """Element-wise: do the edges share a vertex as neighbours in one shape?
 

@@ -26,7 +26,7 @@ if TYPE_CHECKING:  # the extraction modules: imported on first use, so that the 
     # served (and the first scan's returns drawn) while they load
     from scanlines.extractor import Extractor
     from scanlines.scan import Scan
-    from scanlines.sensor_profile import SensorProfile
+    from scanlines.sensor.profile import SensorProfile
 
 __all__ = ["MAX_WORLD_SCANS", "NoPoses", "ViewerSession", "methods"]
 
@@ -69,7 +69,7 @@ class ViewerSession:
     sensor_profile:
         The profile every extraction takes; ``None``: measured from the log's first
         scans when first needed, as ``scanlines run`` measures it
-        (:func:`scanlines.runner.log_profile`).
+        (:func:`scanlines.runs.runner.log_profile`).
     config:
         The configuration the page opens with (default: the default method).
     config_later:
@@ -161,7 +161,7 @@ class ViewerSession:
     def _measure_profile(self) -> tuple[SensorProfile | None, str]:
         # From the log itself, as `scanlines run` measures it (not from the store's
         # float32 copy): the same profile, so the same features as a run.
-        from scanlines.runner import log_profile
+        from scanlines.runs.runner import log_profile
 
         try:
             profile = log_profile(self.store.path, self.store.reader_options)
@@ -223,7 +223,7 @@ class ViewerSession:
             raise ParameterError(f"{self.store.path.name} has no poses: no world view")
         if first < 0 or last < first:
             raise ParameterError(f"world view takes 0 <= first <= last, got {first}..{last}")
-        from scanlines.io.transform import points_to_world, to_world
+        from scanlines.geometry.transform import points_to_world, to_world
 
         extractor = self.extractor(config)
         self.store.scan(last)  # waits for it; out of range is an error naming the log
@@ -301,7 +301,7 @@ def _result(extractor: Extractor, scan: Scan) -> dict[str, Any]:
 
 
 def _noise(scan: Scan) -> dict[str, float]:
-    from scanlines.sensor_profile import scan_noise_line
+    from scanlines.sensor.profile import scan_noise_line
 
     return scan_noise_line(scan)._asdict()
 

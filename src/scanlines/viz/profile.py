@@ -1,4 +1,4 @@
-"""The noise curve of a :class:`~scanlines.sensor_profile.SensorProfile`."""
+"""The noise curve of a :class:`~scanlines.sensor.profile.SensorProfile`."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from scanlines.sensor_profile import SensorProfile
+from scanlines.sensor.profile import SensorProfile
 from scanlines.viz.figures import pyplot
 
 __all__ = ["plot_noise_curve"]

@@ -36,10 +36,10 @@ from typing import Any
 
 import numpy as np
 
+from scanlines.bench.machine import cores_busy
 from scanlines.builtin_methods import DEFAULT_METHOD
-from scanlines.evaluation.machine import cores_busy
-from scanlines.evaluation.report import TableData
-from scanlines.runner import CHUNK_SCANS
+from scanlines.report import TableData
+from scanlines.runs.runner import CHUNK_SCANS
 
 __all__ = ["ColdStart", "PipelineResult", "cold_start", "measure_pipeline", "one_pass"]
 
@@ -183,7 +183,7 @@ def measure_pipeline(
     see the module docstring)."""
     from scanlines import Extractor
     from scanlines.io import open_log
-    from scanlines.runner import log_profile
+    from scanlines.runs.runner import log_profile
 
     log = Path(log)
     extractor = Extractor(method, sensor_profile=log_profile(log, {}))
@@ -267,7 +267,7 @@ def _read(log: Path, count: int) -> int:
 
 def _stacks(scans: list) -> list[tuple]:
     """The chunks ``scanlines run`` would extract, as ``Extractor.batch`` arguments."""
-    from scanlines.runner import CHUNK_SCANS, chunk_scans
+    from scanlines.runs.runner import CHUNK_SCANS, chunk_scans
 
     stacks = []
     for chunk in chunk_scans(enumerate(scans), CHUNK_SCANS):
@@ -300,7 +300,7 @@ def _encode_all(scans: list, tables: list, suffix: str) -> None:
 
 def _run_seconds(log: Path, scans: slice, extractor: Any, suffix: str, jobs: int) -> float:
     from scanlines.io import open_log
-    from scanlines.runner import run_log_to_file
+    from scanlines.runs.runner import run_log_to_file
 
     with tempfile.TemporaryDirectory() as folder, open_log(log) as reader:
         start = time.perf_counter()

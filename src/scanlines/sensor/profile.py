@@ -6,7 +6,7 @@ from), the beam geometry, the range quantum, the codes and rates of beams withou
 return, and the rates of outliers and mixed pixels::
 
     from scanlines import Extractor, open_log
-    from scanlines.sensor_profile import estimate_profile, read_profile
+    from scanlines.sensor.profile import estimate_profile, read_profile
 
     profile = estimate_profile(open_log("run.log"), source="run.log")
     profile.save("lms.json")
@@ -39,7 +39,7 @@ import numpy as np
 
 from scanlines.errors import NO_SUCH_FILE, ScanlinesError
 from scanlines.scan import Scan
-from scanlines.sensor_mounting import estimate_mounting
+from scanlines.sensor.mounting import estimate_mounting
 from scanlines.steps.noise import (
     MIN_NOISE_SIGMA,
     NoiseLine,

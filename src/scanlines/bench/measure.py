@@ -14,26 +14,26 @@ Every selected method on the same scans, in one process:
 * :meth:`Extractor.batch <scanlines.Extractor.batch>` against the single-call loop on the
   real excerpts (scans of one sensor, equal beam count, stacked);
 * the pipeline of ``scanlines run`` on the intel excerpt, cold start in a fresh process,
-  scaling with jobs and the floor (:mod:`scanlines.evaluation.bench_pipeline`);
+  scaling with jobs and the floor (:mod:`scanlines.bench.pipeline`);
 * optionally a :mod:`cProfile` run of the default extractor (``adaptive``) over the intel
   excerpt: the functions within scanlines by cumulative time.
 
 How
 ---
 One :class:`~scanlines.Extractor` per method (default parameters) for the whole run.
-Every time is taken by :mod:`scanlines.evaluation.timing`: per (method, dataset)
+Every time is taken by :mod:`scanlines.bench.timing`: per (method, dataset)
 ``repeats`` passes over the dataset's scans in a fixed order, interleaved between methods,
 every timed call directly after an untimed call on the same scan; every timed call is one
 sample. Reported: median and 90th percentile of the samples in microseconds per scan, and
 scans per second (``1e6 / mean``). The ratio of a method is its median over the reference
 method's median on the same dataset in the same run
-(:data:`~scanlines.evaluation.timing.REFERENCE`, or the first selected method when it is
+(:data:`~scanlines.bench.timing.REFERENCE`, or the first selected method when it is
 not selected). A method that raises on a scan is reported as an error for that dataset
 (the scan and the message) and not timed further there; the bench goes on. The batch
 comparison times whole passes over the stack (:data:`BATCH_VARIANTS`) by the same rule.
 
-The results are :mod:`scanlines.evaluation.bench_results`, the page
-:mod:`tools.bench.performance_page`. ``import scanlines.evaluation.bench`` needs
+The results are :mod:`scanlines.bench.results`, the page
+:mod:`tools.bench.performance_page`. ``import scanlines.bench.measure`` needs
 only numpy; the command (``scanlines.cli.bench``) adds the rich tables and the progress
 bar.
 """
@@ -55,14 +55,14 @@ from typing import Any
 import numpy as np
 
 from scanlines import Extractor, ParameterError, Scan, method_names
-from scanlines.builtin_methods import DEFAULT_METHOD
-from scanlines.evaluation.bench_config import (
+from scanlines.bench.config import (
     DEFAULT_BEAMS,
     QUICK_BEAMS,
     SAMPLE_NAMES,
     BenchConfig,
 )
-from scanlines.evaluation.bench_results import (
+from scanlines.bench.machine import load_average, machine_info
+from scanlines.bench.results import (
     BatchResult,
     BatchRow,
     BenchResult,
@@ -70,8 +70,8 @@ from scanlines.evaluation.bench_results import (
     ScalingResult,
     Timing,
 )
-from scanlines.evaluation.machine import load_average, machine_info
-from scanlines.evaluation.timing import REFERENCE, Timed, time_calls
+from scanlines.bench.timing import REFERENCE, Timed, time_calls
+from scanlines.builtin_methods import DEFAULT_METHOD
 
 __all__ = [
     "BATCH_VARIANTS",
@@ -358,8 +358,8 @@ def run(
         tick("profiling adaptive")()
     pipeline = None
     if config.pipeline:
+        from scanlines.bench.pipeline import measure_pipeline
         from scanlines.data import sample
-        from scanlines.evaluation.bench_pipeline import measure_pipeline
 
         pipeline = measure_pipeline(
             sample("intel"),

@@ -34,12 +34,12 @@ from typing import Any
 
 from scanlines.builtin_methods import DEFAULT_METHOD
 from scanlines.errors import ParameterError, ScanlinesError, describe
-
-# dask_setup: the Dask workers' preload is this module (see fleet_executors._executor)
-from scanlines.fleet_executors import _executor
-from scanlines.fleet_executors import dask_setup as dask_setup
-from scanlines.fleet_inputs import estimated_records, expand_inputs, log_names
 from scanlines.reader_options import ReaderOptions
+
+# dask_setup: the Dask workers' preload is this module (see executors._executor)
+from scanlines.runs.executors import _executor
+from scanlines.runs.executors import dask_setup as dask_setup
+from scanlines.runs.inputs import estimated_records, expand_inputs, log_names
 
 __all__ = [
     "CHUNK_RECORDS",
@@ -172,8 +172,8 @@ def extract_task(task: ChunkTask) -> ChunkResult:
     from scanlines.extractor import Extractor
     from scanlines.io import open_log
     from scanlines.io.parquet import write_parts
-    from scanlines.runner import CHUNK_SCANS, chunk_scans, select
-    from scanlines.runner import extract_chunk as extract_piece
+    from scanlines.runs.runner import CHUNK_SCANS, chunk_scans, select
+    from scanlines.runs.runner import extract_chunk as extract_piece
 
     started = time.perf_counter()
     profile = _task_profile(task)
@@ -196,8 +196,8 @@ def extract_task(task: ChunkTask) -> ChunkResult:
 def _task_profile(task: ChunkTask) -> Any:
     """The sensor profile file given, else the log's own, measured from its first scans
     as ``scanlines run`` does (the same for every chunk of the log)."""
-    from scanlines.runner import log_profile
-    from scanlines.sensor_profile import ProfileError, read_profile
+    from scanlines.runs.runner import log_profile
+    from scanlines.sensor.profile import ProfileError, read_profile
 
     if task.sensor_profile is not None:
         return read_profile(task.sensor_profile)
@@ -229,7 +229,7 @@ def checksum(path: Path) -> str:
 
 
 def _fingerprint(task: ChunkTask, digest: str) -> dict[str, Any]:
-    from scanlines.json_values import jsonable
+    from scanlines.report import jsonable
 
     profile = task.sensor_profile
     return jsonable({"input_sha256": digest, "method": task.method, "preset": task.preset,

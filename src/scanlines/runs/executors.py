@@ -124,7 +124,7 @@ class _executor:
                 self._cluster = LocalCluster(n_workers=self.jobs, threads_per_worker=1,
                                              processes=True, dashboard_address=None,
                                              silence_logs=logging.ERROR,
-                                             preload=["scanlines.fleet"])  # fmt: skip
+                                             preload=["scanlines.runs.fleet"])  # fmt: skip
             self._client = Client(self._cluster)
             engine = f"Dask LocalCluster of {self.jobs} workers"
         else:

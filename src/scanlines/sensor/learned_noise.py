@@ -7,7 +7,7 @@ import threading
 import numpy as np
 
 from scanlines.scan import Scan
-from scanlines.sensor_profile import noise_samples, pooled_noise_line
+from scanlines.sensor.profile import noise_samples, pooled_noise_line
 from scanlines.steps.noise import NoiseLine
 
 #: Scans of one sensor the noise line is learned from, then frozen.
@@ -21,7 +21,7 @@ class NoiseLearner:
 
     A sensor is its geometry (beam count, first angle, increment). The first scan of a
     sensor is extracted with its own noise estimate; the noise samples of the scans seen
-    are pooled, and the line of the pool (:func:`~scanlines.sensor_profile.estimate_profile`'s
+    are pooled, and the line of the pool (:func:`~scanlines.sensor.profile.estimate_profile`'s
     measure of the same scans) is measured again after 1, 2, 4, ... scans and frozen after
     the last of :data:`LEARNED_SCANS`: each scan is extracted with the line of the scans
     before it. Safe to share between threads.

@@ -1,12 +1,15 @@
-"""Writing results down: markdown tables, number formats, CSV files.
+"""Writing results down: markdown tables, number formats, JSON values, CSV files.
 
-Every report of :mod:`scanlines.evaluation` (the ``eval`` outputs, ``RESULTS.md``,
+Every report (the ``eval`` outputs, the ``bench`` tables, ``RESULTS.md``,
 ``PERFORMANCE.md``) and the command line tables write through this one module:
 
 * :func:`number` formats a value, or gives ``-`` when there is none (``None``, NaN,
   infinite); :func:`percent` and :func:`microseconds` are its two special cases;
 * :func:`markdown_table` writes a table, and :class:`TableData` holds one with its title
   and caption for the command (rich) and the pages (markdown) alike;
+* :func:`jsonable` is the one conversion every JSON output of scanlines uses (NaN
+  becomes ``null``, infinities ``"inf"``/``"-inf"``), :func:`write_csv` writes rows of
+  dicts;
 * :func:`command_line` is the command a page records as its origin.
 """
 
@@ -15,15 +18,18 @@ from __future__ import annotations
 import csv
 import math
 import sys
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 __all__ = [
     "MISSING",
     "TableData",
     "command_line",
+    "jsonable",
     "markdown_table",
     "microseconds",
     "number",
@@ -109,6 +115,25 @@ class TableData:
 
 
 # --------------------------------------------------------------------------- files
+
+
+def jsonable(value: Any) -> Any:
+    """``value`` with mappings as dicts (keys as strings), arrays and tuples as lists, numpy
+    scalars as Python ones, NaN as ``None`` and infinities as ``"inf"`` / ``"-inf"`` (JSON
+    has no number for them); anything else JSON cannot hold becomes its ``str``."""
+    if isinstance(value, Mapping):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, np.ndarray):
+        return jsonable(value.tolist())
+    if isinstance(value, list | tuple):
+        return [jsonable(v) for v in value]
+    if isinstance(value, np.generic):
+        return jsonable(value.item())
+    if isinstance(value, float) and not math.isfinite(value):
+        return None if math.isnan(value) else ("inf" if value > 0 else "-inf")
+    if value is None or isinstance(value, bool | int | float | str):
+        return value
+    return str(value)
 
 
 def write_csv(path: Path, rows: list[dict[str, Any]]) -> Path:

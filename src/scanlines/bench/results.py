@@ -1,8 +1,8 @@
 """What ``scanlines bench`` measured: timings per method and dataset, and their tables.
 
-:class:`BenchResult` holds everything one run measured (:func:`scanlines.evaluation.bench.run`)
+:class:`BenchResult` holds everything one run measured (:func:`scanlines.bench.measure.run`)
 and gives it as JSON (:meth:`BenchResult.to_dict`, schema :data:`SCHEMA`) and as tables
-(:class:`~scanlines.evaluation.report.TableData`) for the command and the performance page
+(:class:`~scanlines.report.TableData`) for the command and the performance page
 (:mod:`tools.bench.performance_page`).
 """
 
@@ -17,10 +17,10 @@ from typing import Any
 
 import numpy as np
 
-from scanlines.evaluation.bench_config import BenchConfig
-from scanlines.evaluation.report import MISSING, TableData, microseconds, number
-from scanlines.evaluation.timing import Timed
+from scanlines.bench.config import BenchConfig
+from scanlines.bench.timing import Timed
 from scanlines.outputs import write_text_atomically
+from scanlines.report import MISSING, TableData, microseconds, number
 
 __all__ = [
     "SCHEMA",
@@ -52,7 +52,7 @@ class Timing:
 
     @classmethod
     def from_timed(cls, timed: Timed[Any]) -> Timing:
-        """The summary of :func:`~scanlines.evaluation.timing.time_calls` samples."""
+        """The summary of :func:`~scanlines.bench.timing.time_calls` samples."""
         if timed.failure is not None or not timed.n_samples:
             error = timed.failure.describe() if timed.failure is not None else "no samples"
             return cls(status="error", samples=timed.n_samples, error=error)
@@ -189,7 +189,7 @@ class BenchResult:
     started: str
     elapsed_s: float
     load_after: list[float] | None = None
-    pipeline: Any = None  # bench_pipeline.PipelineResult
+    pipeline: Any = None  # pipeline.PipelineResult
 
     @property
     def methods(self) -> tuple[str, ...]:

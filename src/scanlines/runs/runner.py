@@ -21,8 +21,8 @@ from scanlines.extraction import ExtractionTable
 from scanlines.extractor import Extractor
 from scanlines.reader_options import ReaderOptions
 from scanlines.scan import Scan
-from scanlines.sensor_mounting import estimate_mounting
-from scanlines.sensor_profile import (
+from scanlines.sensor.mounting import estimate_mounting
+from scanlines.sensor.profile import (
     DEFAULT_SCANS,
     SensorProfile,
     estimate_profile,
@@ -90,8 +90,8 @@ def selected_count(scans_in_file: int | None, scans: slice) -> int | None:
 def log_profile(
     path: Any, reader_options: ReaderOptions, scans: slice = slice(None)
 ) -> SensorProfile:
-    """The :class:`~scanlines.sensor_profile.SensorProfile` of a log, measured from its
-    first selected scans (at most :data:`~scanlines.sensor_profile.DEFAULT_SCANS`).
+    """The :class:`~scanlines.sensor.profile.SensorProfile` of a log, measured from its
+    first selected scans (at most :data:`~scanlines.sensor.profile.DEFAULT_SCANS`).
 
     ``scanlines run`` without ``--sensor-profile`` extracts the whole log with this one
     profile, so every chunk, job and worker sees the same noise.
@@ -109,7 +109,7 @@ def run_profile(
     came from: the profile file ``given``; else measured from the log's first selected
     scans; else none (a log too short or too odd to measure: each scan's noise is then
     measured from itself)."""
-    from scanlines.sensor_profile import ProfileError, read_profile
+    from scanlines.sensor.profile import ProfileError, read_profile
 
     if given is not None:
         return read_profile(given), None

@@ -5,7 +5,7 @@ pose of the log's poses, or the identity): the points of the *source* scan ``j``
 moved into the frame of the *target* scan ``i`` and pulled onto the local lines of
 ``i``'s returns::
 
-    from scanlines.evaluation.registration import icp, line_target, relative_pose
+    from scanlines.geometry.registration import icp, line_target, relative_pose
 
     guess = relative_pose(scan_i.pose, scan_j.pose)      # j's frame in i's frame
     fit = icp(scan_j.points[scan_j.valid], line_target(scan_i), guess)
@@ -32,7 +32,8 @@ The method
   the hard gate trims the far pairs).
 * Update: Gauss-Newton on the point-to-line residuals ``n . (R p + t - q)`` with Huber
   weights (``huber`` metres), a small ridge so a direction the scene does not constrain
-  (a corridor's axis) stays at the initial guess instead of drifting.
+  (a corridor's axis) stays at the initial guess instead of drifting
+  (:func:`point_to_line_step`, the step the map's alignment takes too).
 * Stop when an update moves less than ``tolerance`` (metres and radians) at the final
   gate, or after ``max_iterations``.
 
@@ -50,11 +51,12 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from scanlines.poses import IDENTITY, Pose, compose, invert, relative_pose
+from scanlines.geometry.poses import IDENTITY, Pose, compose, invert, relative_pose
 from scanlines.scan import Scan
 
 __all__ = [
     "IcpSettings",
+    "LineStep",
     "LineTarget",
     "Pose",
     "Registration",
@@ -62,6 +64,7 @@ __all__ = [
     "icp",
     "invert",
     "line_target",
+    "point_to_line_step",
     "relative_pose",
     "transform_points",
 ]
@@ -183,6 +186,50 @@ class Registration:
 _COARSE = 1e-3
 """An update smaller than this (metres, radians) shrinks the gate."""
 
+_RIDGE = 1e-6
+"""The ridge of :func:`icp`'s steps: this share of the normal matrix's mean diagonal."""
+
+
+class LineStep(NamedTuple):
+    """One Gauss-Newton step: the pose update ``(dx, dy, dtheta)`` and the normal matrix
+    ``J' W J`` (before any ridge) it was solved with."""
+
+    update: np.ndarray
+    normal: np.ndarray
+
+
+def point_to_line_step(
+    lever: np.ndarray,
+    normals: np.ndarray,
+    residuals: np.ndarray,
+    huber: float,
+    ridge: float | None = None,
+) -> LineStep | None:
+    """One Huber-weighted Gauss-Newton step on point-to-line residuals: the pose update
+    that brings points onto their lines, the one step of :func:`icp` (scan to scan) and of
+    :func:`scanlines.map.align.align_points` (scan to map).
+
+    A point ``p`` on a line of unit normal ``n`` has the residual ``e = n . p - rho``; a
+    small update ``(dx, dy, dtheta)`` turning about a centre ``c`` changes it by
+    ``n . (dx, dy) + dtheta (n_y l_x - n_x l_y)``, ``l = p - c`` (``lever``, K x 2). The
+    weights are Huber's (``huber`` metres). With a ``ridge``, that share of the normal
+    matrix's mean diagonal is added to it, so a direction the points do not constrain (a
+    corridor's axis) stays where it is; without one, ``None`` where the normal matrix is
+    not finite or its determinant not positive."""
+    a = np.abs(residuals)
+    weight = np.where(a <= huber, 1.0, huber / np.maximum(a, 1e-12))
+    jac = np.column_stack(
+        (normals[:, 0], normals[:, 1], normals[:, 1] * lever[:, 0] - normals[:, 0] * lever[:, 1])
+    )
+    h = jac.T @ (weight[:, None] * jac)
+    if ridge is None:
+        if not np.all(np.isfinite(h)) or np.linalg.det(h) <= 0:
+            return None
+        solved = h
+    else:
+        solved = h + np.eye(3) * (ridge * np.trace(h) / 3.0 + 1e-12)
+    return LineStep(-np.linalg.solve(solved, jac.T @ (weight * residuals)), h)
+
 
 def _subsample(points: np.ndarray, most: int) -> np.ndarray:
     if len(points) <= most:
@@ -241,12 +288,7 @@ def icp(
             break
         p, q, n = moved[ok], target.points[index[ok]], target.normals[index[ok]]
         e = np.sum(n * (p - q), axis=1)
-        a = np.abs(e)
-        weight = np.where(a <= settings.huber, 1.0, settings.huber / np.maximum(a, 1e-12))
-        jac = np.column_stack((n[:, 0], n[:, 1], n[:, 1] * p[:, 0] - n[:, 0] * p[:, 1]))
-        h = jac.T @ (weight[:, None] * jac)
-        h += np.eye(3) * (1e-6 * np.trace(h) / 3.0 + 1e-12)
-        step = -np.linalg.solve(h, jac.T @ (weight * e))
+        step = point_to_line_step(p, n, e, settings.huber, ridge=_RIDGE).update  # about the origin
         pose = compose((step[0], step[1], step[2]), pose)
         iterations += 1
         size = max(abs(step[0]), abs(step[1]), abs(step[2]))
