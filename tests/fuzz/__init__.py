@@ -10,6 +10,7 @@ mutators), ``map_channels.py`` (``map`` and ``eval --map``). The DDS target:
 ``mutate_cdr.py`` damages a ``sensor_msgs/LaserScan`` sample and ``dds_target.py`` sends
 each to one running ``scanlines ros2`` node over loopback (opt-in: ``--targets dds``).
 ``run.py`` drives a campaign (``python -m tests.fuzz.run --help`` from the repository
-root), ``make_corpus.py`` builds ``corpus/`` (inputs that once failed; ``corpus_dds/``
-holds the DDS samples) and ``test_fuzz.py`` runs both under pytest.
+root); ``binaries.py`` ends it if a shared object it runs on is rewritten meanwhile.
+``make_corpus.py`` builds ``corpus/`` (inputs that once failed; ``corpus_dds/`` holds the
+DDS samples) and ``test_fuzz.py`` runs both under pytest.
 """

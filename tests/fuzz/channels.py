@@ -36,7 +36,9 @@ Outcomes
 
 Every channel runs in a :class:`Worker`: a long-lived subprocess with an
 address-space limit, which the parent kills and restarts when a channel goes
-past its timeout or the process dies.
+past its timeout or the process dies. Given a :class:`~.binaries.BinaryWatch`, a worker
+checks it on each start, death and timeout: a worker killed by a shared object rewritten
+under it raises :class:`~.binaries.BinaryChanged` instead of reporting a ``crash``.
 """
 
 from __future__ import annotations
@@ -52,6 +54,7 @@ from multiprocessing.connection import Connection
 from pathlib import Path
 from typing import Any
 
+from .binaries import BinaryWatch
 from .map_channels import MAP_CHANNELS, map_channel
 
 CHANNELS = ("library fail", "library skip", "info", "run")
@@ -244,6 +247,8 @@ class Worker:
         A folder of its own for command outputs.
     warm_up:
         An input the worker runs once at start-up (untimed), to load the kernels.
+    watch:
+        The campaign's shared objects, checked when the worker starts, dies or times out.
     """
 
     def __init__(
@@ -253,15 +258,22 @@ class Worker:
         timeout: float = DEFAULT_TIMEOUT,
         memory_limit: int = DEFAULT_MEMORY_LIMIT,
         warm_up: Path | None = None,
+        watch: BinaryWatch | None = None,
     ) -> None:
         self.workdir = workdir
+        self.watch = watch
         self.timeout = timeout
         self.memory_limit = memory_limit
         self.warm_up = None if warm_up is None else str(warm_up)
         self.process: Any = None
         self.connection: Connection | None = None
 
+    def check_binaries(self, when: str) -> None:
+        if self.watch is not None:
+            self.watch.check(when)
+
     def start(self) -> None:
+        self.check_binaries("a worker starting")
         context = multiprocessing.get_context("spawn")
         self.connection, child = context.Pipe()
         self.process = context.Process(
@@ -277,6 +289,7 @@ class Worker:
             ready = False
         if not ready:
             self.stop()
+            self.check_binaries("a worker did not start")
             raise RuntimeError("the fuzzing worker did not start")
 
     def stop(self) -> None:
@@ -301,6 +314,7 @@ class Worker:
         self.connection.send(request | {"declared": declared})
         if not self.connection.poll(self.timeout):
             self.stop()
+            self.check_binaries(f"a worker timed out on {path}")
             return Outcome(channel, DEFECT, "timeout", f"no answer within {self.timeout:g} s")
         try:
             return Outcome(**self.connection.recv())
@@ -308,6 +322,7 @@ class Worker:
             self.process.join(5)
             exitcode = self.process.exitcode
             self.stop()
+            self.check_binaries(f"a worker died (exit code {exitcode}) on {path}")
             return Outcome(channel, DEFECT, "crash", f"the worker died (exit code {exitcode})")
 
     def run_all(self, path: Path, channels: tuple[str, ...] = CHANNELS) -> list[Outcome]:

@@ -32,7 +32,8 @@ Outcomes (channel ``dds node``)
 
 At the end the node gets SIGTERM (channel ``node exit``, on the last input): exit 143, its
 last line ``scanlines: terminated (...)``, whose malformed and undecodable counts are the
-lines seen, no traceback.
+lines seen, no traceback. Given a :class:`~.binaries.BinaryWatch`, a node's death is
+first checked against it (a shared object rewritten under the node kills it too).
 """
 
 from __future__ import annotations
@@ -54,6 +55,7 @@ from pathlib import Path
 from scanlines.ros2.dds import wait_for_match
 from scanlines.ros2.player import SETTLE
 
+from .binaries import BinaryWatch
 from .channels import CLEAN_ERROR, DEFECT, SUCCESS, Case, Outcome, first_line
 
 CHANNEL, EXIT_CHANNEL = "dds node", "node exit"
@@ -219,10 +221,13 @@ class Sender:
 class Campaign:
     """One node, restarted when it dies, and the inputs sent to it one at a time."""
 
-    def __init__(self, seed: bytes, domain: int = DEFAULT_DOMAIN) -> None:
+    def __init__(
+        self, seed: bytes, domain: int = DEFAULT_DOMAIN, watch: BinaryWatch | None = None
+    ) -> None:
         from scanlines.ros2 import messages as msg
 
         self.domain = domain
+        self.watch = watch
         self.good = msg.LaserScan.deserialize(seed)
         self.sender = Sender(domain)
         self.node: NodeProcess | None = None
@@ -302,6 +307,7 @@ class Campaign:
                 node.process.wait(DYING)
         if not node.alive():
             code = node.stop()
+            self.check_binaries(f"the node died (exit {code})")
             return Outcome(CHANNEL, DEFECT, f"node died (exit {code})", node.last_words())
         if bad:
             return Outcome(CHANNEL, DEFECT, line_kind(bad[0]), first_line(bad[0]))
@@ -321,6 +327,10 @@ class Campaign:
             return Outcome(CHANNEL, DEFECT, "stopped handling scans", "a probe was not published")
         return None
 
+    def check_binaries(self, when: str) -> None:
+        if self.watch is not None:
+            self.watch.check(when)
+
     # -- the end -------------------------------------------------------------------------------
 
     def close(self) -> Outcome:
@@ -331,6 +341,7 @@ class Campaign:
             return Outcome(EXIT_CHANNEL, DEFECT, "no node", "the node was not running")
         if not node.alive():
             died = f"node died (exit {node.stop()})"
+            self.check_binaries(f"the {died}")
             return Outcome(EXIT_CHANNEL, DEFECT, died, node.last_words())
         time.sleep(0.5)  # a probe sent twice is handled twice
         code = node.stop()
@@ -367,12 +378,13 @@ def run_dds(
     seed: bytes,
     domain: int = DEFAULT_DOMAIN,
     progress: bool = False,
+    watch: BinaryWatch | None = None,
 ) -> list[Case]:
     """Inputs ``make(0) ... make(count - 1)`` (each a plan name and the bytes) sent to one
     node; each input's bytes are kept in ``workdir/dds-inputs`` as ``.cdr`` files."""
     folder = workdir / "dds-inputs"
     folder.mkdir(parents=True, exist_ok=True)
-    campaign = Campaign(seed, domain)
+    campaign = Campaign(seed, domain, watch)
     cases: list[Case] = []
     try:
         for index in range(count):

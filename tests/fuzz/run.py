@@ -21,12 +21,16 @@ always gives the same inputs, and the first ``n`` inputs of a target in a longer
 those of a run of ``n``. Prints a table of outcomes by seed and channel for each target
 and every defect; exits 1 if there is any defect. ``--replay`` takes saved inputs: log
 files and bag directories, map inputs (a folder with ``log.clf``) and DDS samples
-(``.cdr``, sent to a node).
+(``.cdr``, sent to a node). A shared object rewritten during the campaign (``binaries.py``:
+another build of the core copied over the installed one) ends it with one line, exit 2:
+the crashes it causes are not the inputs'.
 """
 
 from __future__ import annotations
 
 import argparse
+import gc
+import os
 import random
 import shutil
 import sys
@@ -40,6 +44,7 @@ from typing import Any, NamedTuple
 
 from scanlines.data import sample
 
+from .binaries import BinaryChanged, BinaryWatch
 from .channels import (
     CHANNELS,
     CLEAN_ERROR,
@@ -125,9 +130,11 @@ def run_cases(
     timeout: float = DEFAULT_TIMEOUT,
     memory_limit: int = DEFAULT_MEMORY_LIMIT,
     progress: bool = False,
+    watch: BinaryWatch | None = None,
 ) -> list[Case]:
     """Cases ``make(0) ... make(count - 1)``, each through its own channels (``channels``
-    where it has none), in ``jobs`` workers."""
+    where it has none), in ``jobs`` workers; ``watch`` checked by each worker and at the
+    end."""
     cases: list[Case] = []
     pending = iter(range(count))
     lock = threading.Lock()
@@ -139,6 +146,7 @@ def run_cases(
             timeout=timeout,
             memory_limit=memory_limit,
             warm_up=sample("intel"),
+            watch=watch,
         ) as worker:
             while not failures:
                 with lock:
@@ -169,6 +177,8 @@ def run_cases(
         thread.join()
     if failures:
         raise failures[0]
+    if watch is not None:
+        watch.check("after the inputs")
     return sorted(cases, key=lambda c: c.index)
 
 
@@ -190,6 +200,11 @@ def fuzz(
     ``dds``: sent to a ROS 2 node, on ``options["domain"]``).
 
     ``options`` are those of :func:`run_cases` (``jobs``, ``save_failures``, ...).
+
+    Every target's seeds are written first, and what they left collected: past that point
+    this process runs no code of the compiled core (the workers and the node do), so a core
+    rewritten under the campaign is found by the :class:`BinaryWatch` (``options["watch"]``,
+    by default one made then) rather than crashing this process first (``binaries.py``).
     """
     targets = tuple(dict.fromkeys(targets))
     unknown = set(targets) - set(TARGETS)
@@ -198,18 +213,31 @@ def fuzz(
     counts = {target: len(range(k, count, len(targets))) for k, target in enumerate(targets)}
     with tempfile.TemporaryDirectory(prefix="scanlines-fuzz-") as scratch:
         workdir = Path(scratch) if workdir is None else workdir
+        seeds = {
+            target: SEEDED_TARGETS[target].build(workdir / "seeds")
+            for target, n in counts.items()
+            if n and target in SEEDED_TARGETS
+        }
+        sample = dds_seed() if counts.get("dds") else b""
+        gc.collect()  # arrays the core allocated are freed while it is intact
+        if "watch" not in options:
+            options["watch"] = BinaryWatch()
         cases = []
         for target, n in counts.items():
             if n and target == "dds":
-                cases += fuzz_dds(n, seed, workdir, **options)
+                cases += fuzz_dds(n, seed, workdir, sample, **options)
             elif n:
-                cases += fuzz_seeded(target, n, seed, workdir, **without_domain(options))
+                cases += fuzz_seeded(
+                    target, n, seed, workdir, seeds[target], **without_domain(options)
+                )
         return cases
 
 
-def fuzz_seeded(target: str, count: int, seed: int, workdir: Path, **options: Any) -> list[Case]:
-    """``count`` inputs of a seeded target (``logs``, ``maps``) through its channels."""
-    seeds = SEEDED_TARGETS[target].build(workdir / "seeds")
+def fuzz_seeded(
+    target: str, count: int, seed: int, workdir: Path, seeds: dict[str, Path], **options: Any
+) -> list[Case]:
+    """``count`` inputs of a seeded target (``logs``, ``maps``; its ``seeds`` written)
+    through its channels."""
     inputs = workdir / f"{target}-inputs"
     shutil.rmtree(inputs, ignore_errors=True)
     inputs.mkdir(parents=True)
@@ -220,11 +248,19 @@ def fuzz_seeded(target: str, count: int, seed: int, workdir: Path, **options: An
     return run_cases(make, count, workdir=workdir, seed=seed, remove_inputs=True, **options)
 
 
-def fuzz_dds(count: int, seed: int, workdir: Path, **options: Any) -> list[Case]:
-    """``count`` mutations of a LaserScan sample sent to one ROS 2 node (``dds_target``)."""
-    from .mutate_cdr import plans, seed_sample
+def dds_seed() -> bytes:
+    """The LaserScan sample the DDS target mutates (``mutate_cdr.seed_sample``)."""
+    from .mutate_cdr import seed_sample
 
-    sample, mutators = seed_sample(), plans()
+    return seed_sample()
+
+
+def fuzz_dds(count: int, seed: int, workdir: Path, sample: bytes, **options: Any) -> list[Case]:
+    """``count`` mutations of the LaserScan ``sample`` sent to one ROS 2 node
+    (``dds_target``)."""
+    from .mutate_cdr import plans
+
+    mutators = plans()
 
     def make(index: int) -> tuple[str, bytes]:
         name, mutator = mutators[index % len(mutators)]
@@ -239,8 +275,10 @@ def _dds_cases(make, count, workdir, sample, seed=0, **options: Any) -> list[Cas
     from .dds_target import DEFAULT_DOMAIN, run_dds
 
     domain = options.get("domain", DEFAULT_DOMAIN)
-    progress = options.get("progress", False)
-    cases = run_dds(make, count, workdir=workdir, seed=sample, domain=domain, progress=progress)
+    progress, watch = options.get("progress", False), options.get("watch")
+    cases = run_dds(
+        make, count, workdir=workdir, seed=sample, domain=domain, progress=progress, watch=watch
+    )
     for case in cases:
         if case.defects and options.get("save_failures") is not None:
             case.saved = save_input(case, seed, options["save_failures"])
@@ -254,6 +292,7 @@ def replay(paths: list[Path], *, workdir: Path | None = None, **options: Any) ->
     (``.cdr``) to a ROS 2 node."""
     samples = [p for p in paths if p.suffix == ".cdr"]
     paths = [p for p in paths if p.suffix != ".cdr"]
+    options.setdefault("watch", BinaryWatch())
     with tempfile.TemporaryDirectory(prefix="scanlines-replay-") as scratch:
         workdir = Path(scratch) if workdir is None else workdir
         cases = []
@@ -404,11 +443,15 @@ def main(argv: list[str] | None = None) -> int:
         "domain": args.domain_id,
     }
     started = time.perf_counter()
-    if args.replay:
-        cases = replay(replay_inputs(args.replay), **options)
-    else:
-        targets = tuple(args.targets or DEFAULT_TARGETS)
-        cases = fuzz(args.count, args.seed, targets=targets, **options)
+    try:
+        if args.replay:
+            cases = replay(replay_inputs(args.replay), **options)
+        else:
+            targets = tuple(args.targets or DEFAULT_TARGETS)
+            cases = fuzz(args.count, args.seed, targets=targets, **options)
+    except BinaryChanged as exc:
+        print(f"{parser.prog}: error: {exc}", file=sys.stderr)
+        return BINARY_CHANGED
     print(report(cases, time.perf_counter() - started))
     return 1 if any(case.defects for case in cases) else 0
 
@@ -431,5 +474,13 @@ def replay_inputs(paths: list[Path]) -> list[Path]:
     return inputs
 
 
+#: The exit status of a campaign ended by a shared object rewritten under it.
+BINARY_CHANGED = 2
+
 if __name__ == "__main__":
-    sys.exit(main())
+    status = main()
+    if status == BINARY_CHANGED:  # this process's copy of the core may be damaged too:
+        sys.stdout.flush()  # its clean-up at exit would run it, so there is none
+        sys.stderr.flush()
+        os._exit(status)
+    sys.exit(status)
