@@ -110,7 +110,7 @@ def test_a_local_cluster_gives_the_same_rows(logs, local_dataset, tmp_path) -> N
 def test_a_killed_worker_loses_no_row_and_doubles_none(logs, local_dataset, tmp_path) -> None:
     dataset = tmp_path / "features"
     with (
-        LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None) as cluster,
+        LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=":0") as cluster,
         Client(cluster) as client,
     ):
         victims = list(client.run(os.getpid).values())
@@ -218,7 +218,7 @@ def test_a_notebook_computes_the_tasks_on_its_own_cluster(logs, local_dataset, t
 
     dataset = tmp_path / "features"
     with (
-        LocalCluster(n_workers=1, threads_per_worker=1, dashboard_address=None) as cluster,
+        LocalCluster(n_workers=1, threads_per_worker=1, dashboard_address=":0") as cluster,
         Client(cluster),
     ):
         results = dask.compute(*fleet_tasks([logs / "b"], dataset, chunk_records=CHUNK))

@@ -120,9 +120,11 @@ class _executor:
         if self.scheduler == "local":
             # silence_logs: the workers' warnings (a task cancelled on Ctrl-C) stay off
             # the console
+            # dashboard_address ":0": a free port (None still binds 8787 and warns when
+            # another cluster holds it, dask/distributed#8136)
             with _interrupts_held():  # Ctrl-C is the command's to handle, not the workers'
                 self._cluster = LocalCluster(n_workers=self.jobs, threads_per_worker=1,
-                                             processes=True, dashboard_address=None,
+                                             processes=True, dashboard_address=":0",
                                              silence_logs=logging.ERROR,
                                              preload=["scanlines.runs.fleet"])  # fmt: skip
             self._client = Client(self._cluster)
