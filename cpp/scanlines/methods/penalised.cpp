@@ -262,7 +262,12 @@ Partition best_partition(const Returns& ret, const Reals& sigma, const Reals& fo
     for (int round = 0; round < ROUNDS; ++round) {
         Sums sums = weighted_sums(ret, sigma, footprint, o.model_error, held);
         runs = optimal_runs(sums, opens, o);
-        runs = joined_runs(sums, opens, runs, o);
+        // Joined until no two neighbours join: a long wall comes out of the look-back in
+        // pieces, and a join of two long pieces can pay where each piece's first did not.
+        for (std::size_t before = 0; before != runs.a.size();) {
+            before = runs.a.size();
+            runs = joined_runs(sums, opens, runs, o);
+        }
         Flags fits = inside_fit(ret, sums, sigma, o.model_error, runs, o.clutter_cost);
         if (o.bridge_left_out) outside_runs_left_out(runs, fits);
         bool changed = fits != held;
