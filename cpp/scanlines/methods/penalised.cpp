@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <tuple>
 
+#include "scanlines/steps/noise.hpp"
 #include "scanlines/steps/returns.hpp"
 
 namespace scanlines::penalised {
@@ -329,6 +331,61 @@ Flags kept_runs(const Returns& ret, const Flags& held, const Runs& runs, Index m
         keep[k] = count >= min_points && length >= min_length;
     }
     return keep;
+}
+
+ScanReturns scan_returns(View<double> ranges, View<bool> valid, const Stack& sensor,
+                         double noise_sigma) {
+    const Index n_beams = ranges.size;
+    ScanReturns out{valid_returns(ranges, valid, sensor.cos, sensor.sin), {}, false};
+    if (out.ret.size() == 0) return out;
+    Ints gap = beam_gaps(out.ret.index, n_beams);
+    NoiseLine noise = sensor.noise;
+    if (noise_sigma == noise_sigma) noise = {noise_sigma, 0.0};
+    noise = resolve_noise(noise, out.ret, gap);
+    if (sensor.full_circle) std::tie(out.ret, out.ring) = seam_at_widest_gap(out.ret, gap, n_beams);
+    out.sigma.resize(out.ret.r.size());
+    for (std::size_t p = 0; p < out.sigma.size(); ++p) out.sigma[p] = noise_at(noise, out.ret.r[p]);
+    return out;
+}
+
+Partition ring_partition(ScanReturns& scan, Reals& footprint, Index n_beams, double step,
+                         const Objective& objective) {
+    Partition part = best_partition(scan.ret, scan.sigma, footprint, n_beams, step, objective);
+    if (scan.ring && part.runs.a.size() > 1) {
+        Index shift = part.runs.b[0] + 1;
+        scan.ret = rotated(scan.ret, shift);
+        std::rotate(scan.sigma.begin(), scan.sigma.begin() + shift, scan.sigma.end());
+        std::rotate(footprint.begin(), footprint.begin() + shift, footprint.end());
+        part = best_partition(scan.ret, scan.sigma, footprint, n_beams, step, objective);
+    }
+    return part;
+}
+
+HeldRuns held_runs(const ScanReturns& scan, const Partition& part, const Ints& kept_ids,
+                   double range_sigma) {
+    Ints position(scan.ret.r.size());
+    Index held_count = 0;
+    for (std::size_t p = 0; p < position.size(); ++p) {
+        held_count += part.held[p];
+        position[p] = held_count - 1;
+    }
+    HeldRuns out;
+    for (Index k : kept_ids) {
+        out.a.push_back(position[part.runs.a[k]]);
+        out.b.push_back(position[part.runs.b[k]]);
+    }
+    for (std::size_t p = 0; p < scan.sigma.size(); ++p)
+        if (part.held[p]) out.sigma.push_back(scan.sigma[p]);
+    out.ret = kept(scan.ret, part.held);
+    if (range_sigma == range_sigma) out.sigma.assign(out.ret.r.size(), range_sigma);
+    return out;
+}
+
+Ints left_out(const Returns& ret, const Partition& part) {
+    Ints out;
+    for (Index p = 0; p < ret.size(); ++p)
+        if (!part.held[p]) out.push_back(ret.index[p]);
+    return out;
 }
 
 }  // namespace scanlines::penalised

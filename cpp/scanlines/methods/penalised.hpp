@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "scanlines/core.hpp"
+#include "scanlines/steps/stack.hpp"
 
 namespace scanlines::penalised {
 
@@ -95,5 +96,34 @@ Index corner_between(const Returns& ret, const Sums& sums, const Reals& sigma, c
 // Which runs hold at least min_points returns in their fit and are at least min_length long.
 Flags kept_runs(const Returns& ret, const Flags& held, const Runs& runs, Index min_points,
                 double min_length);
+
+// A scan's valid returns as the partition takes them: a full circle rotated to start after
+// its widest gap (ring: whether it closes), and each return's range noise (noise_sigma, or
+// NaN for the sensor's noise line, else the scan's own).
+struct ScanReturns {
+    Returns ret;
+    Reals sigma;
+    bool ring;
+};
+ScanReturns scan_returns(View<double> ranges, View<bool> valid, const Stack& sensor,
+                         double noise_sigma);
+
+// The best partition of scan's returns; a closed ring is cut where the first optimum had a
+// boundary and solved again (scan and footprint rotated with it).
+Partition ring_partition(ScanReturns& scan, Reals& footprint, Index n_beams, double step,
+                         const Objective& objective);
+
+// The returns held in a fit, the runs `kept` renumbered to them, and their range noise
+// (range_sigma, or NaN for each return's own).
+struct HeldRuns {
+    Returns ret;
+    Ints a, b;
+    Reals sigma;
+};
+HeldRuns held_runs(const ScanReturns& scan, const Partition& part, const Ints& kept,
+                   double range_sigma);
+
+// The beams of the returns the partition left out.
+Ints left_out(const Returns& ret, const Partition& part);
 
 }  // namespace scanlines::penalised

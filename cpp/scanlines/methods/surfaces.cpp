@@ -181,59 +181,25 @@ void pool_lines(ScanResult& result, const Returns& ret, const Reals& sigma, cons
 ScanResult surfaces_scan(View<double> ranges, View<bool> valid, const Stack& sensor,
                          const SurfacesSettings& s) {
     const Index n_beams = ranges.size;
-    Returns ret = valid_returns(ranges, valid, sensor.cos, sensor.sin);
-    if (ret.size() == 0) return empty_result({}, {});
-    Ints gap = beam_gaps(ret.index, n_beams);
-    NoiseLine noise = sensor.noise;
-    if (s.noise_sigma == s.noise_sigma) noise = {s.noise_sigma, 0.0};
-    noise = resolve_noise(noise, ret, gap);
-    bool ring = false;
-    if (sensor.full_circle) std::tie(ret, ring) = seam_at_widest_gap(ret, gap, n_beams);
-    Reals sigma(ret.r.size());
-    for (std::size_t p = 0; p < sigma.size(); ++p) sigma[p] = noise_at(noise, ret.r[p]);
+    ScanReturns scan = scan_returns(ranges, valid, sensor, s.noise_sigma);
+    if (scan.ret.size() == 0) return empty_result({}, {});
     const Objective objective{s.penalty, s.clutter_cost, s.model_error, s.min_points,
                               Residual::ALONG_BEAM, true};
-    Reals weights = footprint_weights(ret, sensor.step, s.footprint);
-    Partition part = best_partition(ret, sigma, weights, n_beams, sensor.step, objective);
-    if (ring && part.runs.a.size() > 1) {
-        // A closed ring: cut it where the first optimum had a boundary, and solve again.
-        Index shift = part.runs.b[0] + 1;
-        ret = rotated(ret, shift);
-        std::rotate(sigma.begin(), sigma.begin() + shift, sigma.end());
-        std::rotate(weights.begin(), weights.begin() + shift, weights.end());
-        part = best_partition(ret, sigma, weights, n_beams, sensor.step, objective);
-    }
-    auto [breakpoints, corners] =
-        surface_events(ret, part, sigma, sensor.step, {sensor.full_circle, ring, n_beams});
-    Ints outliers;
-    for (Index p = 0; p < ret.size(); ++p)
-        if (!part.held[p]) outliers.push_back(ret.index[p]);
-    Flags keep = kept_runs(ret, part.held, part.runs, s.min_points, s.min_length);
+    Reals weights = footprint_weights(scan.ret, sensor.step, s.footprint);
+    Partition part = ring_partition(scan, weights, n_beams, sensor.step, objective);
+    auto [breakpoints, corners] = surface_events(scan.ret, part, scan.sigma, sensor.step,
+                                                 {sensor.full_circle, scan.ring, n_beams});
+    Flags keep = kept_runs(scan.ret, part.held, part.runs, s.min_points, s.min_length);
     Ints kept_ids;
     for (std::size_t k = 0; k < keep.size(); ++k)
         if (keep[k]) kept_ids.push_back(static_cast<Index>(k));
     Ints group = surface_groups(part.sums, part.runs, kept_ids, s.penalty, s.model_error);
-    // The returns held in a fit, and the kept runs renumbered to them.
-    Ints position(ret.r.size());
-    Index held_count = 0;
-    for (std::size_t p = 0; p < position.size(); ++p) {
-        held_count += part.held[p];
-        position[p] = held_count - 1;
-    }
-    Ints a, b;
-    for (Index k : kept_ids) {
-        a.push_back(position[part.runs.a[k]]);
-        b.push_back(position[part.runs.b[k]]);
-    }
-    Reals held_sigma;
-    for (std::size_t p = 0; p < sigma.size(); ++p)
-        if (part.held[p]) held_sigma.push_back(sigma[p]);
-    ret = kept(ret, part.held);
-    if (s.range_sigma == s.range_sigma) held_sigma.assign(ret.r.size(), s.range_sigma);
-    Moments moments = prefix_moments(ret.x, ret.y);
-    ScanResult result = assemble(ret, TLS, moments, a, b, sensor.angle_min, held_sigma,
-                                 {breakpoints, corners, outliers}, n_beams, ring);
-    pool_lines(result, ret, held_sigma, a, b, group, sensor.angle_min);
+    HeldRuns held = held_runs(scan, part, kept_ids, s.range_sigma);
+    Moments moments = prefix_moments(held.ret.x, held.ret.y);
+    ScanResult result =
+        assemble(held.ret, TLS, moments, held.a, held.b, sensor.angle_min, held.sigma,
+                 {breakpoints, corners, left_out(scan.ret, part)}, n_beams, scan.ring);
+    pool_lines(result, held.ret, held.sigma, held.a, held.b, group, sensor.angle_min);
     return result;
 }
 
