@@ -3,12 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <tuple>
 
 #include "scanlines/methods/penalised.hpp"
 #include "scanlines/steps/assemble.hpp"
 #include "scanlines/steps/fit.hpp"
-#include "scanlines/steps/noise.hpp"
 #include "scanlines/steps/returns.hpp"
 
 namespace scanlines {
@@ -85,10 +83,7 @@ ScanResult partition_scan(View<double> ranges, View<bool> valid, const Stack& se
     auto [breakpoints, corners] =
         partition_events(scan.ret, part.sums, scan.sigma, part.runs, part.gap, sensor.step,
                          {sensor.full_circle, scan.ring, n_beams});
-    Flags keep = kept_runs(scan.ret, part.held, part.runs, s.min_points, s.min_length);
-    Ints kept_ids;
-    for (std::size_t k = 0; k < keep.size(); ++k)
-        if (keep[k]) kept_ids.push_back(static_cast<Index>(k));
+    Ints kept_ids = kept_runs(scan.ret, part.held, part.runs, s.min_points, s.min_length);
     HeldRuns held = held_runs(scan, part, kept_ids, s.range_sigma);
     Moments moments = prefix_moments(held.ret.x, held.ret.y);
     ScanResult result =

@@ -320,15 +320,15 @@ Index corner_between(const Returns& ret, const Sums& sums, const Reals& sigma, c
     return to_end <= to_begin ? end : begin;
 }
 
-Flags kept_runs(const Returns& ret, const Flags& held, const Runs& runs, Index min_points,
+Ints kept_runs(const Returns& ret, const Flags& held, const Runs& runs, Index min_points,
                 double min_length) {
-    Flags keep(runs.a.size());
+    Ints keep;
     for (std::size_t k = 0; k < runs.a.size(); ++k) {
         Index count = 0;
         for (Index p = runs.a[k]; p <= runs.b[k]; ++p) count += held[p];
         double length = std::hypot(ret.x[runs.b[k]] - ret.x[runs.a[k]],
                                    ret.y[runs.b[k]] - ret.y[runs.a[k]]);
-        keep[k] = count >= min_points && length >= min_length;
+        if (count >= min_points && length >= min_length) keep.push_back(static_cast<Index>(k));
     }
     return keep;
 }

@@ -93,8 +93,8 @@ std::pair<Returns, bool> seam_at_widest_gap(Returns ret, const Ints& gap, Index 
 Index corner_between(const Returns& ret, const Sums& sums, const Reals& sigma, const Runs& runs,
                      Index i, Index j, double sigmas);
 
-// Which runs hold at least min_points returns in their fit and are at least min_length long.
-Flags kept_runs(const Returns& ret, const Flags& held, const Runs& runs, Index min_points,
+// The runs (their numbers) that hold at least min_points returns in their fit and are at least min_length long.
+Ints kept_runs(const Returns& ret, const Flags& held, const Runs& runs, Index min_points,
                 double min_length);
 
 // A scan's valid returns as the partition takes them: a full circle rotated to start after

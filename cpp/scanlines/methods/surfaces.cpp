@@ -2,12 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <tuple>
 
 #include "scanlines/methods/penalised.hpp"
 #include "scanlines/steps/assemble.hpp"
 #include "scanlines/steps/fit.hpp"
-#include "scanlines/steps/noise.hpp"
 #include "scanlines/steps/returns.hpp"
 
 namespace scanlines {
@@ -189,10 +187,7 @@ ScanResult surfaces_scan(View<double> ranges, View<bool> valid, const Stack& sen
     Partition part = ring_partition(scan, weights, n_beams, sensor.step, objective);
     auto [breakpoints, corners] = surface_events(scan.ret, part, scan.sigma, sensor.step,
                                                  {sensor.full_circle, scan.ring, n_beams});
-    Flags keep = kept_runs(scan.ret, part.held, part.runs, s.min_points, s.min_length);
-    Ints kept_ids;
-    for (std::size_t k = 0; k < keep.size(); ++k)
-        if (keep[k]) kept_ids.push_back(static_cast<Index>(k));
+    Ints kept_ids = kept_runs(scan.ret, part.held, part.runs, s.min_points, s.min_length);
     Ints group = surface_groups(part.sums, part.runs, kept_ids, s.penalty, s.model_error);
     HeldRuns held = held_runs(scan, part, kept_ids, s.range_sigma);
     Moments moments = prefix_moments(held.ret.x, held.ret.y);

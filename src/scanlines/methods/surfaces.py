@@ -21,11 +21,11 @@ as there, with these changes:
   up to 80 deg of incidence can put them (plus three sigmas), a corner where the two lines
   turn by more than three standard deviations and meet between the facing returns.
 
-And one output rule: **pieces of one surface share one line.** Neighbouring segments
-(with returns of something else or missing beams between them, as a wall behind a chair
-leg) whose returns one line explains for less than the price of a segment (``penalty``)
-are reported each with that common line, its covariance and its rms, fitted to the
-returns of all of them.
+And one output rule: **pieces of one surface share one line.** A segment and one of the
+three segments before it (with returns of something else or missing beams between them, as
+a wall behind a chair leg), whose returns one line explains for less than the price of a
+segment (``penalty``), are reported each with that common line, its covariance and its
+rms, fitted to the returns of all of them.
 
 Weights are ``footprint / (sigma(r)^2 + model_error^2)`` with ``sigma(r)`` the measured
 range noise: a sensor profile's noise line, else the scan's own (:mod:`scanlines.steps.noise`);
@@ -40,24 +40,14 @@ from typing import Any, ClassVar
 
 from scanlines._core import surfaces_stack
 from scanlines.methods.base import CompiledMethod, kernel_values
+from scanlines.methods.partition_settings import PARAMETERS as PARTITION
 from scanlines.params import MAX_METRES, Param, auto_or, number, segment_params
 
 __all__ = ["Surfaces"]
 
+#: The objective's three parameters are partition's (the same objective, the same domains).
 PARAMETERS: dict[str, Param] = {
-    "penalty": Param(
-        50.0, number(low=0.0, high=1e6), "cost of one more segment (nats of likelihood)"
-    ),
-    "clutter_cost": Param(
-        20.0,
-        number(low=0.0, low_open=True, high=1e6),
-        "cost of leaving one return out as clutter (nats per observation)",
-    ),
-    "model_error": Param(
-        0.002,
-        number(low=0.0, high=MAX_METRES),
-        "how far real walls depart from a line (m), added to the range noise in quadrature",
-    ),
+    **{name: PARTITION[name] for name in ("penalty", "clutter_cost", "model_error")},
     "footprint": Param(
         0.05,
         number(low=0.0, high=MAX_METRES),
