@@ -118,16 +118,16 @@ def test_each_kind_of_value_has_its_spelling() -> None:
         {"min_points": "6", "k": 2, "fit": "tls", "merge": "true", "range_sigma": "AUTO"}
         | {"max_residual": "off", "dkth_range": "0,0.05", "dkth_step": 1e-9},
     )
-    assert config.params == {
-        "min_points": 6,
-        "range_sigma": "auto",
-        "k": 2.0,
-        "dkth_range": (0.0, 0.05),
-        "dkth_step": 1e-9,
-        "fit": "tls",
-        "merge": True,
-        "max_residual": None,
-    }  # checked, typed, in the method's order
+    assert list(config.params.items()) == [
+        ("k", 2.0),
+        ("dkth_range", (0.0, 0.05)),
+        ("dkth_step", 1e-9),
+        ("fit", "tls"),
+        ("merge", True),
+        ("max_residual", None),
+        ("min_points", 6),
+        ("range_sigma", "auto"),
+    ]  # checked, typed, in the method's order (clustering, segments, output)
     text = config.to_toml()
     assert text.splitlines()[:6] == [
         "# scanlines extraction configuration",
@@ -135,7 +135,7 @@ def test_each_kind_of_value_has_its_spelling() -> None:
         'preset = "paper"',
         "",
         "[params]",
-        "min_points = 6",
+        "k = 2.0",
     ]
     for line in (
         'range_sigma = "auto"',
@@ -287,7 +287,7 @@ def test_another_method_than_the_files_is_an_error_when_the_file_sets_its_parame
     with pytest.raises(ParameterError) as caught:
         method_options("iepf", None, None, tuned)
     message = str(caught.value)
-    for needle in ("--method iepf", "'adaptive'", "tuned.toml", "preset 'paper'", "min_points, k"):
+    for needle in ("--method iepf", "'adaptive'", "tuned.toml", "preset 'paper'", "k, min_points"):
         assert needle in message, message
     bare = tmp_path / "bare.toml"
     bare.write_text('method = "adaptive"\n')
@@ -401,7 +401,7 @@ def test_eval_takes_configs_as_method_rows(tmp_path) -> None:
     summary = json.loads((tmp_path / "only" / "summary.json").read_text())
     (spec,) = summary["config"]["specs"]
     assert spec["label"] == "tuned.toml"
-    assert spec["spec"] == "adaptive?min_points=6&dkth_range=0.0,0.05"
+    assert spec["spec"] == "adaptive?dkth_range=0.0,0.05&min_points=6"
     both = cli(*args, "-m", "adaptive", "--out", "both", cwd=tmp_path)
     assert both.returncode == 0, both.stderr
     with (tmp_path / "both" / "summary.csv").open(newline="") as handle:

@@ -13,6 +13,7 @@ from scanlines.config import ExtractionConfig, load_config
 from scanlines.methods import REGISTRY, CompiledMethod, register, unregister
 from scanlines.methods.base import kernel_values
 from scanlines.params import (
+    GROUPS,
     Param,
     as_float,
     auto_or,
@@ -23,10 +24,10 @@ from scanlines.params import (
     number,
     optional,
     radians,
-    segment_params,
 )
-from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, NO_RULE, RULE_CODES, RuleSpec
-from scanlines.steps.events import EVENT_PARAMS
+from scanlines.steps.assemble import output_settings
+from scanlines.steps.breakpoints import CLUSTERING, NO_RULE, RULE_CODES, RuleSpec
+from scanlines.steps.events import EVENTS
 
 
 class Declared(CompiledMethod):
@@ -34,7 +35,7 @@ class Declared(CompiledMethod):
 
     name = "declared_settings"
     parameters: ClassVar[dict[str, Param]] = {
-        **segment_params(4),
+        **output_settings(4),
         "turn": Param(30.0, number(low=0.0, high=90.0), "a turn (deg)", (radians(),)),
         "side": Param("left", choice("left", "right"), "a side", (coded({"left": 0, "right": 1}),)),
         "bound": Param(None, optional(number(low=0.0)), "a bound (m), or none"),
@@ -72,7 +73,7 @@ def test_a_declared_parameter_reaches_method_info_the_file_and_the_record(declar
     Declared.built = 0
     assert load_config(path) == config
     assert Declared.built == 1  # the file is validated once
-    settings = config.extractor()._method.settings
+    settings = config.extractor()._method.record
     assert list(settings) == [
         *("min_points", "min_length", "range_sigma", "turn", "side", "bound", "width"),
         *("auto_width", "quiet"),
@@ -100,20 +101,23 @@ def test_a_string_choice_without_declared_fields_is_refused():
 def test_every_record_field_of_a_builtin_method_comes_from_a_declaration(name):
     cls = REGISTRY[name]
     params = Extractor(name).params
-    declared = kernel_settings(cls.parameters, params)
-    settings = cls.settings_of(params)
-    assert set(settings) - set(declared) <= {"split_reference"}  # the split methods' own
-    for field, value in declared.items():  # NaN fields included
-        assert np.array_equal(settings[field], value, equal_nan=True), field
-        assert np.asarray(settings[field]).dtype == np.asarray(value).dtype, field
+    record = cls.record_of(params)
+    assert list(record) == list(GROUPS)
+    for group, spec in cls.settings.groups().items():
+        declared = kernel_settings(spec, params)
+        settings = record[group]
+        assert set(settings) - set(declared) <= {"split_reference"}  # the split methods' own
+        for field, value in declared.items():  # NaN fields included
+            assert np.array_equal(settings[field], value, equal_nan=True), field
+            assert np.asarray(settings[field]).dtype == np.asarray(value).dtype, field
 
 
 def test_the_rule_and_output_tuples_are_the_fields_of_their_parameter_groups():
-    assert set(RuleSpec._fields) == set(BREAKPOINT_PARAMS)
+    assert set(RuleSpec._fields) == set(CLUSTERING)
     line_tracking = Extractor("line_tracking", abd_lambda=20.0, corner_angle=30.0)._method
     assert line_tracking.rule.abd_lambda == math.radians(20.0)
     assert line_tracking.output.corner_angle == math.radians(30.0)
     assert math.isnan(Extractor("ransac", range_sigma="auto")._method.output.range_sigma)
-    assert set(EVENT_PARAMS) <= set(line_tracking.output._fields)
+    assert set(EVENTS) <= set(line_tracking.output._fields)
     assert line_tracking.rule.breakpoints == RULE_CODES["fixed"]
     assert Extractor("ransac")._method.rule.breakpoints == NO_RULE

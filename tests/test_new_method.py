@@ -19,10 +19,11 @@ from scanlines.cli import app
 from scanlines.data import sample
 from scanlines.io import open_log
 from scanlines.methods import ClusteredMethod, register, unregister
-from scanlines.params import Param, number, segment_params
+from scanlines.params import Param, Settings, number
 from scanlines.runs.runner import run_log_to_file
-from scanlines.steps.breakpoints import BREAKPOINT_PARAMS
-from scanlines.steps.events import EVENT_PARAMS
+from scanlines.steps.assemble import output_settings
+from scanlines.steps.breakpoints import CLUSTERING
+from scanlines.steps.events import EVENTS
 
 
 class ChordSplit(ClusteredMethod):
@@ -30,12 +31,14 @@ class ChordSplit(ClusteredMethod):
     farther than ``bulge`` from the chord of its ends."""
 
     name = "chord_split"
-    parameters: ClassVar[dict[str, Param]] = {
-        **segment_params(3),
-        **BREAKPOINT_PARAMS,
-        **EVENT_PARAMS,
-        "bulge": Param(0.1, number(low=0.0, low_open=True), "largest bulge of one segment (m)"),
-    }
+    settings: ClassVar[Settings] = Settings(
+        clustering=CLUSTERING,
+        segments={
+            "bulge": Param(0.1, number(low=0.0, low_open=True), "largest bulge of one segment (m)")
+        },
+        events=EVENTS,
+        output=output_settings(3),
+    )
 
     def find_runs(self, returns, gap, start, end):
         a, b, group = [], [], []

@@ -35,38 +35,32 @@ nb::object copy_to_numpy(const std::vector<T>& values) {
     return to_numpy(std::vector<T>(values));
 }
 
-AdaptiveSettings adaptive_settings(const nb::dict& d) {
+// The settings record of scanlines/methods/adaptive.py, group by group.
+AdaptiveSettings adaptive_settings(const nb::dict& record) {
     AdaptiveSettings s;
-    s.min_points = setting<Index>(d, "min_points");
-    s.min_length = setting<double>(d, "min_length");
-    s.range_sigma = setting<double>(d, "range_sigma");
-    s.breakpoints = setting<Index>(d, "breakpoints");
-    s.k = setting<double>(d, "k");
-    s.noise_k = setting<double>(d, "noise_k");
-    s.line_k = setting<double>(d, "line_k");
-    s.abd_lambda = setting<double>(d, "abd_lambda");
-    s.auto_abd_lambda = setting<bool>(d, "auto_abd_lambda");
-    s.pdbs_c0 = setting<double>(d, "pdbs_c0");
-    s.jump_distance = setting<double>(d, "jump_distance");
-    s.denoise = setting<Index>(d, "denoise");
-    s.window = setting<Index>(d, "window");
-    s.corner_score = setting<Index>(d, "corner_score");
-    s.slope_window = setting<Index>(d, "slope_window");
-    s.auto_slope_window = setting<bool>(d, "auto_slope_window");
-    s.use_grid = setting<bool>(d, "use_grid");
-    s.max_evaluations = setting<Index>(d, "max_evaluations");
-    s.criterion = setting<Index>(d, "criterion");
-    s.penalty = setting<double>(d, "penalty");
-    s.noise_sigma = setting<double>(d, "noise_sigma");
-    s.estimate_noise = setting<bool>(d, "estimate_noise");
-    s.fit = setting<Index>(d, "fit");
-    s.shared_corner = setting<bool>(d, "shared_corner");
-    s.merge = setting<bool>(d, "merge");
-    s.merge_chi2 = setting<double>(d, "merge_chi2");
-    s.max_residual = setting<double>(d, "max_residual");
-    s.corner_check = setting<bool>(d, "corner_check");
-    s.min_cluster_points = setting<Index>(d, "min_cluster_points");
-    s.constant_noise = setting<bool>(d, "constant_noise");
+    nb::dict noise = group(record, "noise");
+    s.noise = {setting<double>(noise, "noise_sigma"), setting<bool>(noise, "estimate_noise"),
+               setting<bool>(noise, "constant_noise")};
+    nb::dict clustering = group(record, "clustering");
+    s.clustering = {rule_spec_of(clustering), setting<bool>(clustering, "auto_abd_lambda"),
+                    setting<Index>(clustering, "denoise"), setting<Index>(clustering, "window"),
+                    setting<Index>(clustering, "min_cluster_points")};
+    nb::dict segments = group(record, "segments");
+    auto& g = s.segments;
+    g.corner_score = setting<Index>(segments, "corner_score");
+    g.slope_window = setting<Index>(segments, "slope_window");
+    g.auto_slope_window = setting<bool>(segments, "auto_slope_window");
+    g.use_grid = setting<bool>(segments, "use_grid");
+    g.max_evaluations = setting<Index>(segments, "max_evaluations");
+    g.criterion = setting<Index>(segments, "criterion");
+    g.penalty = setting<double>(segments, "penalty");
+    g.fit = setting<Index>(segments, "fit");
+    g.shared_corner = setting<bool>(segments, "shared_corner");
+    g.merge = setting<bool>(segments, "merge");
+    g.merge_chi2 = setting<double>(segments, "merge_chi2");
+    g.max_residual = setting<double>(segments, "max_residual");
+    s.events = {setting<bool>(group(record, "events"), "corner_check")};
+    s.output = output_bounds_of(group(record, "output"));
     return s;
 }
 

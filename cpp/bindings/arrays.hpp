@@ -166,21 +166,37 @@ T setting(const nb::dict& settings, const char* name) {
         return nb::cast<T>(nb::float_(value));
 }
 
-// A clustering rule's fields (RuleSpec in scanlines/steps/breakpoints.py), by name.
-inline RuleSpec rule_spec_of(const nb::dict& d) {
-    return {setting<Index>(d, "breakpoints"), setting<double>(d, "k"),
-            setting<double>(d, "noise_k"),    setting<double>(d, "line_k"),
-            setting<double>(d, "abd_lambda"), setting<double>(d, "pdbs_c0"),
-            setting<double>(d, "jump_distance")};
+// One group of a method's settings record (scanlines.params.Settings.record).
+inline nb::dict group(const nb::dict& record, const char* name) {
+    if (!record.contains(name)) throw nb::key_error(name);
+    return nb::cast<nb::dict>(record[name]);
 }
 
-// A comparison method's output bounds (Output in scanlines/steps/assemble.py), by name.
-inline Output output_of(const nb::dict& d) {
-    return {setting<Index>(d, "min_points"),
-            setting<double>(d, "min_length"),
-            setting<double>(d, "range_sigma"),
-            {setting<Index>(d, "corner_beams"), setting<double>(d, "corner_distance"),
-             setting<double>(d, "corner_angle")}};
+// The clustering rule's fields (the shared clustering settings, RuleSpec in
+// scanlines/steps/breakpoints.py), by name.
+inline RuleSpec rule_spec_of(const nb::dict& clustering) {
+    return {setting<Index>(clustering, "breakpoints"), setting<double>(clustering, "k"),
+            setting<double>(clustering, "noise_k"),    setting<double>(clustering, "line_k"),
+            setting<double>(clustering, "abd_lambda"), setting<double>(clustering, "pdbs_c0"),
+            setting<double>(clustering, "jump_distance")};
+}
+
+// The output settings every method has (output_settings in scanlines/steps/assemble.py).
+inline OutputBounds output_bounds_of(const nb::dict& output) {
+    return {setting<Index>(output, "min_points"), setting<double>(output, "min_length"),
+            setting<double>(output, "range_sigma")};
+}
+
+// The shared corner rule's bounds (EVENTS in scanlines/steps/events.py).
+inline CornerBounds corner_bounds_of(const nb::dict& events) {
+    return {setting<Index>(events, "corner_beams"), setting<double>(events, "corner_distance"),
+            setting<double>(events, "corner_angle")};
+}
+
+// A comparison method's output (Output in scanlines/steps/assemble.py): its output and
+// events settings (one flat dict may hold both).
+inline Output output_of(const nb::dict& output, const nb::dict& events) {
+    return {output_bounds_of(output), corner_bounds_of(events)};
 }
 
 }  // namespace scanlines::bind

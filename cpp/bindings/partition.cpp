@@ -6,6 +6,32 @@
 
 namespace scanlines::bind {
 
+namespace {
+
+// The objective's settings, shared by partition and surfaces (their segments group).
+penalised::ObjectiveSettings objective_of(const nb::dict& segments) {
+    return {setting<double>(segments, "penalty"), setting<double>(segments, "clutter_cost"),
+            setting<double>(segments, "model_error")};
+}
+
+// The settings record of scanlines/methods/partition.py, group by group.
+PartitionSettings partition_settings(const nb::dict& record) {
+    nb::dict output = group(record, "output");
+    return {setting<double>(group(record, "noise"), "noise_sigma"),
+            objective_of(group(record, "segments")),
+            {output_bounds_of(output), setting<double>(output, "max_rho_sigma")}};
+}
+
+// The settings record of scanlines/methods/surfaces.py, group by group.
+SurfacesSettings surfaces_settings(const nb::dict& record) {
+    nb::dict segments = group(record, "segments");
+    return {setting<double>(group(record, "noise"), "noise_sigma"),
+            {objective_of(segments), setting<double>(segments, "footprint")},
+            output_bounds_of(group(record, "output"))};
+}
+
+}  // namespace
+
 void bind_partition(nb::module_& m) {
     m.def(
         "partition_stack",
@@ -14,14 +40,7 @@ void bind_partition(nb::module_& m) {
            bool full_circle, double angle_min, std::pair<double, double> noise,
            const nb::dict& settings) {
             Stack stack = stack_of(ranges, valid, cos, sin, step, full_circle, angle_min, noise);
-            PartitionSettings s{setting<double>(settings, "penalty"),
-                                setting<double>(settings, "clutter_cost"),
-                                setting<double>(settings, "model_error"),
-                                setting<Index>(settings, "min_points"),
-                                setting<double>(settings, "min_length"),
-                                setting<double>(settings, "max_rho_sigma"),
-                                setting<double>(settings, "noise_sigma"),
-                                setting<double>(settings, "range_sigma")};
+            PartitionSettings s = partition_settings(settings);
             Table table;
             {
                 nb::gil_scoped_release unlocked;
@@ -37,14 +56,7 @@ void bind_partition(nb::module_& m) {
            bool full_circle, double angle_min, std::pair<double, double> noise,
            const nb::dict& settings) {
             Stack stack = stack_of(ranges, valid, cos, sin, step, full_circle, angle_min, noise);
-            SurfacesSettings s{setting<double>(settings, "penalty"),
-                               setting<double>(settings, "clutter_cost"),
-                               setting<double>(settings, "model_error"),
-                               setting<double>(settings, "footprint"),
-                               setting<Index>(settings, "min_points"),
-                               setting<double>(settings, "min_length"),
-                               setting<double>(settings, "noise_sigma"),
-                               setting<double>(settings, "range_sigma")};
+            SurfacesSettings s = surfaces_settings(settings);
             Table table;
             {
                 nb::gil_scoped_release unlocked;

@@ -7,29 +7,30 @@ namespace scanlines::bind {
 
 namespace {
 
-template <Table (*kernel)(const Stack&, const SplitSettings&, const RuleSpec&, const Output&)>
+// The settings record of scanlines/methods/iepf.py and split_merge.py, group by group
+// (the fields only split_merge has are NaN for iepf and pdbs).
+SplitSettings split_settings(const nb::dict& record) {
+    auto optional = [](const nb::dict& group, const char* name) {
+        return group.contains(name) ? setting<double>(group, name) : NAN;
+    };
+    nb::dict clustering = group(record, "clustering"), segments = group(record, "segments");
+    return {{rule_spec_of(clustering), optional(clustering, "outlier_distance")},
+            {setting<double>(segments, "split_distance"),
+             setting<Index>(segments, "split_reference"), optional(segments, "merge_chi2")},
+            output_of(group(record, "output"), group(record, "events"))};
+}
+
+template <Table (*kernel)(const Stack&, const SplitSettings&)>
 nb::tuple split_stack(const In<double, nb::ndim<2>>& ranges, const In<bool, nb::ndim<2>>& valid,
                       const In<double, nb::ndim<1>>& cos, const In<double, nb::ndim<1>>& sin,
                       double step, bool full_circle, double angle_min,
-                      std::pair<double, double> noise, const nb::dict& settings,
-                      const nb::dict& rule, const nb::dict& out) {
+                      std::pair<double, double> noise, const nb::dict& record) {
     Stack stack = stack_of(ranges, valid, cos, sin, step, full_circle, angle_min, noise);
-    auto optional = [&](const char* name) {
-        return settings.contains(name) ? nb::cast<double>(settings[name]) : NAN;
-    };
-    SplitSettings s{setting<double>(settings, "split_distance"),
-                    setting<Index>(settings, "split_reference"),
-                    setting<Index>(settings, "min_points"),
-                    setting<double>(settings, "min_length"),
-                    setting<double>(settings, "range_sigma"),
-                    optional("outlier_distance"),
-                    optional("merge_chi2")};
-    RuleSpec spec = rule_spec_of(rule);
-    Output output = output_of(out);
+    SplitSettings s = split_settings(record);
     Table table;
     {
         nb::gil_scoped_release unlocked;
-        table = kernel(stack, s, spec, output);
+        table = kernel(stack, s);
     }
     return table_to_numpy(std::move(table));
 }

@@ -117,7 +117,7 @@ nb::tuple finish_binding(const InInts& index, const InReals& r, const InReals& x
                          NoisePair noise) {
     Returns returns = returns_of(index, r, x, y);
     check_runs(a, b, returns.size());
-    Output output = output_of(out);
+    Output output = output_of(out, out);  // the step's Output tuple: both groups' fields
     Clustering clustering{clustered_ring.first, clustered_ring.second, vector_of(breakpoints)};
     ScanResult result;
     {

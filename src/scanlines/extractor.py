@@ -32,13 +32,16 @@ def method_names() -> tuple[str, ...]:
 
 
 class ParamInfo(NamedTuple):
-    """One parameter of a method: its default, what it does, and the values it takes (in
-    words, and as ``domain``: ``{"type": "float", "low": 0.0, "high": 90.0, ...}``)."""
+    """One parameter of a method: its default, what it does, the values it takes (in
+    words, and as ``domain``: ``{"type": "float", "low": 0.0, "high": 90.0, ...}``) and
+    its group (:data:`~scanlines.params.GROUPS`; ``""`` for a method declaring flat
+    parameters)."""
 
     default: Any
     doc: str
     allowed: str
     domain: dict[str, Any]
+    group: str = ""
 
 
 @dataclass(frozen=True)
@@ -59,7 +62,11 @@ class MethodInfo:
     def __str__(self) -> str:
         width = max(len(name) for name in self.params)
         lines = [f"{self.name}: {self.doc}", "", "parameters (default; allowed values):"]
+        group = ""
         for name, param in self.params.items():
+            if param.group != group:
+                group = param.group
+                lines.append(f" {group}:")
             lines.append(f"  {name:<{width}}  {param.default!r}; {param.allowed}")
             lines.append(f"  {'':<{width}}  {param.doc}")
         lines.append("")
@@ -85,7 +92,13 @@ def method_info(method: str) -> MethodInfo:
         name=cls.name,
         doc=(module.__doc__ or cls.__doc__ or "").strip().splitlines()[0],
         params={
-            name: ParamInfo(p.default, p.doc, p.check.describe(), p.check.domain())
+            name: ParamInfo(
+                p.default,
+                p.doc,
+                p.check.describe(),
+                p.check.domain(),
+                cls.settings.group_of(name) if cls.settings else "",
+            )
             for name, p in cls.parameters.items()
         },
         presets={name: dict(values) for name, values in cls.presets.items()},

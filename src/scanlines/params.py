@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 import numbers
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -13,12 +13,14 @@ import numpy as np
 from scanlines.errors import ParameterError
 
 __all__ = [
+    "GROUPS",
     "MAX_COUNT",
     "MAX_METRES",
     "MAX_NUMBER",
     "Check",
     "KernelField",
     "Param",
+    "Settings",
     "as_float",
     "auto_or",
     "choice",
@@ -73,25 +75,60 @@ class Param:
     kernel: tuple[KernelField, ...] | None = None
 
 
+GROUPS = ("noise", "clustering", "segments", "events", "output")
+"""What a method's settings are for, in the order a scan meets them: the range noise the
+thresholds use; which neighbouring returns belong together (the clustering rule, the
+denoising); how a cluster becomes segments (the method's own search); the corners and
+breakpoints between segments; which segments are reported, with what covariances."""
+
+
+@dataclass(frozen=True)
+class Settings:
+    """A method's parameters grouped by purpose (:data:`GROUPS`), each group a mapping
+    name -> :class:`Param`; a name belongs to one group only.
+
+    The user sees one flat namespace (:attr:`parameters`: ``Extractor("iepf",
+    split_distance=0.05)``); a compiled kernel reads one settings record per group
+    (:meth:`record`), which its binding turns into the kernel's typed settings.
+    """
+
+    noise: Mapping[str, Param] = field(default_factory=dict)
+    clustering: Mapping[str, Param] = field(default_factory=dict)
+    segments: Mapping[str, Param] = field(default_factory=dict)
+    events: Mapping[str, Param] = field(default_factory=dict)
+    output: Mapping[str, Param] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        seen: dict[str, str] = {}
+        for group, params in self.groups().items():
+            for name in params:
+                if name in seen:
+                    raise TypeError(f"parameter {name!r} is in groups {seen[name]} and {group}")
+                seen[name] = group
+
+    def groups(self) -> dict[str, Mapping[str, Param]]:
+        """Group name -> its parameters, in the order of :data:`GROUPS`."""
+        return {group: getattr(self, group) for group in GROUPS}
+
+    @property
+    def parameters(self) -> dict[str, Param]:
+        """Every parameter, name -> :class:`Param`, group by group."""
+        return {name: p for params in self.groups().values() for name, p in params.items()}
+
+    def group_of(self, name: str) -> str:
+        """The group of the parameter ``name``."""
+        return next(group for group, params in self.groups().items() if name in params)
+
+    def record(self, params: Mapping[str, Any]) -> dict[str, dict[str, Any]]:
+        """The kernel's settings of resolved ``params``: group -> field -> numpy scalar
+        (:func:`kernel_settings` of each group)."""
+        return {group: kernel_settings(spec, params) for group, spec in self.groups().items()}
+
+
 def with_default(param: Param, default: Any, note: str = "") -> Param:
     """``param`` with another default (and a note appended to its doc), same validation
     and kernel fields."""
     return replace(param, default=default, doc=param.doc + (f" ({note})" if note else ""))
-
-
-def segment_params(
-    min_points: int, min_length: float = 0.0, range_sigma: float | str = "auto"
-) -> dict[str, Param]:
-    """The output parameters every method has, with that method's defaults."""
-    return {
-        "min_points": Param(min_points, integer(2, MAX_COUNT), "fewest points of a segment"),
-        "min_length": Param(min_length, number(low=0.0, high=MAX_METRES), "shortest segment (m)"),
-        "range_sigma": Param(
-            range_sigma,
-            auto_or(number(low=0.0, high=MAX_METRES, low_open=True)),
-            "range noise of the covariances (m), or auto: the noise model's",
-        ),
-    }
 
 
 #: Upper bound of the counts that scale with a scan (points, votes): the most beams a
@@ -364,6 +401,6 @@ def kernel_settings(spec: Mapping[str, Param], params: Mapping[str, Any]) -> dic
     out: dict[str, Any] = {}
     for name, param in spec.items():
         fields = (_implied_field(param.check),) if param.kernel is None else param.kernel
-        for field in fields:
-            out[field.name or name] = field.encode(params[name])
+        for kernel_field in fields:
+            out[kernel_field.name or name] = kernel_field.encode(params[name])
     return out

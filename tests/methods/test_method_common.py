@@ -282,7 +282,7 @@ def l_shape(n_side: int = 40) -> tuple[np.ndarray, np.ndarray]:
     return x, y
 
 
-@pytest.mark.parametrize("reference", ["chord", "fit"])
+@pytest.mark.parametrize("reference", ["chord", "line"])
 def test_split_cuts_an_l_at_its_corner_and_keeps_every_point(reference):
     x, y = l_shape()
     a, b, group = split_at_farthest(

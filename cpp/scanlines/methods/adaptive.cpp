@@ -53,8 +53,8 @@ Returns turned(Returns returns, double angle) {
 // The noise line the thresholds use: the noise_sigma override, else the sensor profile's
 // noise or the scan's own (one constant, its value at the median range, with
 // constant_noise).
-NoiseLine scan_noise_model(const AdaptiveSettings& s, NoiseLine noise, const Returns& returns,
-                           const Ints& gap) {
+NoiseLine scan_noise_model(const AdaptiveSettings::Noise& s, NoiseLine noise,
+                           const Returns& returns, const Ints& gap) {
     if (!s.estimate_noise) return {s.noise_sigma, 0.0};
     noise = resolve_noise(noise, returns, gap);
     if (s.constant_noise) return {noise_at(noise, median(returns.r)), 0.0};
@@ -62,15 +62,17 @@ NoiseLine scan_noise_model(const AdaptiveSettings& s, NoiseLine noise, const Ret
 }
 
 // The clustering rule of the settings with the range noise.
-BreakpointRule breakpoint_rule(const AdaptiveSettings& s, NoiseLine noise, double step) {
-    double lambda = s.auto_abd_lambda ? auto_abd_lambda(step) : s.abd_lambda;
-    return make_rule(s.breakpoints, s.k, s.noise_k, s.line_k, lambda, s.pdbs_c0, s.jump_distance,
-                     noise);
+BreakpointRule breakpoint_rule(const AdaptiveSettings::Clustering& s, NoiseLine noise,
+                               double step) {
+    const RuleSpec& rule = s.rule;
+    double lambda = s.auto_abd_lambda ? auto_abd_lambda(step) : rule.abd_lambda;
+    return make_rule(rule.breakpoints, rule.k, rule.noise_k, rule.line_k, lambda, rule.pdbs_c0,
+                     rule.jump_distance, noise);
 }
 
 // The run cost of the criterion: in noise units for BIC (each run's error over its
 // returns' mean noise variance, sigma per return, and incidence), square metres for SSE.
-RunCost run_cost_of(const AdaptiveSettings& s, Moments moments, const Returns& returns,
+RunCost run_cost_of(const AdaptiveSettings::Segments& s, Moments moments, const Returns& returns,
                     const Reals& sigma) {
     if (s.criterion != BIC) return {s.fit, std::move(moments), {}, {}};
     Reals variances = variance_sums(sigma);
@@ -106,7 +108,7 @@ double measured_scale(const RunCost& cost, const Ints& start, const Ints& end,
 // choose_corners over every tried threshold (the "sse" criterion, or a fixed dkth_range).
 Choice chosen_by_full_sweep(const RunCost& cost, const Ints& start, const Ints& end,
                             const Ints& candidates, const Reals& scores, bool rescale,
-                            const AdaptiveSettings& s, const Reals& grid) {
+                            const AdaptiveSettings::Segments& s, const Reals& grid) {
     Levels swept = sweep_levels(cost, start, end, candidates, scores, grid, s.use_grid,
                                 s.max_evaluations, s.shared_corner);
     const Index n_points = points_in(start, end);
@@ -129,7 +131,7 @@ Choice chosen_by_full_sweep(const RunCost& cost, const Ints& start, const Ints& 
 // noise model (1, or with rescale the scale the lines of a first choice measure). Under
 // "bic" the sweep stops where the choice is certain.
 Choice choose_corners(const RunCost& cost, const Ints& start, const Ints& end,
-                      const Reals& scores, bool rescale, const AdaptiveSettings& s,
+                      const Reals& scores, bool rescale, const AdaptiveSettings::Segments& s,
                       const Reals& grid) {
     Ints candidates = peak_positions(scores, start, end);
     Reals candidate_scores(candidates.size());
@@ -158,27 +160,27 @@ Runs segments(const Returns& returns, const RunCost& cost, const Ints& start, co
               const Reals& sigma) {
     const Reals& x = returns.x;
     const Reals& y = returns.y;
-    Runs runs = cut_at(start, end, corners, s.shared_corner);
-    if (!s.shared_corner) std::tie(runs.a, runs.b) = refine_cuts(cost, runs.a, runs.b, runs.group);
-    if (s.merge) {
+    Runs runs = cut_at(start, end, corners, s.segments.shared_corner);
+    if (!s.segments.shared_corner) std::tie(runs.a, runs.b) = refine_cuts(cost, runs.a, runs.b, runs.group);
+    if (s.segments.merge) {
         double segment_cost =
-            s.penalty * std::log(static_cast<double>(std::max<Index>(returns.size(), 2))) * unit;
+            s.segments.penalty * std::log(static_cast<double>(std::max<Index>(returns.size(), 2))) * unit;
         runs = merge_by_criterion(cost, runs.a, runs.b, runs.group, segment_cost);
-        if (s.merge_chi2 > 0.0 && s.fit != PAPER)
+        if (s.segments.merge_chi2 > 0.0 && s.segments.fit != PAPER)
             runs = merge_by_chi_square(returns, cost.moments, runs.a, runs.b, runs.group, sigma,
-                                       s.merge_chi2, true);
+                                       s.segments.merge_chi2, true);
     }
-    if (s.max_residual < INF) {
-        Reals tolerance = residual_tolerances(returns.r, noise, s.max_residual);
-        runs = split_by_residual(x, y, s.fit, cost.moments, runs.a, runs.b, runs.group, tolerance,
-                                 s.min_points);
+    if (s.segments.max_residual < INF) {
+        Reals tolerance = residual_tolerances(returns.r, noise, s.segments.max_residual);
+        runs = split_by_residual(x, y, s.segments.fit, cost.moments, runs.a, runs.b, runs.group, tolerance,
+                                 s.output.min_points);
     }
     Runs out;
     for (std::size_t k = 0; k < runs.a.size(); ++k) {
         Index a = runs.a[k], b = runs.b[k];
         double dx = x[b] - x[a], dy = y[b] - y[a];
         double length = std::sqrt(dx * dx + dy * dy);
-        if (b - a + 1 >= s.min_points && length >= s.min_length) {
+        if (b - a + 1 >= s.output.min_points && length >= s.output.min_length) {
             out.a.push_back(a);
             out.b.push_back(b);
             out.group.push_back(runs.group[k]);
@@ -228,23 +230,23 @@ ScanResult adaptive_scan(View<double> ranges, View<bool> valid, const Stack& sen
     double angle_min = sensor.angle_min;
     Returns returns = valid_returns(ranges, valid, sensor.cos, sensor.sin);
     if (returns.size() == 0) return empty_result({}, {});
-    if (s.fit == PAPER) {
+    if (s.segments.fit == PAPER) {
         // y = kx + b depends on the frame: fit in the sensor frame, as the paper does.
         returns = turned(std::move(returns), angle_min);
         angle_min = 0.0;
     }
     Ints gap = beam_gaps(returns.index, n_beams);
-    NoiseLine noise = scan_noise_model(s, sensor.noise, returns, gap);
+    NoiseLine noise = scan_noise_model(s.noise, sensor.noise, returns, gap);
     const double typical = noise_at(noise, median(returns.r));
-    BreakpointRule rule = breakpoint_rule(s, noise, step);
-    const double margin = s.noise_k * std::sqrt(2.0) * typical;
+    BreakpointRule rule = breakpoint_rule(s.clustering, noise, step);
+    const double margin = s.clustering.rule.noise_k * std::sqrt(2.0) * typical;
     laps.end(STAGE_NOISE);
-    Denoised clean = denoise(std::move(returns), n_beams, step, full_circle, rule, s.denoise,
-                             s.window, s.min_cluster_points, margin);
+    Denoised clean = denoise(std::move(returns), n_beams, step, full_circle, rule, s.clustering.denoise,
+                             s.clustering.window, s.clustering.min_cluster_points, margin);
     laps.end(STAGE_DENOISE);
     if (clean.returns.size() == 0) return empty_result(clean.outliers, clean.outliers);
-    Index window = s.slope_window;
-    if (s.auto_slope_window)
+    Index window = s.segments.slope_window;
+    if (s.segments.auto_slope_window)
         window = turn_window(clean.returns.x, clean.returns.y, clean.returns.index, typical);
     laps.end(STAGE_TURN_WINDOW);
     Clusters clusters = cluster_returns(std::move(clean.returns), n_beams, step, full_circle, rule,
@@ -254,32 +256,32 @@ ScanResult adaptive_scan(View<double> ranges, View<bool> valid, const Stack& sen
     const Ints& start = clusters.start;
     const Ints& end = clusters.end;
     Reals sigma = return_sigmas(ret.r, noise);  // once: the criterion, merge, checks, covariances
-    const RunCost cost = run_cost_of(s, prefix_moments(ret.x, ret.y), ret, sigma);
+    const RunCost cost = run_cost_of(s.segments, prefix_moments(ret.x, ret.y), ret, sigma);
     const Moments& moments = cost.moments;
     laps.end(STAGE_COSTS);
-    Reals scores = corner_scores(ret, n_beams, step, moments, start, end, window, s.corner_score);
+    Reals scores = corner_scores(ret, n_beams, step, moments, start, end, window, s.segments.corner_score);
     laps.end(STAGE_SCORES);
-    const bool rescale = s.estimate_noise && s.criterion == BIC;
-    Choice choice = choose_corners(cost, start, end, scores, rescale, s, grid);
+    const bool rescale = s.noise.estimate_noise && s.segments.criterion == BIC;
+    Choice choice = choose_corners(cost, start, end, scores, rescale, s.segments, grid);
     laps.end(STAGE_CHOICE);
     const double unit =
-        s.criterion == BIC ? choice.scale * choice.scale : typical * typical;
+        s.segments.criterion == BIC ? choice.scale * choice.scale : typical * typical;
     Runs runs = segments(ret, cost, start, end, choice.corners, unit, s, noise, sigma);
     laps.end(STAGE_SEGMENTS);
-    const double check_sigma = s.corner_check ? choice.scale * typical : -1.0;
+    const double check_sigma = s.events.corner_check ? choice.scale * typical : -1.0;
     Reals turn_sigmas;
-    if (s.corner_check) turn_sigmas = direction_sigmas(ret, moments, runs.a, runs.b, sigma);
-    auto [corner_beams, jumps] = junction_events(ret, s.fit, moments, runs.a, runs.b, runs.group,
-                                                 s.shared_corner, clusters.ring, check_sigma,
+    if (s.events.corner_check) turn_sigmas = direction_sigmas(ret, moments, runs.a, runs.b, sigma);
+    auto [corner_beams, jumps] = junction_events(ret, s.segments.fit, moments, runs.a, runs.b, runs.group,
+                                                 s.segments.shared_corner, clusters.ring, check_sigma,
                                                  turn_sigmas);
     Ints breakpoints = clusters.breakpoints;
     breakpoints.insert(breakpoints.end(), jumps.begin(), jumps.end());
     breakpoints = sorted_distinct(std::move(breakpoints));
     laps.end(STAGE_EVENTS);
-    if (s.range_sigma == s.range_sigma)  // given: it replaces the noise line
-        sigma.assign(ret.r.size(), s.range_sigma);
+    if (s.output.range_sigma == s.output.range_sigma)  // given: it replaces the noise line
+        sigma.assign(ret.r.size(), s.output.range_sigma);
     ScanResult result =
-        assemble(ret, s.fit, moments, runs.a, runs.b, angle_min, sigma,
+        assemble(ret, s.segments.fit, moments, runs.a, runs.b, angle_min, sigma,
                  {std::move(breakpoints), std::move(corner_beams), std::move(clean.outliers)},
                  n_beams, full_circle);
     laps.end(STAGE_ASSEMBLY);

@@ -5,36 +5,40 @@
 #include <array>
 
 #include "scanlines/core.hpp"
+#include "scanlines/steps/assemble.hpp"
+#include "scanlines/steps/breakpoints.hpp"
 #include "scanlines/steps/stack.hpp"
 
 namespace scanlines {
 
-// The kernel's settings (the fields scanlines/methods/adaptive_settings.py declares).
+// The kernel's settings, grouped as scanlines/methods/adaptive.py declares them.
 struct AdaptiveSettings {
-    Index min_points;
-    double min_length;
-    double range_sigma;  // NaN: the noise line
-    Index breakpoints;
-    double k, noise_k, line_k;
-    double abd_lambda;  // radians, unless auto_abd_lambda
-    bool auto_abd_lambda;
-    double pdbs_c0, jump_distance;
-    Index denoise, window;
-    Index corner_score, slope_window;
-    bool auto_slope_window;
-    bool use_grid;  // the thresholds of a fixed dkth_range, else the candidates' scores
-    Index max_evaluations;
-    Index criterion;
-    double penalty;
-    double noise_sigma;  // used unless estimate_noise
-    bool estimate_noise;
-    Index fit;
-    bool shared_corner, merge;
-    double merge_chi2;
-    double max_residual;  // inf: no bound
-    bool corner_check;
-    Index min_cluster_points;
-    bool constant_noise;
+    struct Noise {
+        double noise_sigma;  // used unless estimate_noise
+        bool estimate_noise;
+        bool constant_noise;
+    } noise;
+    struct Clustering {
+        RuleSpec rule;         // abd_lambda in radians, unless auto_abd_lambda
+        bool auto_abd_lambda;
+        Index denoise, window, min_cluster_points;
+    } clustering;
+    struct Segments {
+        Index corner_score, slope_window;
+        bool auto_slope_window;
+        bool use_grid;  // the thresholds of a fixed dkth_range, else the candidates' scores
+        Index max_evaluations;
+        Index criterion;
+        double penalty;
+        Index fit;
+        bool shared_corner, merge;
+        double merge_chi2;
+        double max_residual;  // inf: no bound
+    } segments;
+    struct Events {
+        bool corner_check;
+    } events;
+    OutputBounds output;
 };
 
 // The stages of adaptive_scan, in order, for timing them (tools/benchmarks/stage_times.py).

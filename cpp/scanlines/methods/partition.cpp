@@ -76,20 +76,19 @@ ScanResult partition_scan(View<double> ranges, View<bool> valid, const Stack& se
     const Index n_beams = ranges.size;
     ScanReturns scan = scan_returns(ranges, valid, sensor, s.noise_sigma);
     if (scan.ret.size() == 0) return empty_result({}, {});
-    const Objective objective{s.penalty, s.clutter_cost, s.model_error, s.min_points,
-                              Residual::ALONG_BEAM, false};
+    const Objective objective{s.segments, s.output.min_points, Residual::ALONG_BEAM, false};
     Reals once(scan.ret.r.size(), 1.0);  // every return one observation
     Partition part = ring_partition(scan, once, n_beams, sensor.step, objective);
     auto [breakpoints, corners] =
         partition_events(scan.ret, part.sums, scan.sigma, part.runs, part.gap, sensor.step,
                          {sensor.full_circle, scan.ring, n_beams});
-    Ints kept_ids = kept_runs(scan.ret, part.held, part.runs, s.min_points, s.min_length);
-    HeldRuns held = held_runs(scan, part, kept_ids, s.range_sigma);
+    Ints kept_ids = kept_runs(scan.ret, part.held, part.runs, s.output.min_points, s.output.min_length);
+    HeldRuns held = held_runs(scan, part, kept_ids, s.output.range_sigma);
     Moments moments = prefix_moments(held.ret.x, held.ret.y);
     ScanResult result =
         assemble(held.ret, TLS, moments, held.a, held.b, sensor.angle_min, held.sigma,
                  {breakpoints, corners, left_out(scan.ret, part)}, n_beams, scan.ring);
-    return well_determined(result, s.max_rho_sigma);
+    return well_determined(result, s.output.max_rho_sigma);
 }
 
 std::pair<Ints, Ints> partition_optimal_runs(const Reals& x, const Reals& y, const Reals& sigma,
@@ -100,8 +99,9 @@ std::pair<Ints, Ints> partition_optimal_runs(const Reals& x, const Reals& y, con
     ret.x = x;
     ret.y = y;
     Sums sums = weighted_sums(ret, sigma, Reals(x.size(), 1.0), model_error, Flags(x.size(), true));
-    Runs runs = optimal_runs(sums, opens,
-                             {penalty, clutter_cost, model_error, min_points, Residual::ALONG_BEAM, false});
+    const Objective objective{{penalty, clutter_cost, model_error}, min_points,
+                              Residual::ALONG_BEAM, false};
+    Runs runs = optimal_runs(sums, opens, objective);
     return {runs.a, runs.b};
 }
 

@@ -5,17 +5,19 @@
 #include <utility>
 
 #include "scanlines/core.hpp"
+#include "scanlines/methods/penalised.hpp"
+#include "scanlines/steps/assemble.hpp"
 #include "scanlines/steps/stack.hpp"
 
 namespace scanlines {
 
+// The settings of scanlines/methods/partition.py, grouped as it declares them.
 struct PartitionSettings {
-    double penalty, clutter_cost, model_error;
-    Index min_points;
-    double min_length;
-    double max_rho_sigma;  // inf: keep every segment
-    double noise_sigma;    // NaN: the noise line
-    double range_sigma;    // NaN: the noise line
+    double noise_sigma;  // noise; NaN: the noise line
+    penalised::ObjectiveSettings segments;
+    struct Kept : OutputBounds {
+        double max_rho_sigma;  // inf: keep every segment
+    } output;
 };
 
 ScanResult partition_scan(View<double> ranges, View<bool> valid, const Stack& sensor,

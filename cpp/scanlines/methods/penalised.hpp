@@ -14,8 +14,14 @@ namespace scanlines::penalised {
 // the beams (the depth along the segment's mean bearing against the lateral position).
 enum class Residual { ACROSS_LINE, ALONG_BEAM };
 
-struct Objective {
+// The objective's three settings, shared by partition and surfaces (declared once, in
+// scanlines/methods/partition.py): nats of a segment, nats of a return left out, metres of
+// a wall's departure from a line.
+struct ObjectiveSettings {
     double penalty, clutter_cost, model_error;
+};
+
+struct Objective : ObjectiveSettings {
     Index min_points;
     Residual residual;
     // A return left out (a lone spike, a mixed pixel) does not cut the surface its

@@ -24,27 +24,27 @@ struct SplitClusters {
 // Steps 1-2 of the split methods: cluster by the rule, split every cluster at the point
 // farthest from its chord (or line) while it is farther than split_distance.
 SplitClusters cluster_and_split(Returns returns, Index n_beams, const Stack& sensor,
-                                const RuleSpec& rule, const SplitSettings& s) {
-    Clusters clusters =
-        cluster_scan(std::move(returns), n_beams, sensor.step, sensor.full_circle, rule, sensor.noise);
+                                const SplitSettings& s) {
+    Clusters clusters = cluster_scan(std::move(returns), n_beams, sensor.step, sensor.full_circle,
+                                     s.clustering.rule, sensor.noise);
     Moments moments = prefix_moments(clusters.returns.x, clusters.returns.y);
     Runs whole{clusters.start, clusters.end, Ints(clusters.start.size())};
     std::iota(whole.group.begin(), whole.group.end(), Index{0});
     Runs runs = split_at_farthest(clusters.returns.x, clusters.returns.y, moments, whole,
-                                  s.split_distance, s.split_reference);
+                                  s.segments.split_distance, s.segments.split_reference);
     return {std::move(clusters.returns), std::move(moments), std::move(runs),
             {true, clusters.ring, std::move(clusters.breakpoints)}};
 }
 
 ScanResult iepf_scan(View<double> ranges, View<bool> valid, const Stack& sensor,
-                     const SplitSettings& s, const RuleSpec& rule, const Output& out) {
+                     const SplitSettings& s) {
     const Index n_beams = ranges.size;
     Returns returns = valid_returns(ranges, valid, sensor.cos, sensor.sin);
     if (returns.size() == 0) return empty_result({}, {});
-    SplitClusters split = cluster_and_split(std::move(returns), n_beams, sensor, rule, s);
+    SplitClusters split = cluster_and_split(std::move(returns), n_beams, sensor, s);
     return finish(split.returns, n_beams, sensor.full_circle, split.moments, split.runs.a,
-                  split.runs.b, split.runs.group, split.clustering, {}, sensor.angle_min, out,
-                  sensor.noise);
+                  split.runs.b, split.runs.group, split.clustering, {}, sensor.angle_min,
+                  s.output, sensor.noise);
 }
 
 // Step 1 of split-and-merge: the returns without isolated ones, and the beams of those.
@@ -81,37 +81,38 @@ std::pair<Returns, Ints> drop_outliers(Returns returns, double outlier_distance,
 }
 
 ScanResult split_merge_scan(View<double> ranges, View<bool> valid, const Stack& sensor,
-                            const SplitSettings& s, const RuleSpec& rule, const Output& out) {
+                            const SplitSettings& s) {
     const Index n_beams = ranges.size;
     Returns all = valid_returns(ranges, valid, sensor.cos, sensor.sin);
-    auto [returns, outliers] = drop_outliers(std::move(all), s.outlier_distance, s.split_distance);
+    auto [returns, outliers] =
+        drop_outliers(std::move(all), s.clustering.outlier_distance, s.segments.split_distance);
     if (returns.size() == 0) return empty_result({}, outliers);
-    SplitClusters split = cluster_and_split(std::move(returns), n_beams, sensor, rule, s);
+    SplitClusters split = cluster_and_split(std::move(returns), n_beams, sensor, s);
     const Returns& ret = split.returns;
     Runs runs = split.runs;
-    drop_small(ret.x, ret.y, runs.a, runs.b, runs.group, s.min_points, s.min_length);
-    Reals sigma = covariance_sigmas(s.range_sigma, sensor.noise, ret, beam_gaps(ret.index, n_beams));
-    runs = merge_by_chi_square(ret, split.moments, runs.a, runs.b, runs.group, sigma, s.merge_chi2,
-                               false);
+    drop_small(ret.x, ret.y, runs.a, runs.b, runs.group, s.output.min_points,
+               s.output.min_length);
+    Reals sigma =
+        covariance_sigmas(s.output.range_sigma, sensor.noise, ret, beam_gaps(ret.index, n_beams));
+    runs = merge_by_chi_square(ret, split.moments, runs.a, runs.b, runs.group, sigma,
+                               s.segments.merge_chi2, false);
     return finish(ret, n_beams, sensor.full_circle, split.moments, runs.a, runs.b, runs.group,
-                  split.clustering, outliers, sensor.angle_min, out, sensor.noise);
+                  split.clustering, outliers, sensor.angle_min, s.output, sensor.noise);
 }
 
 }  // namespace
 
-Table iepf_stack(const Stack& stack, const SplitSettings& s, const RuleSpec& rule,
-                 const Output& out) {
+Table iepf_stack(const Stack& stack, const SplitSettings& s) {
     Table table;
     for (Index row = 0; row < stack.rows; ++row)
-        table.add(iepf_scan(stack.row_ranges(row), stack.row_valid(row), stack, s, rule, out));
+        table.add(iepf_scan(stack.row_ranges(row), stack.row_valid(row), stack, s));
     return table;
 }
 
-Table split_merge_stack(const Stack& stack, const SplitSettings& s, const RuleSpec& rule,
-                        const Output& out) {
+Table split_merge_stack(const Stack& stack, const SplitSettings& s) {
     Table table;
     for (Index row = 0; row < stack.rows; ++row)
-        table.add(split_merge_scan(stack.row_ranges(row), stack.row_valid(row), stack, s, rule, out));
+        table.add(split_merge_scan(stack.row_ranges(row), stack.row_valid(row), stack, s));
     return table;
 }
 

@@ -9,18 +9,22 @@
 
 namespace scanlines {
 
+// The settings of scanlines/methods/iepf.py and split_merge.py, grouped as they declare them.
 struct SplitSettings {
-    double split_distance;
-    Index split_reference;  // CHORD or LINE
-    // split_merge only:
-    Index min_points;
-    double min_length, range_sigma, outlier_distance, merge_chi2;
+    struct Clustering {
+        RuleSpec rule;
+        double outlier_distance;  // split_merge only: lone returns dropped first
+    } clustering;
+    struct Segments {
+        double split_distance;
+        Index split_reference;  // CHORD or LINE
+        double merge_chi2;      // split_merge only
+    } segments;
+    Output output;  // the output and events settings
 };
 
-Table iepf_stack(const Stack& stack, const SplitSettings& s, const RuleSpec& rule,
-                 const Output& out);
+Table iepf_stack(const Stack& stack, const SplitSettings& s);
 
-Table split_merge_stack(const Stack& stack, const SplitSettings& s, const RuleSpec& rule,
-                        const Output& out);
+Table split_merge_stack(const Stack& stack, const SplitSettings& s);
 
 }  // namespace scanlines

@@ -181,15 +181,15 @@ ScanResult surfaces_scan(View<double> ranges, View<bool> valid, const Stack& sen
     const Index n_beams = ranges.size;
     ScanReturns scan = scan_returns(ranges, valid, sensor, s.noise_sigma);
     if (scan.ret.size() == 0) return empty_result({}, {});
-    const Objective objective{s.penalty, s.clutter_cost, s.model_error, s.min_points,
-                              Residual::ALONG_BEAM, true};
-    Reals weights = footprint_weights(scan.ret, sensor.step, s.footprint);
+    const Objective objective{s.segments, s.output.min_points, Residual::ALONG_BEAM, true};
+    Reals weights = footprint_weights(scan.ret, sensor.step, s.segments.footprint);
     Partition part = ring_partition(scan, weights, n_beams, sensor.step, objective);
     auto [breakpoints, corners] = surface_events(scan.ret, part, scan.sigma, sensor.step,
                                                  {sensor.full_circle, scan.ring, n_beams});
-    Ints kept_ids = kept_runs(scan.ret, part.held, part.runs, s.min_points, s.min_length);
-    Ints group = surface_groups(part.sums, part.runs, kept_ids, s.penalty, s.model_error);
-    HeldRuns held = held_runs(scan, part, kept_ids, s.range_sigma);
+    Ints kept_ids = kept_runs(scan.ret, part.held, part.runs, s.output.min_points, s.output.min_length);
+    Ints group = surface_groups(part.sums, part.runs, kept_ids, s.segments.penalty,
+                                 s.segments.model_error);
+    HeldRuns held = held_runs(scan, part, kept_ids, s.output.range_sigma);
     Moments moments = prefix_moments(held.ret.x, held.ret.y);
     ScanResult result =
         assemble(held.ret, TLS, moments, held.a, held.b, sensor.angle_min, held.sigma,

@@ -4,16 +4,19 @@
 #pragma once
 
 #include "scanlines/core.hpp"
+#include "scanlines/methods/penalised.hpp"
+#include "scanlines/steps/assemble.hpp"
 #include "scanlines/steps/stack.hpp"
 
 namespace scanlines {
 
+// The settings of scanlines/methods/surfaces.py, grouped as it declares them.
 struct SurfacesSettings {
-    double penalty, clutter_cost, model_error, footprint;
-    Index min_points;
-    double min_length;
-    double noise_sigma;  // NaN: the noise line
-    double range_sigma;  // NaN: the noise line
+    double noise_sigma;  // noise; NaN: the noise line
+    struct Segments : penalised::ObjectiveSettings {
+        double footprint;
+    } segments;
+    OutputBounds output;
 };
 
 ScanResult surfaces_scan(View<double> ranges, View<bool> valid, const Stack& sensor,

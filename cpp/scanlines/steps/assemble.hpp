@@ -18,11 +18,16 @@ ScanResult assemble(const Returns& returns, Index fit, const Moments& moments, c
                     const Ints& b, double angle_min, const Reals& sigma, Events events,
                     Index n_beams, bool wrap);
 
-// What a comparison method keeps and reports: the smallest segment, the range noise of
-// the covariances (NaN: the noise model's) and the bounds of the corner rule.
-struct Output {
+// The output settings every method has: the smallest segment reported and the range noise
+// of the covariances (NaN: the noise model's).
+struct OutputBounds {
     Index min_points;
     double min_length, range_sigma;
+};
+
+// What a comparison method keeps and reports: its output bounds and the bounds of the
+// corner rule.
+struct Output : OutputBounds {
     CornerBounds corners;
 };
 

@@ -1,16 +1,18 @@
 """What every method is: the :class:`Method` protocol and its two kinds of implementation.
 
-A method is a class with a ``name``, its ``parameters`` (name ->
-:class:`~scanlines.params.Param`), named ``presets`` and :meth:`Method.extract`, which
-goes from one scan's arrays to an :class:`~scanlines.Extraction`. An instance holds
-resolved, validated parameters; :class:`~scanlines.Extractor` builds it once and calls
-it per scan.
+A method is a class with a ``name``, its ``settings`` (a
+:class:`~scanlines.params.Settings`: its parameters grouped by purpose, declared in its
+module), named ``presets`` and :meth:`Method.extract`, which goes from one scan's arrays to
+an :class:`~scanlines.Extraction`. An instance holds resolved, validated parameters;
+:class:`~scanlines.Extractor` builds it once and calls it per scan. Nothing here names a
+parameter: a method's settings are read by name only in its module and its kernel.
 
 :class:`CompiledMethod`
     The whole method is one compiled kernel (adaptive, iepf, pdbs, split_merge,
-    partition; C++ in ``cpp/scanlines/methods/``), called once per stack of scans without
-    the GIL. Its parameters become typed settings, the fields each declares
-    (:func:`~scanlines.params.kernel_settings`), passed to the kernel by name.
+    partition, surfaces; C++ in ``cpp/scanlines/methods/``), called once per stack of scans
+    without the GIL. Its settings become one record per group, the fields each parameter
+    declares (:meth:`~scanlines.params.Settings.record`), which the kernel's binding reads
+    into its typed settings by name.
 :class:`ClusteredMethod`
     The method's own search is Python over numpy (line tracking, line regression,
     RANSAC, Hough); clustering before it and the events and assembly after it are the
@@ -26,7 +28,7 @@ import numpy as np
 
 from scanlines import _core
 from scanlines.extraction import Extraction, ExtractionTable
-from scanlines.params import Param, kernel_settings
+from scanlines.params import Param, Settings, kernel_settings
 from scanlines.scan import is_full_circle
 from scanlines.steps.assemble import Output, empty_result, finish, to_extraction
 from scanlines.steps.breakpoints import NO_RULE, RuleSpec
@@ -55,15 +57,32 @@ class Method:
     """
 
     name: ClassVar[str] = ""
+    #: The parameters grouped by purpose; a method of your own may declare the flat
+    #: ``parameters`` instead (its kernel then reads one flat record).
+    settings: ClassVar[Settings | None] = None
+    #: Every parameter, name -> :class:`~scanlines.params.Param` (from ``settings``).
     parameters: ClassVar[Mapping[str, Param]] = {}
     presets: ClassVar[Mapping[str, Mapping[str, Any]]] = {}
     #: Whether an Extractor without a sensor profile learns the noise line from its first
     #: scans for this method (:class:`~scanlines.sensor.learned_noise.NoiseLearner`).
     learns_noise: ClassVar[bool] = False
 
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if "settings" in cls.__dict__ and cls.settings is not None:
+            cls.parameters = cls.settings.parameters
+
     def __init__(self, params: Mapping[str, Any], noise: NoiseLine | None = None) -> None:
         self.params = params
         self.noise = UNKNOWN_NOISE if noise is None else NoiseLine(*map(float, noise))
+
+    @classmethod
+    def record_of(cls, params: Mapping[str, Any]) -> dict[str, Any]:
+        """The kernel's settings of resolved ``params``: group -> field -> numpy scalar
+        (a method declaring flat ``parameters``: field -> numpy scalar)."""
+        if cls.settings is None:
+            return kernel_settings(cls.parameters, params)
+        return cls.settings.record(params)
 
     def extract(
         self,
@@ -108,22 +127,17 @@ class CompiledMethod(Method):
     kernel, a loop over the rows of its per-scan kernel that returns one flat table
     (:meth:`~scanlines.extraction.ExtractionTable.of_flat_table` reads it). One scan is a
     stack of one. :meth:`kernel_arguments` returns the kernel's last arguments, by
-    default the settings of :meth:`settings_of` (the fields the parameters declare, as
-    plain numbers by name; a subclass may add constants of its own).
+    default the record of :meth:`record_of` (group -> the fields its parameters declare,
+    as plain numbers by name; a subclass may add arguments of its own).
     """
 
     def __init__(self, params: Mapping[str, Any], noise: NoiseLine | None = None) -> None:
         super().__init__(params, noise)
-        self.settings = self.settings_of(params)
+        self.record = self.record_of(params)
         self.arguments = self.kernel_arguments()
 
-    @classmethod
-    def settings_of(cls, params: Mapping[str, Any]) -> dict[str, np.generic]:
-        """The kernel's settings of resolved ``params``: field name -> numpy scalar."""
-        return kernel_settings(cls.parameters, params)
-
     def kernel_arguments(self) -> tuple[Any, ...]:
-        return (kernel_values(self.settings),)
+        return (kernel_values(self.record),)
 
     @staticmethod
     def kernel(*args: Any) -> tuple[np.ndarray, ...]:
@@ -144,19 +158,25 @@ class CompiledMethod(Method):
         )
 
 
-def kernel_values(settings: Mapping[str, Any]) -> dict[str, Any]:
-    """Settings (field name -> numpy scalar) as plain Python numbers, the form the compiled
-    kernels read by name."""
-    return {name: value.item() if isinstance(value, np.generic) else value
-            for name, value in settings.items()}  # fmt: skip
+def kernel_values(record: Mapping[str, Any]) -> dict[str, Any]:
+    """A settings record (field name -> numpy scalar, or group -> such a record) as plain
+    Python numbers, the form the compiled kernels read by name."""
+    return {
+        name: kernel_values(value) if isinstance(value, Mapping) else _plain(value)
+        for name, value in record.items()
+    }
 
 
-def kernel_tuple(kind: type[NamedTuple], spec: Mapping[str, Param], params: Mapping[str, Any]):
+def _plain(value: Any) -> Any:
+    return value.item() if isinstance(value, np.generic) else value
+
+
+def kernel_tuple(kind: type[NamedTuple], *groups: Mapping[str, Any]):
     """The kernel tuple ``kind`` (:class:`~scanlines.steps.breakpoints.RuleSpec`,
-    :class:`~scanlines.steps.assemble.Output`) of resolved ``params``: its fields as the
-    parameters of ``spec`` named like them declare them."""
-    group = {name: spec[name] for name in kind._fields}
-    return kind(**kernel_settings(group, params))
+    :class:`~scanlines.steps.assemble.Output`) of the fields of the settings records
+    ``groups`` that it names."""
+    fields = {name: value for group in groups for name, value in group.items()}
+    return kind(**{name: fields[name] for name in kind._fields})
 
 
 class ClusteredMethod(Method):
@@ -170,8 +190,10 @@ class ClusteredMethod(Method):
 
     def __init__(self, params: Mapping[str, Any], noise: NoiseLine | None = None) -> None:
         super().__init__(params, noise)
-        self.rule = kernel_tuple(RuleSpec, self.parameters, params)
-        self.output = kernel_tuple(Output, self.parameters, params)
+        record = self.record_of(params)
+        group = (lambda name: record[name]) if self.settings else (lambda name: record)
+        self.rule = kernel_tuple(RuleSpec, group("clustering"))
+        self.output = kernel_tuple(Output, group("output"), group("events"))
 
     def find_runs(
         self, returns: Returns, gap: np.ndarray, start: np.ndarray, end: np.ndarray

@@ -50,9 +50,10 @@ from typing import Any, ClassVar
 import numpy as np
 
 from scanlines.methods.consensus import MAX_MISSES, WHOLE_SCAN, ConsensusMethod
-from scanlines.params import MAX_COUNT, Param, integer, number, segment_params
-from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, LITERAL_CLUSTERING
-from scanlines.steps.events import EVENT_PARAMS
+from scanlines.params import MAX_COUNT, Param, Settings, integer, number
+from scanlines.steps.assemble import output_settings
+from scanlines.steps.breakpoints import CLUSTERING, LITERAL_CLUSTERING
+from scanlines.steps.events import EVENTS
 from scanlines.steps.returns import Returns
 
 MAX_RHO_BINS = 4096
@@ -65,27 +66,35 @@ class Hough(ConsensusMethod):
     """Hough transform (module docstring)."""
 
     name = "hough"
-    parameters: ClassVar[dict[str, Param]] = {
-        **segment_params(5),
-        **BREAKPOINT_PARAMS,
-        **LITERAL_CLUSTERING,
-        "breakpoints": WHOLE_SCAN,
-        "max_misses": MAX_MISSES,
-        "rho_resolution": Param(
-            0.02, number(low=0.0, low_open=True), "accumulator cell size in rho (m)"
-        ),
-        "angle_resolution": Param(
-            1.0, number(low=0.05, high=90.0), "accumulator cell size in alpha (deg)"
-        ),
-        "min_votes": Param(5, integer(1, MAX_COUNT), "fewest votes of an accumulator peak"),
-        "inlier_distance": Param(
-            0.05, number(low=0.0, low_open=True), "largest distance of an inlier from its line (m)"
-        ),
-        "max_gap": Param(
-            0.4, number(low=0.0, low_open=True), "largest distance between consecutive inliers (m)"
-        ),
-        **EVENT_PARAMS,
-    }
+    settings: ClassVar[Settings] = Settings(
+        clustering={
+            **CLUSTERING,
+            **LITERAL_CLUSTERING,
+            "breakpoints": WHOLE_SCAN,
+        },
+        segments={
+            "max_misses": MAX_MISSES,
+            "rho_resolution": Param(
+                0.02, number(low=0.0, low_open=True), "accumulator cell size in rho (m)"
+            ),
+            "angle_resolution": Param(
+                1.0, number(low=0.05, high=90.0), "accumulator cell size in alpha (deg)"
+            ),
+            "min_votes": Param(5, integer(1, MAX_COUNT), "fewest votes of an accumulator peak"),
+            "inlier_distance": Param(
+                0.05,
+                number(low=0.0, low_open=True),
+                "largest distance of an inlier from its line (m)",
+            ),
+            "max_gap": Param(
+                0.4,
+                number(low=0.0, low_open=True),
+                "largest distance between consecutive inliers (m)",
+            ),
+        },
+        events=EVENTS,
+        output=output_settings(5),
+    )
 
     def line_finder(self, returns: Returns, member: np.ndarray, search: Any) -> Accumulator:
         return Accumulator(

@@ -50,54 +50,52 @@ from typing import Any, ClassVar
 import numpy as np
 
 from scanlines._core import iepf_stack
-from scanlines.methods.base import CompiledMethod, kernel_tuple, kernel_values
-from scanlines.params import Param, number, segment_params, with_default
-from scanlines.steps.assemble import Output
-from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, LITERAL_CLUSTERING, RuleSpec
-from scanlines.steps.events import EVENT_PARAMS
+from scanlines.methods.base import CompiledMethod
+from scanlines.params import Param, Settings, number, with_default
+from scanlines.steps.assemble import output_settings
+from scanlines.steps.breakpoints import CLUSTERING, LITERAL_CLUSTERING
+from scanlines.steps.events import EVENTS
 from scanlines.steps.split import REFERENCE_CODES
 
 
 class SplitMethod(CompiledMethod):
     """A method that splits clusters at their farthest point (iepf, pdbs, split_merge): its
-    settings record adds ``split_reference``, what the distance is measured from, and its
-    kernel takes the clustering rule and the output bounds as their tuples."""
+    ``segments`` record adds ``split_reference``, what the distance is measured from."""
 
     reference: ClassVar[str] = "chord"
-    """A key of :data:`~scanlines.steps.split.REFERENCE_CODES`: ``"chord"`` or ``"fit"``."""
+    """A key of :data:`~scanlines.steps.split.REFERENCE_CODES`: ``"chord"`` or ``"line"``
+    (the run's fitted line)."""
 
     @classmethod
-    def settings_of(cls, params: Mapping[str, Any]) -> dict[str, np.generic]:
-        """The settings the parameters declare, and the method's ``split_reference``."""
-        reference = np.int64(REFERENCE_CODES[cls.reference])
-        return {**super().settings_of(params), "split_reference": reference}
-
-    def kernel_arguments(self) -> tuple[Any, ...]:
-        """The settings record, the :class:`~scanlines.steps.breakpoints.RuleSpec` and the
-        :class:`~scanlines.steps.assemble.Output`."""
-        rule = kernel_tuple(RuleSpec, self.parameters, self.params)._asdict()
-        out = kernel_tuple(Output, self.parameters, self.params)._asdict()
-        return kernel_values(self.settings), kernel_values(rule), kernel_values(out)
+    def record_of(cls, params: Mapping[str, Any]) -> dict[str, Any]:
+        """The settings record of the parameters, and the method's ``split_reference``."""
+        record = super().record_of(params)
+        record["segments"]["split_reference"] = np.int64(REFERENCE_CODES[cls.reference])
+        return record
 
 
 class Iepf(SplitMethod):
     """Iterative end-point fit (module docstring)."""
 
     name = "iepf"
-    parameters: ClassVar[dict[str, Param]] = {
-        **segment_params(5),
-        **BREAKPOINT_PARAMS,
-        **LITERAL_CLUSTERING,
-        "breakpoints": with_default(
-            BREAKPOINT_PARAMS["breakpoints"], "fixed", "IEPF: fixed jump distance"
-        ),
-        "split_distance": Param(
-            0.1,
-            number(low=0.0, low_open=True),
-            "split where a point is this far from the chord (m)",
-        ),
-        **EVENT_PARAMS,
-    }
+    settings: ClassVar[Settings] = Settings(
+        clustering={
+            **CLUSTERING,
+            **LITERAL_CLUSTERING,
+            "breakpoints": with_default(
+                CLUSTERING["breakpoints"], "fixed", "IEPF: fixed jump distance"
+            ),
+        },
+        segments={
+            "split_distance": Param(
+                0.1,
+                number(low=0.0, low_open=True),
+                "split where a point is this far from the chord (m)",
+            ),
+        },
+        events=EVENTS,
+        output=output_settings(5),
+    )
 
     @staticmethod
     def kernel(*arguments):

@@ -58,9 +58,10 @@ from typing import ClassVar
 import numpy as np
 
 from scanlines.methods.base import ClusteredMethod
-from scanlines.params import Param, integer, number, segment_params, with_default
-from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, LITERAL_CLUSTERING
-from scanlines.steps.events import EVENT_PARAMS
+from scanlines.params import Param, Settings, integer, number, with_default
+from scanlines.steps.assemble import output_settings
+from scanlines.steps.breakpoints import CLUSTERING, LITERAL_CLUSTERING
+from scanlines.steps.events import EVENTS
 from scanlines.steps.fit import TLS, Moments, fit_many, prefix_moments, run_covariances
 from scanlines.steps.merge import pair_chi_squares
 from scanlines.steps.noise import covariance_sigmas
@@ -73,22 +74,30 @@ class LineRegression(ClusteredMethod):
     """Line regression (module docstring)."""
 
     name = "line_regression"
-    parameters: ClassVar[dict[str, Param]] = {
-        **segment_params(5, range_sigma=0.02),
-        **BREAKPOINT_PARAMS,
-        **LITERAL_CLUSTERING,
-        "breakpoints": with_default(
-            BREAKPOINT_PARAMS["breakpoints"], "fixed", "line regression: fixed jump distance"
-        ),
-        "window": Param(9, integer(2, 1000), "sliding window N_f: points per window fit"),
-        "fidelity": Param(
-            4.0, number(low=0.0, low_open=True), "largest fidelity (summed chi-square) of a window"
-        ),
-        "merge_chi2": Param(
-            6.0, number(low=0.0), "overlapping segments merge below this chi-square of (rho, alpha)"
-        ),
-        **EVENT_PARAMS,
-    }
+    settings: ClassVar[Settings] = Settings(
+        clustering={
+            **CLUSTERING,
+            **LITERAL_CLUSTERING,
+            "breakpoints": with_default(
+                CLUSTERING["breakpoints"], "fixed", "line regression: fixed jump distance"
+            ),
+        },
+        segments={
+            "window": Param(9, integer(2, 1000), "sliding window N_f: points per window fit"),
+            "fidelity": Param(
+                4.0,
+                number(low=0.0, low_open=True),
+                "largest fidelity (summed chi-square) of a window",
+            ),
+            "merge_chi2": Param(
+                6.0,
+                number(low=0.0),
+                "overlapping segments merge below this chi-square of (rho, alpha)",
+            ),
+        },
+        events=EVENTS,
+        output=output_settings(5, range_sigma=0.02),
+    )
 
     def find_runs(self, returns, gap, start, end):
         moments = prefix_moments(returns.x, returns.y)

@@ -52,9 +52,10 @@ from typing import ClassVar
 import numpy as np
 
 from scanlines.methods.base import ClusteredMethod
-from scanlines.params import Param, number, segment_params, with_default
-from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, LITERAL_CLUSTERING
-from scanlines.steps.events import EVENT_PARAMS
+from scanlines.params import Param, Settings, number, with_default
+from scanlines.steps.assemble import output_settings
+from scanlines.steps.breakpoints import CLUSTERING, LITERAL_CLUSTERING
+from scanlines.steps.events import EVENTS
 from scanlines.steps.fit import TLS, Moments, fit_many, prefix_moments
 from scanlines.steps.returns import Returns
 
@@ -65,20 +66,24 @@ class LineTracking(ClusteredMethod):
     """Line tracking (module docstring)."""
 
     name = "line_tracking"
-    parameters: ClassVar[dict[str, Param]] = {
-        **segment_params(5),
-        **BREAKPOINT_PARAMS,
-        **LITERAL_CLUSTERING,
-        "breakpoints": with_default(
-            BREAKPOINT_PARAMS["breakpoints"], "fixed", "line tracking: fixed jump distance"
-        ),
-        "track_distance": Param(
-            0.1,
-            number(low=0.0, low_open=True),
-            "a point farther than this from the current line starts a new one (m)",
-        ),
-        **EVENT_PARAMS,
-    }
+    settings: ClassVar[Settings] = Settings(
+        clustering={
+            **CLUSTERING,
+            **LITERAL_CLUSTERING,
+            "breakpoints": with_default(
+                CLUSTERING["breakpoints"], "fixed", "line tracking: fixed jump distance"
+            ),
+        },
+        segments={
+            "track_distance": Param(
+                0.1,
+                number(low=0.0, low_open=True),
+                "a point farther than this from the current line starts a new one (m)",
+            ),
+        },
+        events=EVENTS,
+        output=output_settings(5),
+    )
 
     def find_runs(self, returns, gap, start, end):
         moments = prefix_moments(returns.x, returns.y)

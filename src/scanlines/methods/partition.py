@@ -61,11 +61,28 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 from scanlines._core import partition_stack
-from scanlines.methods.base import CompiledMethod, kernel_values
-from scanlines.methods.partition_settings import PARAMETERS, PRESETS
-from scanlines.params import Param
+from scanlines.methods.base import CompiledMethod
+from scanlines.params import MAX_METRES, Param, Settings, auto_or, number, optional
+from scanlines.steps.assemble import output_settings
 
-__all__ = ["Partition"]
+__all__ = ["OBJECTIVE", "Partition"]
+
+OBJECTIVE: dict[str, Param] = {
+    "penalty": Param(
+        50.0, number(low=0.0, high=1e6), "cost of one more segment (nats of likelihood)"
+    ),
+    "clutter_cost": Param(
+        20.0,
+        number(low=0.0, low_open=True, high=1e6),
+        "cost of leaving one return out as clutter (nats)",
+    ),
+    "model_error": Param(
+        0.002,
+        number(low=0.0, high=MAX_METRES),
+        "how far real walls depart from a line (m), added to the range noise in quadrature",
+    ),
+}
+"""The objective's parameters (the ``segments`` settings), shared with ``surfaces``."""
 
 
 class Partition(CompiledMethod):
@@ -73,11 +90,25 @@ class Partition(CompiledMethod):
     docstring)."""
 
     name = "partition"
-    parameters: ClassVar[dict[str, Param]] = PARAMETERS
-    presets: ClassVar[dict[str, dict[str, Any]]] = PRESETS
-
-    def kernel_arguments(self) -> tuple[Any, ...]:
-        return (kernel_values(self.settings),)
+    settings: ClassVar[Settings] = Settings(
+        noise={
+            "noise_sigma": Param(
+                "auto",
+                auto_or(number(low=0.0, low_open=True, high=MAX_METRES)),
+                "range noise (m), or auto: the sensor profile's noise line, else the scan's own",
+            ),
+        },
+        segments=OBJECTIVE,
+        output={
+            **output_settings(4),
+            "max_rho_sigma": Param(
+                None,
+                optional(number(low=0.0, low_open=True, high=MAX_METRES)),
+                "keep only segments whose rho standard deviation is at most this (m), or None: all",
+            ),
+        },
+    )
+    presets: ClassVar[dict[str, dict[str, Any]]] = {"repeatable": {"max_rho_sigma": 0.02}}
 
     @staticmethod
     def kernel(*arguments):

@@ -37,20 +37,24 @@ References
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import ClassVar
 
 from scanlines.methods.iepf import Iepf
-from scanlines.params import Param, with_default
-from scanlines.steps.breakpoints import BREAKPOINT_PARAMS
+from scanlines.params import Settings, with_default
+from scanlines.steps.breakpoints import CLUSTERING
 
 
 class Pdbs(Iepf):
     """IEPF with the PDBS clustering rule (module docstring)."""
 
     name = "pdbs"
-    parameters: ClassVar[dict[str, Param]] = {
-        **Iepf.parameters,
-        "breakpoints": with_default(
-            BREAKPOINT_PARAMS["breakpoints"], "pdbs", "PDBS: Premebida and Nunes"
-        ),
-    }
+    settings: ClassVar[Settings] = replace(
+        Iepf.settings,
+        clustering={
+            **Iepf.settings.clustering,
+            "breakpoints": with_default(
+                CLUSTERING["breakpoints"], "pdbs", "PDBS: Premebida and Nunes"
+            ),
+        },
+    )

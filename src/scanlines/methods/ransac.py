@@ -57,9 +57,10 @@ from typing import Any, ClassVar
 import numpy as np
 
 from scanlines.methods.consensus import MAX_MISSES, WHOLE_SCAN, ConsensusMethod
-from scanlines.params import Param, integer, number, segment_params
-from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, LITERAL_CLUSTERING
-from scanlines.steps.events import EVENT_PARAMS
+from scanlines.params import Param, Settings, integer, number
+from scanlines.steps.assemble import output_settings
+from scanlines.steps.breakpoints import CLUSTERING, LITERAL_CLUSTERING
+from scanlines.steps.events import EVENTS
 from scanlines.steps.returns import Returns
 
 #: Most random pairs drawn per line (the cost grows with trials times the points).
@@ -75,22 +76,30 @@ class Ransac(ConsensusMethod):
     """Sequential RANSAC (module docstring)."""
 
     name = "ransac"
-    parameters: ClassVar[dict[str, Param]] = {
-        **segment_params(5),
-        **BREAKPOINT_PARAMS,
-        **LITERAL_CLUSTERING,
-        "breakpoints": WHOLE_SCAN,
-        "max_misses": MAX_MISSES,
-        "inlier_distance": Param(
-            0.05, number(low=0.0, low_open=True), "largest distance of an inlier from its line (m)"
-        ),
-        "trials": Param(200, integer(1, MAX_TRIALS), "random point pairs drawn per line"),
-        "max_gap": Param(
-            0.4, number(low=0.0, low_open=True), "largest distance between consecutive inliers (m)"
-        ),
-        "seed": Param(0, integer(0, 2**63 - 1), "seed of the random draws (per scan)"),
-        **EVENT_PARAMS,
-    }
+    settings: ClassVar[Settings] = Settings(
+        clustering={
+            **CLUSTERING,
+            **LITERAL_CLUSTERING,
+            "breakpoints": WHOLE_SCAN,
+        },
+        segments={
+            "max_misses": MAX_MISSES,
+            "inlier_distance": Param(
+                0.05,
+                number(low=0.0, low_open=True),
+                "largest distance of an inlier from its line (m)",
+            ),
+            "trials": Param(200, integer(1, MAX_TRIALS), "random point pairs drawn per line"),
+            "max_gap": Param(
+                0.4,
+                number(low=0.0, low_open=True),
+                "largest distance between consecutive inliers (m)",
+            ),
+            "seed": Param(0, integer(0, 2**63 - 1), "seed of the random draws (per scan)"),
+        },
+        events=EVENTS,
+        output=output_settings(5),
+    )
 
     def new_search(self) -> np.random.Generator:
         return np.random.default_rng(self.params["seed"])

@@ -58,44 +58,52 @@ from typing import ClassVar
 
 from scanlines._core import split_merge_stack
 from scanlines.methods.iepf import SplitMethod
-from scanlines.params import Param, number, segment_params, with_default
-from scanlines.steps.breakpoints import BREAKPOINT_PARAMS, LITERAL_CLUSTERING
-from scanlines.steps.events import EVENT_PARAMS
+from scanlines.params import Param, Settings, number, with_default
+from scanlines.steps.assemble import output_settings
+from scanlines.steps.breakpoints import CLUSTERING, LITERAL_CLUSTERING
+from scanlines.steps.events import EVENTS
 
 
 class SplitMerge(SplitMethod):
     """Split-and-merge with a chi-square merge (module docstring)."""
 
     name = "split_merge"
-    parameters: ClassVar[dict[str, Param]] = {
-        **segment_params(9, min_length=0.5, range_sigma=0.02),
-        **BREAKPOINT_PARAMS,
-        **LITERAL_CLUSTERING,
-        "breakpoints": with_default(
-            BREAKPOINT_PARAMS["breakpoints"], "fixed", "split-and-merge: fixed, max_line_gap"
-        ),
-        "jump_distance": Param(
-            0.4,
-            BREAKPOINT_PARAMS["jump_distance"].check,
-            "fixed rule: largest neighbour distance, metres (laser_line_extraction max_line_gap)",
-        ),
-        "split_distance": Param(
-            0.05,
-            number(low=0.0, low_open=True),
-            "split where a point is this far from the run's fitted line (m; min_split_dist)",
-        ),
-        "outlier_distance": Param(
-            0.05,
-            number(low=0.0, low_open=True),
-            "outlier: range difference to both neighbours (m; outlier_dist)",
-        ),
-        "merge_chi2": Param(
-            3.0, number(low=0.0), "merge neighbours while chi-square of (rho, alpha) is below this"
-        ),
-        **EVENT_PARAMS,
-    }
+    settings: ClassVar[Settings] = Settings(
+        clustering={
+            **CLUSTERING,
+            **LITERAL_CLUSTERING,
+            "breakpoints": with_default(
+                CLUSTERING["breakpoints"], "fixed", "split-and-merge: fixed, max_line_gap"
+            ),
+            "jump_distance": Param(
+                0.4,
+                CLUSTERING["jump_distance"].check,
+                "fixed rule: largest neighbour distance, metres (laser_line_extraction "
+                "max_line_gap)",
+            ),
+            "outlier_distance": Param(
+                0.05,
+                number(low=0.0, low_open=True),
+                "outlier: range difference to both neighbours (m; outlier_dist)",
+            ),
+        },
+        segments={
+            "split_distance": Param(
+                0.05,
+                number(low=0.0, low_open=True),
+                "split where a point is this far from the run's fitted line (m; min_split_dist)",
+            ),
+            "merge_chi2": Param(
+                3.0,
+                number(low=0.0),
+                "merge neighbours while chi-square of (rho, alpha) is below this",
+            ),
+        },
+        events=EVENTS,
+        output=output_settings(9, min_length=0.5, range_sigma=0.02),
+    )
 
-    reference = "fit"
+    reference = "line"
 
     @staticmethod
     def kernel(*arguments):

@@ -39,27 +39,12 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 from scanlines._core import surfaces_stack
-from scanlines.methods.base import CompiledMethod, kernel_values
-from scanlines.methods.partition_settings import PARAMETERS as PARTITION
-from scanlines.params import MAX_METRES, Param, auto_or, number, segment_params
+from scanlines.methods.base import CompiledMethod
+from scanlines.methods.partition import OBJECTIVE
+from scanlines.params import MAX_METRES, Param, Settings, auto_or, number
+from scanlines.steps.assemble import output_settings
 
 __all__ = ["Surfaces"]
-
-#: The objective's three parameters are partition's (the same objective, the same domains).
-PARAMETERS: dict[str, Param] = {
-    **{name: PARTITION[name] for name in ("penalty", "clutter_cost", "model_error")},
-    "footprint": Param(
-        0.05,
-        number(low=0.0, high=MAX_METRES),
-        "wall length of one independent observation (m); 0: every return is one",
-    ),
-    **segment_params(3),
-    "noise_sigma": Param(
-        "auto",
-        auto_or(number(low=0.0, low_open=True, high=MAX_METRES)),
-        "range noise (m), or auto: the sensor profile's noise line, else the one learned",
-    ),
-}
 
 
 class Surfaces(CompiledMethod):
@@ -67,12 +52,26 @@ class Surfaces(CompiledMethod):
     (module docstring)."""
 
     name = "surfaces"
-    parameters: ClassVar[dict[str, Param]] = PARAMETERS
+    settings: ClassVar[Settings] = Settings(
+        noise={
+            "noise_sigma": Param(
+                "auto",
+                auto_or(number(low=0.0, low_open=True, high=MAX_METRES)),
+                "range noise (m), or auto: the sensor profile's noise line, else the one learned",
+            ),
+        },
+        segments={
+            **OBJECTIVE,  # partition's objective: the same parameters, the same domains
+            "footprint": Param(
+                0.05,
+                number(low=0.0, high=MAX_METRES),
+                "wall length of one independent observation (m); 0: every return is one",
+            ),
+        },
+        output=output_settings(3),
+    )
     presets: ClassVar[dict[str, dict[str, Any]]] = {}
     learns_noise = True
-
-    def kernel_arguments(self) -> tuple[Any, ...]:
-        return (kernel_values(self.settings),)
 
     @staticmethod
     def kernel(*arguments):

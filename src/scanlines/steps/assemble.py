@@ -17,6 +17,7 @@ import numpy as np
 
 from scanlines import _core
 from scanlines.extraction import N_LINE_COLUMNS, Extraction
+from scanlines.params import MAX_COUNT, MAX_METRES, Param, auto_or, integer, number
 from scanlines.steps.arrays import float64s, int64s
 from scanlines.steps.noise import NoiseLine
 from scanlines.steps.returns import Returns
@@ -26,8 +27,25 @@ __all__ = [
     "assemble",
     "empty_result",
     "finish",
+    "output_settings",
     "to_extraction",
 ]
+
+
+def output_settings(
+    min_points: int, min_length: float = 0.0, range_sigma: float | str = "auto"
+) -> dict[str, Param]:
+    """The ``output`` settings every method has (which segments are reported, with what
+    covariances), with that method's defaults."""
+    return {
+        "min_points": Param(min_points, integer(2, MAX_COUNT), "fewest points of a segment"),
+        "min_length": Param(min_length, number(low=0.0, high=MAX_METRES), "shortest segment (m)"),
+        "range_sigma": Param(
+            range_sigma,
+            auto_or(number(low=0.0, high=MAX_METRES, low_open=True)),
+            "range noise of the covariances (m), or auto: the noise model's",
+        ),
+    }
 
 
 class Output(NamedTuple):

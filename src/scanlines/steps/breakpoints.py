@@ -52,7 +52,7 @@ from scanlines.steps.returns import Returns
 __all__ = [
     "ABD",
     "ADAPTIVE",
-    "BREAKPOINT_PARAMS",
+    "CLUSTERING",
     "FIXED",
     "LITERAL_CLUSTERING",
     "NO_RULE",
@@ -70,7 +70,7 @@ RULES = ("paper", "abd", "pdbs", "fixed")
 RULE_CODES = {name: code for code, name in enumerate(RULES)}
 ADAPTIVE, ABD, PDBS, FIXED = range(4)
 
-BREAKPOINT_PARAMS: dict[str, Param] = {
+CLUSTERING: dict[str, Param] = {
     "breakpoints": Param(
         "abd", choice(*RULES), "clustering rule: " + ", ".join(RULES), (coded(RULE_CODES),)
     ),
@@ -97,11 +97,9 @@ BREAKPOINT_PARAMS: dict[str, Param] = {
 """The parameters of a clustering rule, shared by every method that clusters."""
 
 LITERAL_CLUSTERING: dict[str, Param] = {
-    "line_k": Param(
-        0.0, BREAKPOINT_PARAMS["line_k"].check, BREAKPOINT_PARAMS["line_k"].doc + "; off here"
-    )
+    "line_k": Param(0.0, CLUSTERING["line_k"].check, CLUSTERING["line_k"].doc + "; off here")
 }
-"""Overrides of :data:`BREAKPOINT_PARAMS` for the comparison methods: the published
+"""Overrides of :data:`CLUSTERING` for the comparison methods: the published
 clustering rules have no line-continuation bridge."""
 
 
@@ -127,7 +125,7 @@ class BreakpointRule(NamedTuple):
 class RuleSpec(NamedTuple):
     """A clustering rule as a method's parameters give it: the noise terms in sigmas
     (``noise_k``, ``line_k``), ``abd_lambda`` in radians, ``breakpoints`` a rule code or
-    :data:`NO_RULE` (the fields of the parameters of :data:`BREAKPOINT_PARAMS`)."""
+    :data:`NO_RULE` (the fields of the parameters of :data:`CLUSTERING`)."""
 
     breakpoints: int
     k: float

@@ -50,12 +50,12 @@ from scanlines.steps.returns import Returns
 __all__ = [
     "CORNER_SIGMAS",
     "END_KINDS",
-    "EVENT_PARAMS",
+    "EVENTS",
     "junction_events",
     "segment_events",
 ]
 
-EVENT_PARAMS: dict[str, Param] = {
+EVENTS: dict[str, Param] = {
     "corner_beams": Param(
         2, integer(1, 1000), "corner: most beams between the facing ends of two segments"
     ),

@@ -45,7 +45,7 @@ __all__ = [
 ]
 
 CHORD, LINE = 0, 1
-REFERENCE_CODES = {"chord": CHORD, "fit": LINE}
+REFERENCE_CODES = {"chord": CHORD, "line": LINE}
 
 
 def chord_distance(x, y, a: int, b: int, p: int) -> float:
