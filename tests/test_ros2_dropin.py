@@ -129,7 +129,7 @@ def test_a_ros_users_command_line_moves_and_configures_the_node(store, intel_pro
     start = err.splitlines()[0]
     assert start.startswith(
         "scanlines ros2: node /robot1/scanlines (domain 71) listening on /front/scan "
-        "(LaserScan); method adaptive, min_points=4, merge=False; noise from sensor profile "
+        "(LaserScan); method adaptive, merge=False, min_points=4; noise from sensor profile "
         f"{intel_profile} (sigma(r) = "
     ), start
     assert start.endswith(
