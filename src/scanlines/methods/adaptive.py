@@ -1,26 +1,38 @@
-"""The adaptive-threshold line-segment extractor of the Electronics 2022 paper [1]_.
+"""The default extractor: the adaptive-threshold method of the Electronics 2022 paper [1]_,
+with the changes that make it work on real logs.
 
-Steps (the paper's numbering, sec. 3):
+What it does to each scan, in order (the kernel is C++, ``cpp/scanlines/methods/adaptive.cpp``,
+``adaptive_scan``: one call per stack of scans, without the GIL):
 
-1. points and neighbour distances ``d_i`` (eq. 3, 4/19);
-2-3. denoising: isolated noise points (Step 2) and their replacement by a window
-   mean (eq. 5/20) -- :mod:`scanlines.steps.denoise`;
-4. adaptive nearest-neighbour breakpoints ``D = k rho dtheta`` (eq. 6-7/21) --
-   :mod:`scanlines.steps.breakpoints`;
-5. corner candidates from the slope difference ``Dk`` (eq. 12-13) with the peak
-   and position rules, and the removal of corners with fewer than two points on a
-   side -- :mod:`scanlines.steps.corners`;
-6-7. the sweep of the corner threshold ``dkth`` over ``(a, b)``, keeping the cut
-   with the best fitting-error criterion (eq. 14) -- :mod:`scanlines.steps.select`;
-8. a line per part: five sub-set means and ordinary least squares (eq. 15-17) --
-   :mod:`scanlines.steps.fit`.
+1. the noise line every threshold uses (below): the ``noise_sigma`` override, else the
+   sensor profile's or the scan's own (one constant with ``noise_model="constant"``);
+2. denoising (:mod:`scanlines.steps.denoise`): spikes, single-return clusters and
+   mixed pixels between two surfaces are dropped and reported as outliers;
+3. clustering (:mod:`scanlines.steps.breakpoints`, :mod:`scanlines.steps.clusters`): a
+   breakpoint where the next return is beyond the incidence-bounded distance plus a noise
+   margin, unless the step continues the lines on both sides;
+4. corner scores (:mod:`scanlines.steps.corners`): the turn angle between lines fitted to
+   a window of returns on each side, and its peaks as candidates;
+5. the threshold sweep (:mod:`scanlines.steps.select`): every distinct cut the candidates
+   allow, the one with the best BIC (each run's error in noise variances), stopped where
+   the choice is certain, then chosen again with the noise scaled to the lines of the
+   first choice (the median ``sqrt(cost / (n - 2))`` of their runs of 8 points or more);
+6. the segments: cut at the chosen corners, each cut moved by one position where that
+   fits better, neighbours merged by the criterion and by a chi-square test of their
+   lines, split where a return leaves the residual bound, kept when they hold
+   ``min_points`` returns and are ``min_length`` long;
+7. the corners and jumps between the kept segments
+   (:func:`~scanlines.steps.events.junction_events`: two lines that do not meet near
+   their ends are a jump; two whose turn is within the noise of their directions meet at
+   no corner);
+8. total-least-squares lines with covariances from the noise (:mod:`scanlines.steps.fit`).
 
-``preset="paper"`` runs exactly that: window 10, ``k = 3``, ``Dk`` as printed,
-``dkth`` in ``(0, 0.052)`` in steps of 0.01, ``W_i = 1``, the smallest SSE, the
-5-point OLS fit, the corner point shared by both segments.
-
-Deviations of the default, each a parameter. The evidence: the tests named in
-brackets, and ``docs/decisions/`` (300 simulated scenes per sensor preset).
+The paper's method as printed is the ``paper`` method (:mod:`scanlines.methods.paper`);
+``preset="paper"`` here is its alias, with exactly its features
+(``tests/methods/test_paper.py``). Every step above that differs from the paper's is a
+parameter whose other values include the paper's choice, so that each change is measured
+alone. The evidence: the tests named in brackets, and ``docs/decisions/`` (300 simulated
+scenes per sensor preset).
 
 ``breakpoints="abd"``, ``abd_lambda="auto"``, ``noise_k=3``, ``line_k=3``
     ``D = k rho dtheta`` is ``k`` times the spacing of returns on a surface
@@ -111,42 +123,8 @@ are scaled up by a segment's reduced chi-square when its residuals exceed the no
 (:data:`scanlines.extraction.END_KINDS`). Ranges and angles are taken at float32
 precision, so a log gives the same features read directly or from a ROS bag.
 
-The paper preset's NaN lines: Step 3 replaces a noise point and its two neighbours by
-one window mean, so the three become one point; the sweep then often cuts exactly
-those three into a run of their own, which has no ``y = kx + b`` line. On the first 100
-scans of the Freiburg excerpt 1,473 of 9,647 segments (15 %) are NaN, 1,394 of them
-3-point runs (most of the rest 4-point runs holding such a triple). It is the paper as
-printed; the default neither moves points nor fits ``y = kx + b``.
-
 Missing beams: one missing beam is bridged, two or more end a cluster; full-circle
 scans join across the seam.
-
-The kernel is C++ (``cpp/scanlines/methods/adaptive.cpp``): one call per stack of scans,
-without the GIL. Per scan, in order:
-
-* with ``fit="paper"`` the points are turned into the sensor frame (``y = kx + b``
-  depends on the frame; the paper fits there);
-* the noise line the thresholds use: the ``noise_sigma`` override, else the sensor
-  profile's or the scan's own (one constant, its value at the median range, with
-  ``noise_model="constant"``); the clustering rule takes it, and the two-return test of
-  the denoising allows ``noise_k sqrt(2)`` sigmas at the median range;
-* denoising (:mod:`scanlines.steps.denoise`), the turn window, clustering;
-* the per-return noise sigmas, computed once for the criterion, the merge, the checks and
-  the covariances; the run cost of the criterion: in noise units for ``"bic"`` (each run's
-  error over its returns' mean noise variance, and incidence), square metres for
-  ``"sse"``;
-* Step 5's score at every position (the turn angle, or eq. 13), the candidates and the
-  threshold sweep (:mod:`scanlines.steps.select`). Under ``"bic"`` the sweep stops where
-  the choice is certain; with an estimated noise a second choice is made with the noise
-  scaled to the lines of the first (the median ``sqrt(cost / (n - 2))`` of their runs of 8
-  points or more); ``"sse"`` and a fixed ``dkth_range`` score every tried threshold;
-* the runs: cut at the chosen corners, each cut moved by one position where that fits
-  better (``corner_split="refine"``), merged by the criterion and by the chi-square test,
-  split where a point leaves the residual bound, and kept when they hold ``min_points``
-  returns and are ``min_length`` long;
-* the corners and jumps between the kept segments (:func:`~scanlines.steps.events.junction_events`;
-  the corner check uses each segment's direction standard deviation, from the noise and
-  its residuals), and the result arrays.
 
 References
 ----------
