@@ -39,17 +39,6 @@ namespace {
 
 constexpr double INF = std::numeric_limits<double>::infinity();
 
-// The returns with their points rotated by angle (ranges unchanged).
-Returns turned(Returns returns, double angle) {
-    const double c = std::cos(angle), si = std::sin(angle);
-    for (Index p = 0; p < returns.size(); ++p) {
-        double x = returns.x[p], y = returns.y[p];
-        returns.x[p] = c * x - si * y;
-        returns.y[p] = si * x + c * y;
-    }
-    return returns;
-}
-
 // The noise line the thresholds use: the noise_sigma override, else the sensor profile's
 // noise or the scan's own (one constant, its value at the median range, with
 // constant_noise).

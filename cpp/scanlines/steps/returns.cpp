@@ -1,6 +1,7 @@
 #include "scanlines/steps/returns.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace scanlines {
 
@@ -14,6 +15,16 @@ Returns valid_returns(View<double> ranges, View<bool> valid, View<double> cos, V
         out.y.push_back(ranges[i] * sin[i]);
     }
     return out;
+}
+
+Returns turned(Returns returns, double angle) {
+    const double c = std::cos(angle), si = std::sin(angle);
+    for (Index p = 0; p < returns.size(); ++p) {
+        double x = returns.x[p], y = returns.y[p];
+        returns.x[p] = c * x - si * y;
+        returns.y[p] = si * x + c * y;
+    }
+    return returns;
 }
 
 Ints beam_gaps(const Ints& index, Index n_beams) {

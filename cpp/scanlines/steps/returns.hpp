@@ -14,6 +14,9 @@ Returns valid_returns(View<double> ranges, View<bool> valid, View<double> cos, V
 // Beams between consecutive positions (a rotated full circle wraps once).
 Ints beam_gaps(const Ints& index, Index n_beams);
 
+// The returns with their points turned by angle about the sensor (ranges unchanged).
+Returns turned(Returns returns, double angle);
+
 // The returns rotated so that position shift comes first.
 Returns rotated(const Returns& returns, Index shift);
 
