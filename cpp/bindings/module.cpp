@@ -6,6 +6,7 @@
 
 namespace scanlines::bind {
 void bind_adaptive(nb::module_& m);
+void bind_paper(nb::module_& m);
 void bind_partition(nb::module_& m);
 void bind_split_methods(nb::module_& m);
 void bind_steps(nb::module_& m);
@@ -29,6 +30,7 @@ NB_MODULE(_core, m) {
     m.attr("MAX_BRIDGED_GAP") = scanlines::MAX_BRIDGED_GAP;
     m.attr("CORNER_SIGMAS") = scanlines::CORNER_SIGMAS;
     scanlines::bind::bind_adaptive(m);
+    scanlines::bind::bind_paper(m);
     scanlines::bind::bind_partition(m);
     scanlines::bind::bind_split_methods(m);
     scanlines::bind::bind_steps(m);

@@ -8,6 +8,7 @@ name; :data:`scanlines.methods.REGISTRY` lists the same names in the same order 
 
 BUILTIN_METHODS = (
     "adaptive",
+    "paper",
     "iepf",
     "pdbs",
     "split_merge",

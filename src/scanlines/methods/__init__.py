@@ -16,6 +16,7 @@ from scanlines.methods.hough import Hough
 from scanlines.methods.iepf import Iepf
 from scanlines.methods.line_regression import LineRegression
 from scanlines.methods.line_tracking import LineTracking
+from scanlines.methods.paper import Paper
 from scanlines.methods.partition import Partition
 from scanlines.methods.pdbs import Pdbs
 from scanlines.methods.ransac import Ransac
@@ -36,6 +37,7 @@ REGISTRY: dict[str, type[Method]] = {
     method.name: method
     for method in (
         Adaptive,
+        Paper,
         Iepf,
         Pdbs,
         SplitMerge,
