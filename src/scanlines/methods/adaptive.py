@@ -137,15 +137,16 @@ References
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any, ClassVar
 
 import numpy as np
 
 from scanlines._core import adaptive_stack
 from scanlines.methods.base import CompiledMethod, kernel_values
+from scanlines.methods.paper import Paper
 from scanlines.params import (
     MAX_COUNT,
-    MAX_METRES,
     KernelField,
     Param,
     Settings,
@@ -154,11 +155,11 @@ from scanlines.params import (
     choice,
     coded,
     flag,
-    float_pair,
     integer,
     number,
     optional,
     radians,
+    with_default,
 )
 from scanlines.steps.assemble import output_settings
 from scanlines.steps.breakpoints import CLUSTERING
@@ -168,6 +169,11 @@ from scanlines.steps.fit import FIT_CODES, FITS
 from scanlines.steps.select import CRITERIA, CRITERION_CODES, threshold_grid
 
 __all__ = ["Adaptive"]
+
+
+PAPER = Paper.parameters
+"""The paper method's parameters: adaptive's options of the paper's steps take their
+domains from them, and its ``paper`` preset their defaults."""
 
 
 def _count_or_zero(value: Any) -> np.int64:
@@ -210,7 +216,7 @@ CLUSTERS: dict[str, Param] = {
         "noise rule: isolated | paper | none",
         (coded(DENOISE_CODES),),
     ),
-    "window": Param(10, integer(1, 1000), "paper denoising: mean-filter window N (eq. 5)"),
+    "window": with_default(PAPER["window"], 10, "with denoise=paper"),
     "min_cluster_points": Param(
         2, integer(1, MAX_COUNT), "isolated denoising: smaller clusters are dropped as noise"
     ),
@@ -228,14 +234,12 @@ SEGMENTS: dict[str, Param] = {
     ),
     "dkth_range": Param(
         "auto",
-        auto_or(float_pair(high=MAX_METRES)),
+        auto_or(PAPER["dkth_range"].check),
         "threshold range (a, b), or auto: the candidates' scores",
         (KernelField("use_grid", _fixed_range),),  # the thresholds: the kernel's grid
     ),
-    "dkth_step": Param(
-        0.01, number(low=1e-9, high=MAX_METRES), "threshold step with a fixed range", ()
-    ),
-    "max_evaluations": Param(100, integer(1, 10_000), "most thresholds tried"),
+    "dkth_step": with_default(PAPER["dkth_step"], 0.01, "with a fixed dkth_range"),
+    "max_evaluations": replace(PAPER["max_evaluations"], kernel=None),  # the sweep reads it
     "criterion": Param(
         "bic",
         choice(*CRITERIA),
@@ -277,26 +281,21 @@ EVENTS: dict[str, Param] = {
 }
 
 PRESETS: dict[str, dict[str, Any]] = {
+    # The paper's method (its own parameters' defaults), each step switched to its choice.
     "paper": {
+        **{name: param.default for name, param in PAPER.items()},
         "breakpoints": "paper",
-        "k": 3.0,
         "noise_k": 0.0,
         "line_k": 0.0,
         "denoise": "paper",
-        "window": 10,
+        "min_cluster_points": 1,
         "corner_score": "dk",
-        "dkth_range": (0.0, 0.052),
-        "dkth_step": 0.01,
-        "max_evaluations": 100,
         "criterion": "sse",
         "fit": "paper",
         "corner_split": "shared",
         "merge": False,
-        "corner_check": False,
         "max_residual": None,
-        "min_points": 2,
-        "min_cluster_points": 1,
-        "min_length": 0.0,
+        "corner_check": False,
     },
 }
 

@@ -68,15 +68,13 @@ References
 
 from __future__ import annotations
 
-from dataclasses import replace
 from typing import Any, ClassVar
 
 import numpy as np
 
 from scanlines._core import paper_stack
-from scanlines.methods.adaptive import CLUSTERS, SEGMENTS
 from scanlines.methods.base import CompiledMethod, kernel_values
-from scanlines.params import Param, Settings
+from scanlines.params import MAX_METRES, Param, Settings, float_pair, integer, number
 from scanlines.steps.assemble import output_settings
 from scanlines.steps.breakpoints import CLUSTERING
 from scanlines.steps.select import threshold_grid
@@ -89,19 +87,25 @@ class Paper(CompiledMethod):
 
     name = "paper"
     #: The paper's parameters with its values (sec. 4: ``N = 10``, ``k = 3``, ``dkth`` in
-    #: ``(0, 0.052)``), declared as the adaptive method declares them, and the output ones
-    #: every method has. The thresholds are the kernel's grid, not settings.
+    #: ``(0, 0.052)``) and the output ones every method has. The thresholds are the
+    #: kernel's grid, not settings. The adaptive method takes its options of the paper's
+    #: steps from here.
     settings: ClassVar[Settings] = Settings(
-        clustering={"window": CLUSTERS["window"], "k": CLUSTERING["k"]},
+        clustering={
+            "window": Param(10, integer(1, 1000), "denoising: mean-filter window N (eq. 5)"),
+            "k": CLUSTERING["k"],
+        },
         segments={
             "dkth_range": Param(
                 (0.0, 0.052),
-                SEGMENTS["dkth_range"].check.inner,
+                float_pair(high=MAX_METRES),
                 "threshold range (a, b) of dkth (Steps 6-7)",
                 (),
             ),
-            "dkth_step": SEGMENTS["dkth_step"],
-            "max_evaluations": replace(SEGMENTS["max_evaluations"], kernel=()),
+            "dkth_step": Param(
+                0.01, number(low=1e-9, high=MAX_METRES), "threshold step (Steps 6-7)", ()
+            ),
+            "max_evaluations": Param(100, integer(1, 10_000), "most thresholds tried", ()),
         },
         output=output_settings(2),
     )
