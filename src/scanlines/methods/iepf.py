@@ -51,9 +51,9 @@ import numpy as np
 
 from scanlines._core import iepf_stack
 from scanlines.methods.base import CompiledMethod
-from scanlines.params import Param, Settings, number, with_default
+from scanlines.params import Param, Settings, number
 from scanlines.steps.assemble import output_settings
-from scanlines.steps.breakpoints import CLUSTERING, LITERAL_CLUSTERING
+from scanlines.steps.breakpoints import published_clustering
 from scanlines.steps.events import EVENTS
 from scanlines.steps.split import REFERENCE_CODES
 
@@ -79,13 +79,7 @@ class Iepf(SplitMethod):
 
     name = "iepf"
     settings: ClassVar[Settings] = Settings(
-        clustering={
-            **CLUSTERING,
-            **LITERAL_CLUSTERING,
-            "breakpoints": with_default(
-                CLUSTERING["breakpoints"], "fixed", "IEPF: fixed jump distance"
-            ),
-        },
+        clustering=published_clustering("fixed", "IEPF: fixed jump distance"),
         segments={
             "split_distance": Param(
                 0.1,

@@ -58,9 +58,9 @@ from typing import ClassVar
 import numpy as np
 
 from scanlines.methods.base import ClusteredMethod
-from scanlines.params import Param, Settings, integer, number, with_default
+from scanlines.params import Param, Settings, integer, number
 from scanlines.steps.assemble import output_settings
-from scanlines.steps.breakpoints import CLUSTERING, LITERAL_CLUSTERING
+from scanlines.steps.breakpoints import published_clustering
 from scanlines.steps.events import EVENTS
 from scanlines.steps.fit import TLS, Moments, fit_many, prefix_moments, run_covariances
 from scanlines.steps.merge import pair_chi_squares
@@ -75,13 +75,7 @@ class LineRegression(ClusteredMethod):
 
     name = "line_regression"
     settings: ClassVar[Settings] = Settings(
-        clustering={
-            **CLUSTERING,
-            **LITERAL_CLUSTERING,
-            "breakpoints": with_default(
-                CLUSTERING["breakpoints"], "fixed", "line regression: fixed jump distance"
-            ),
-        },
+        clustering=published_clustering("fixed", "line regression: fixed jump distance"),
         segments={
             "window": Param(9, integer(2, 1000), "sliding window N_f: points per window fit"),
             "fidelity": Param(

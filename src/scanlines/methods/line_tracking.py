@@ -52,9 +52,9 @@ from typing import ClassVar
 import numpy as np
 
 from scanlines.methods.base import ClusteredMethod
-from scanlines.params import Param, Settings, number, with_default
+from scanlines.params import Param, Settings, number
 from scanlines.steps.assemble import output_settings
-from scanlines.steps.breakpoints import CLUSTERING, LITERAL_CLUSTERING
+from scanlines.steps.breakpoints import published_clustering
 from scanlines.steps.events import EVENTS
 from scanlines.steps.fit import TLS, Moments, fit_many, prefix_moments
 from scanlines.steps.returns import Returns
@@ -67,13 +67,7 @@ class LineTracking(ClusteredMethod):
 
     name = "line_tracking"
     settings: ClassVar[Settings] = Settings(
-        clustering={
-            **CLUSTERING,
-            **LITERAL_CLUSTERING,
-            "breakpoints": with_default(
-                CLUSTERING["breakpoints"], "fixed", "line tracking: fixed jump distance"
-            ),
-        },
+        clustering=published_clustering("fixed", "line tracking: fixed jump distance"),
         segments={
             "track_distance": Param(
                 0.1,

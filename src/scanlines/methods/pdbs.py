@@ -41,8 +41,8 @@ from dataclasses import replace
 from typing import ClassVar
 
 from scanlines.methods.iepf import Iepf
-from scanlines.params import Settings, with_default
-from scanlines.steps.breakpoints import CLUSTERING
+from scanlines.params import Settings
+from scanlines.steps.breakpoints import published_clustering
 
 
 class Pdbs(Iepf):
@@ -50,11 +50,5 @@ class Pdbs(Iepf):
 
     name = "pdbs"
     settings: ClassVar[Settings] = replace(
-        Iepf.settings,
-        clustering={
-            **Iepf.settings.clustering,
-            "breakpoints": with_default(
-                CLUSTERING["breakpoints"], "pdbs", "PDBS: Premebida and Nunes"
-            ),
-        },
+        Iepf.settings, clustering=published_clustering("pdbs", "PDBS: Premebida and Nunes")
     )

@@ -59,7 +59,7 @@ import numpy as np
 from scanlines.methods.consensus import MAX_MISSES, WHOLE_SCAN, ConsensusMethod
 from scanlines.params import Param, Settings, integer, number
 from scanlines.steps.assemble import output_settings
-from scanlines.steps.breakpoints import CLUSTERING, LITERAL_CLUSTERING
+from scanlines.steps.breakpoints import published_clustering
 from scanlines.steps.events import EVENTS
 from scanlines.steps.returns import Returns
 
@@ -77,11 +77,7 @@ class Ransac(ConsensusMethod):
 
     name = "ransac"
     settings: ClassVar[Settings] = Settings(
-        clustering={
-            **CLUSTERING,
-            **LITERAL_CLUSTERING,
-            "breakpoints": WHOLE_SCAN,
-        },
+        clustering=published_clustering(WHOLE_SCAN),
         segments={
             "max_misses": MAX_MISSES,
             "inlier_distance": Param(

@@ -58,9 +58,9 @@ from typing import ClassVar
 
 from scanlines._core import split_merge_stack
 from scanlines.methods.iepf import SplitMethod
-from scanlines.params import Param, Settings, number, with_default
+from scanlines.params import Param, Settings, number
 from scanlines.steps.assemble import output_settings
-from scanlines.steps.breakpoints import CLUSTERING, LITERAL_CLUSTERING
+from scanlines.steps.breakpoints import CLUSTERING, published_clustering
 from scanlines.steps.events import EVENTS
 
 
@@ -70,11 +70,7 @@ class SplitMerge(SplitMethod):
     name = "split_merge"
     settings: ClassVar[Settings] = Settings(
         clustering={
-            **CLUSTERING,
-            **LITERAL_CLUSTERING,
-            "breakpoints": with_default(
-                CLUSTERING["breakpoints"], "fixed", "split-and-merge: fixed, max_line_gap"
-            ),
+            **published_clustering("fixed", "split-and-merge: fixed, max_line_gap"),
             "jump_distance": Param(
                 0.4,
                 CLUSTERING["jump_distance"].check,

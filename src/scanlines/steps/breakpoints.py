@@ -44,7 +44,7 @@ from typing import NamedTuple
 import numpy as np
 
 from scanlines import _core
-from scanlines.params import Param, choice, coded, number, radians
+from scanlines.params import Param, choice, coded, number, radians, with_default
 from scanlines.steps.arrays import int64s
 from scanlines.steps.noise import NoiseLine
 from scanlines.steps.returns import Returns
@@ -54,7 +54,6 @@ __all__ = [
     "ADAPTIVE",
     "CLUSTERING",
     "FIXED",
-    "LITERAL_CLUSTERING",
     "NO_RULE",
     "PDBS",
     "RULES",
@@ -63,6 +62,7 @@ __all__ = [
     "RuleSpec",
     "auto_abd_lambda",
     "break_flags",
+    "published_clustering",
     "threshold",
 ]
 
@@ -96,11 +96,20 @@ CLUSTERING: dict[str, Param] = {
 }
 """The parameters of a clustering rule, shared by every method that clusters."""
 
-LITERAL_CLUSTERING: dict[str, Param] = {
-    "line_k": Param(0.0, CLUSTERING["line_k"].check, CLUSTERING["line_k"].doc + "; off here")
-}
-"""Overrides of :data:`CLUSTERING` for the comparison methods: the published
-clustering rules have no line-continuation bridge."""
+
+def published_clustering(rule: str | Param, note: str = "") -> dict[str, Param]:
+    """The clustering settings of a comparison method: :data:`CLUSTERING` with the method's
+    default rule (a rule's name, ``note`` added to its doc, or a ``breakpoints`` parameter
+    of the method's own) and no line-continuation bridge (the published rules have none)."""
+    breakpoints = (
+        rule if isinstance(rule, Param) else with_default(CLUSTERING["breakpoints"], rule, note)
+    )
+    line_k = CLUSTERING["line_k"]
+    return {
+        **CLUSTERING,
+        "breakpoints": breakpoints,
+        "line_k": Param(0.0, line_k.check, line_k.doc + "; off here"),
+    }
 
 
 class BreakpointRule(NamedTuple):
