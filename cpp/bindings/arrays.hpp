@@ -199,4 +199,41 @@ inline Output output_of(const nb::dict& output, const nb::dict& events) {
     return {output_bounds_of(output), corner_bounds_of(events)};
 }
 
+// A method's stack kernel as the Python side calls it: the sensor's arrays and the method's
+// settings record (read into its typed settings by read), one flat table out, the kernel run
+// without the GIL.
+template <auto read, auto kernel>
+nb::tuple stack_kernel(const In<double, nb::ndim<2>>& ranges, const In<bool, nb::ndim<2>>& valid,
+                       const In<double, nb::ndim<1>>& cos, const In<double, nb::ndim<1>>& sin,
+                       double step, bool full_circle, double angle_min,
+                       std::pair<double, double> noise, const nb::dict& record) {
+    Stack stack = stack_of(ranges, valid, cos, sin, step, full_circle, angle_min, noise);
+    auto settings = read(record);
+    Table table;
+    {
+        nb::gil_scoped_release unlocked;
+        table = kernel(stack, settings);
+    }
+    return table_to_numpy(std::move(table));
+}
+
+// The same for a kernel that also takes the thresholds it tries (grid).
+template <auto read, auto kernel>
+nb::tuple grid_stack_kernel(const In<double, nb::ndim<2>>& ranges,
+                            const In<bool, nb::ndim<2>>& valid,
+                            const In<double, nb::ndim<1>>& cos,
+                            const In<double, nb::ndim<1>>& sin, double step, bool full_circle,
+                            double angle_min, std::pair<double, double> noise,
+                            const nb::dict& record, const InReals& grid) {
+    Stack stack = stack_of(ranges, valid, cos, sin, step, full_circle, angle_min, noise);
+    auto settings = read(record);
+    Reals thresholds = vector_of(grid);
+    Table table;
+    {
+        nb::gil_scoped_release unlocked;
+        table = kernel(stack, settings, thresholds);
+    }
+    return table_to_numpy(std::move(table));
+}
+
 }  // namespace scanlines::bind

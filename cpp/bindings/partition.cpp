@@ -33,38 +33,10 @@ SurfacesSettings surfaces_settings(const nb::dict& record) {
 }  // namespace
 
 void bind_partition(nb::module_& m) {
-    m.def(
-        "partition_stack",
-        [](const In<double, nb::ndim<2>>& ranges, const In<bool, nb::ndim<2>>& valid,
-           const In<double, nb::ndim<1>>& cos, const In<double, nb::ndim<1>>& sin, double step,
-           bool full_circle, double angle_min, std::pair<double, double> noise,
-           const nb::dict& settings) {
-            Stack stack = stack_of(ranges, valid, cos, sin, step, full_circle, angle_min, noise);
-            PartitionSettings s = partition_settings(settings);
-            Table table;
-            {
-                nb::gil_scoped_release unlocked;
-                table = partition_stack(stack, s);
-            }
-            return table_to_numpy(std::move(table));
-        },
-        "The partition method on each row of a stack of scans: one flat table.");
-    m.def(
-        "surfaces_stack",
-        [](const In<double, nb::ndim<2>>& ranges, const In<bool, nb::ndim<2>>& valid,
-           const In<double, nb::ndim<1>>& cos, const In<double, nb::ndim<1>>& sin, double step,
-           bool full_circle, double angle_min, std::pair<double, double> noise,
-           const nb::dict& settings) {
-            Stack stack = stack_of(ranges, valid, cos, sin, step, full_circle, angle_min, noise);
-            SurfacesSettings s = surfaces_settings(settings);
-            Table table;
-            {
-                nb::gil_scoped_release unlocked;
-                table = surfaces_stack(stack, s);
-            }
-            return table_to_numpy(std::move(table));
-        },
-        "The surfaces method on each row of a stack of scans: one flat table.");
+    m.def("partition_stack", &stack_kernel<partition_settings, partition_stack>,
+          "The partition method on each row of a stack of scans: one flat table.");
+    m.def("surfaces_stack", &stack_kernel<surfaces_settings, surfaces_stack>,
+          "The surfaces method on each row of a stack of scans: one flat table.");
     m.def(
         "partition_optimal_runs",
         [](const In<double, nb::ndim<1>>& x, const In<double, nb::ndim<1>>& y,

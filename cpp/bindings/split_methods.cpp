@@ -20,27 +20,12 @@ SplitSettings split_settings(const nb::dict& record) {
             output_of(group(record, "output"), group(record, "events"))};
 }
 
-template <Table (*kernel)(const Stack&, const SplitSettings&)>
-nb::tuple split_stack(const In<double, nb::ndim<2>>& ranges, const In<bool, nb::ndim<2>>& valid,
-                      const In<double, nb::ndim<1>>& cos, const In<double, nb::ndim<1>>& sin,
-                      double step, bool full_circle, double angle_min,
-                      std::pair<double, double> noise, const nb::dict& record) {
-    Stack stack = stack_of(ranges, valid, cos, sin, step, full_circle, angle_min, noise);
-    SplitSettings s = split_settings(record);
-    Table table;
-    {
-        nb::gil_scoped_release unlocked;
-        table = kernel(stack, s);
-    }
-    return table_to_numpy(std::move(table));
-}
-
 }  // namespace
 
 void bind_split_methods(nb::module_& m) {
-    m.def("iepf_stack", &split_stack<iepf_stack>,
+    m.def("iepf_stack", &stack_kernel<split_settings, iepf_stack>,
           "Iterative end-point fit on each row of a stack of scans: one flat table.");
-    m.def("split_merge_stack", &split_stack<split_merge_stack>,
+    m.def("split_merge_stack", &stack_kernel<split_settings, split_merge_stack>,
           "Split-and-merge on each row of a stack of scans: one flat table.");
 }
 
