@@ -1,5 +1,6 @@
-"""The default extractor: the adaptive-threshold method of the Electronics 2022 paper [1]_,
-with the changes that make it work on real logs.
+"""The default extractor: the paper's adaptive-threshold method, changed to work on real logs.
+
+The method of the Electronics 2022 paper [1]_ with the changes below, each a parameter.
 
 What it does to each scan, in order (the kernel is C++, ``cpp/scanlines/methods/adaptive.cpp``,
 ``adaptive_scan``: one call per stack of scans, without the GIL):
