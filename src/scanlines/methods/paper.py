@@ -1,6 +1,6 @@
-"""The line-segment extractor of the Electronics 2022 paper [1]_, as printed.
+"""The line-segment extractor of the Electronics 2022 paper, as printed.
 
-One choice per step, the paper's (sec. 2-3; the equation numbers are the paper's):
+One choice per step, the paper's [1]_ (sec. 2-3; the equation numbers are the paper's):
 
 1. Step 1: the points ``x_i = rho_i cos theta_i``, ``y_i = rho_i sin theta_i`` in the
    sensor frame (eq. 2-3) and the neighbour distances ``d_i = |P_{i+1} - P_i|`` (eq. 4/19).
