@@ -11,11 +11,10 @@ from hypothesis import strategies as st
 
 from scanlines import Scan, extract
 from scanlines.evaluation.scenes import make_scene
+from scanlines.methods.adaptive import MAX_BRIDGED_SHARE, auto_abd_lambda, sweep_decided
 from scanlines.steps.breakpoints import (
-    MAX_BRIDGED_SHARE,
     RULE_CODES,
     BreakpointRule,
-    auto_abd_lambda,
     break_flags,
     threshold,
 )
@@ -45,7 +44,6 @@ from scanlines.steps.select import (
     extend_sweep,
     level_corners,
     start_sweep,
-    sweep_decided,
     sweep_levels,
     threshold_grid,
 )

@@ -1,6 +1,7 @@
 #include <nanobind/stl/pair.h>
 #include <nanobind/stl/tuple.h>
 
+#include <cmath>
 #include <tuple>
 
 #include "arrays.hpp"
@@ -98,13 +99,6 @@ void bind_select(nb::module_& m) {
         },
         "Insert candidates done .. upto - 1 of the sweep (in place); returns upto.");
     m.def(
-        "sweep_decided",
-        [](Sweep& sweep, const CostTuple& cost, bool shared, Index done, Index n_points,
-           double sigma, double penalty) {
-            return sweep_decided(sweep, cost_of(cost), shared, done, n_points, sigma, penalty);
-        },
-        "Extend the sweep until the bic choice is certain: (best level, inserted).");
-    m.def(
         "sweep_levels",
         [](const CostTuple& cost, const InInts& start, const InInts& end, const InInts& candidates,
            const InReals& scores, const InReals& grid, bool use_grid, Index max_evaluations,
@@ -185,6 +179,23 @@ void bind_denoise(nb::module_& m) {
         "Steps 2-3 by kind: (returns, beams dropped as noise, break flags or empty).");
 }
 
+// The adaptive method's own steps (methods/adaptive.hpp), for the tests.
+void bind_own_steps(nb::module_& m) {
+    m.attr("MAX_BRIDGED_SHARE") = std::sin(1.0 * (3.141592653589793 / 180.0)) /
+                                  std::sin(14.0 * (3.141592653589793 / 180.0));
+    m.def("auto_abd_lambda", &auto_abd_lambda);
+    m.def("residual_tolerances", [](const InReals& r, std::pair<double, double> noise, double floor) {
+        return to_numpy(residual_tolerances(vector_of(r), {noise.first, noise.second}, floor));
+    });
+    m.def(
+        "sweep_decided",
+        [](Sweep& sweep, const CostTuple& cost, bool shared, Index done, Index n_points,
+           double sigma, double penalty) {
+            return sweep_decided(sweep, cost_of(cost), shared, done, n_points, sigma, penalty);
+        },
+        "Extend the sweep until the bic choice is certain: (best level, inserted).");
+}
+
 }  // namespace
 
 void bind_adaptive(nb::module_& m) {
@@ -233,6 +244,7 @@ void bind_adaptive(nb::module_& m) {
         "low, low + step, ... up to high, at most max_evaluations values.");
     bind_select(m);
     bind_denoise(m);
+    bind_own_steps(m);
 }
 
 }  // namespace scanlines::bind

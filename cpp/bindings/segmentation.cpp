@@ -23,9 +23,6 @@ nb::object flags_array(const Flags& flags) { return flags_to_numpy(flags); }
 }  // namespace
 
 void bind_segmentation(nb::module_& m) {
-    m.attr("MAX_BRIDGED_SHARE") = std::sin(1.0 * (3.141592653589793 / 180.0)) /
-                                  std::sin(14.0 * (3.141592653589793 / 180.0));
-    m.def("auto_abd_lambda", &auto_abd_lambda);
     m.def("threshold", [](nb::handle rule, double r_from, double r_to, Index gap, double step) {
         return threshold(breakpoint_rule_of(rule), r_from, r_to, gap, step);
     });

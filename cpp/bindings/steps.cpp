@@ -176,9 +176,6 @@ void bind_steps(nb::module_& m) {
     m.def("hesse_difference", &hesse_difference);
     m.def("offset_power_sums", &offset_power_sums_binding);
     m.def("parabola_at_centre", &parabola_at_centre_binding);
-    m.def("residual_tolerances", [](const InReals& r, NoisePair noise, double floor) {
-        return to_numpy(residual_tolerances(vector_of(r), {noise.first, noise.second}, floor));
-    });
     m.def("prefix_moments", &prefix_moments_binding);
     m.def("fit_many", &fit_many_binding);
     m.def("tls_run", &tls_run_binding);

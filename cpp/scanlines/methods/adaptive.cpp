@@ -38,6 +38,233 @@ const std::array<const char*, N_ADAPTIVE_STAGES> ADAPTIVE_STAGE_NAMES = {
 namespace {
 
 constexpr double INF = std::numeric_limits<double>::infinity();
+constexpr double PI = 3.141592653589793;
+const double DEGREE = PI / 180.0;  // math.radians(d) is d * (pi / 180)
+const double ABD_LAMBDA_FLOOR = 10.0 * DEGREE;
+const double MAX_BRIDGED_SHARE = std::sin(1.0 * DEGREE) / std::sin(14.0 * DEGREE);
+// Candidates sweep_decided inserts between two checks of its bound.
+constexpr Index SWEEP_CHUNK = 8;
+// Fewest points of a run that residual_noise measures.
+constexpr Index MIN_RUN_FOR_NOISE = 8;
+// Noise sigmas a return may lie from its segment's line before the residual bound cuts.
+constexpr double RESIDUAL_SIGMAS = 5.0;
+
+}  // namespace
+
+// The adaptive method's own steps, bound for the tests (adaptive.hpp).
+
+double auto_abd_lambda(double step) {
+    step = std::fabs(step);
+    double bridged = std::asin(std::min(std::sin(step) / MAX_BRIDGED_SHARE, 1.0));
+    return std::min(std::max(ABD_LAMBDA_FLOOR, step + bridged), 0.5 * PI);
+}
+
+Reals residual_tolerances(const Reals& r, NoiseLine noise, double floor) {
+    Reals out(r.size());
+    for (std::size_t i = 0; i < r.size(); ++i) out[i] = std::max(floor, RESIDUAL_SIGMAS * noise_at(noise, r[i]));
+    return out;
+}
+
+std::pair<Index, Index> sweep_decided(Sweep& sweep, const RunCost& cost, bool shared, Index done,
+                                      Index n_points, double sigma, double penalty) {
+    const double log_n = std::log(static_cast<double>(std::max<Index>(n_points, 2)));
+    Index best = 0;
+    double best_value = INF;
+    Index scored = 0;
+    while (true) {
+        for (Index m = scored; m <= done; ++m) {
+            double value =
+                criterion_value(BIC, sweep.sse[m], sweep.segments[m], log_n, sigma, penalty);
+            if (value < best_value) {
+                best = m;
+                best_value = value;
+            }
+        }
+        scored = done + 1;
+        if (done == sweep.useful ||
+            !(penalty * log_n * static_cast<double>(sweep.segments[done]) < best_value))
+            return {best, done};
+        done = extend_sweep(sweep, cost, shared, done, std::min(done + SWEEP_CHUNK, sweep.useful));
+    }
+}
+
+namespace {
+
+// Running sums of 1 / r^2 (a micrometre floor keeps one absurd range harmless).
+Reals inverse_square_sums(const Reals& r) {
+    Reals out(r.size() + 1, 0.0);
+    for (std::size_t i = 0; i < r.size(); ++i) {
+        double ri = std::max(r[i], 1e-6);
+        out[i + 1] = out[i] + 1.0 / (ri * ri);
+    }
+    return out;
+}
+
+// Running sums of sigma^2.
+Reals variance_sums(const Reals& sigma) {
+    Reals out(sigma.size() + 1, 0.0);
+    for (std::size_t i = 0; i < sigma.size(); ++i) out[i + 1] = out[i] + sigma[i] * sigma[i];
+    return out;
+}
+
+// Noise from the fits of the runs [a, b]: the median of sqrt(cost / (n - 2)) over runs of
+// MIN_RUN_FOR_NOISE points or more; fallback without any such run.
+double residual_noise(const RunCost& cost, const Ints& a, const Ints& b, double fallback) {
+    Reals per_run;
+    for (std::size_t k = 0; k < a.size(); ++k) {
+        if (b[k] - a[k] + 1 >= MIN_RUN_FOR_NOISE) {
+            double value = std::sqrt(run_cost(cost, a[k], b[k]) / static_cast<double>(b[k] - a[k] - 1));
+            if (std::isfinite(value)) per_run.push_back(value);
+        }
+    }
+    if (per_run.empty()) return fallback;
+    return median(per_run);
+}
+
+// Each cut moved by one position where that fits better: (a, b).
+std::pair<Ints, Ints> refine_cuts(const RunCost& cost, const Ints& a, const Ints& b,
+                                  const Ints& owner) {
+    const Index m = static_cast<Index>(a.size());
+    Ints new_a = a, new_b = b;
+    for (Index k = 0; k < m - 1; ++k) {
+        if (owner[k] != owner[k + 1]) continue;
+        double best_cost = INF;
+        Index best_shift = 0;
+        for (Index shift : {0, -1, 1}) {
+            Index cut = b[k] + shift;
+            if (cut - a[k] < 1 || b[k + 1] - cut - 1 < 1) continue;
+            double total = run_cost(cost, a[k], cut) + run_cost(cost, cut + 1, b[k + 1]);
+            if (total < best_cost - 1e-15) {  // NaN never wins
+                best_cost = total;
+                best_shift = shift;
+            }
+        }
+        new_b[k] = b[k] + best_shift;
+        new_a[k + 1] = new_b[k] + 1;
+    }
+    Flags too_short(m);
+    for (Index k = 0; k < m; ++k) too_short[k] = new_b[k] - new_a[k] < 1;
+    for (Index k = 0; k < m - 1; ++k)
+        if (owner[k] == owner[k + 1] && (too_short[k] || too_short[k + 1])) {
+            new_b[k] = b[k];
+            new_a[k + 1] = a[k + 1];
+        }
+    return {new_a, new_b};
+}
+
+// Greedily merge the neighbour pair that lowers the criterion most, until none does.
+Runs merge_by_criterion(const RunCost& cost, const Ints& a_in, const Ints& b_in,
+                        const Ints& cluster_in, double segment_cost) {
+    Ints a = a_in, b = b_in, cluster = cluster_in;
+    Index m = static_cast<Index>(a.size());
+    Reals part(m), joined(std::max<Index>(m - 1, 0), NAN);
+    for (Index k = 0; k < m; ++k) part[k] = run_cost(cost, a[k], b[k]);
+    for (Index k = 0; k < m - 1; ++k)
+        if (cluster[k] == cluster[k + 1]) joined[k] = run_cost(cost, a[k], b[k + 1]);
+    while (m >= 2) {
+        Index best = -1;
+        double best_change = INF;
+        for (Index k = 0; k < m - 1; ++k) {
+            double change = joined[k] - part[k] - part[k + 1] - segment_cost;
+            if (change < best_change) {  // NaN (other cluster, no line) never wins
+                best = k;
+                best_change = change;
+            }
+        }
+        if (best < 0 || !(best_change < 0.0)) break;
+        b[best] = b[best + 1];
+        part[best] = joined[best];
+        for (Index k = best + 1; k < m - 1; ++k) {
+            a[k] = a[k + 1];
+            b[k] = b[k + 1];
+            cluster[k] = cluster[k + 1];
+            part[k] = part[k + 1];
+        }
+        for (Index k = best; k < m - 2; ++k) joined[k] = joined[k + 1];
+        --m;
+        for (Index k : {best - 1, best}) {
+            if (0 <= k && k < m - 1) {
+                bool same = cluster[k] == cluster[k + 1];
+                double value = run_cost(cost, a[k], b[k + 1]);
+                joined[k] = same ? value : NAN;
+            }
+        }
+    }
+    a.resize(m);
+    b.resize(m);
+    cluster.resize(m);
+    return {a, b, cluster};
+}
+
+std::pair<double, Index> farthest_in_tolerances(const Reals& x, const Reals& y,
+                                                const Reals& tolerance, Index lo, Index hi,
+                                                double c, double s, double rho) {
+    double worst = -1.0;
+    Index worst_at = lo;
+    for (Index p = lo; p <= hi; ++p) {
+        double distance = std::fabs(x[p] * c + y[p] * s - rho) / tolerance[p];
+        if (distance > worst) {
+            worst = distance;
+            worst_at = p;
+        }
+    }
+    return {worst, worst_at};
+}
+
+std::pair<double, Index> farthest_from_chord_in_tolerances(const Reals& x, const Reals& y,
+                                                           const Reals& tolerance, Index lo,
+                                                           Index hi) {
+    double dx = x[hi] - x[lo], dy = y[hi] - y[lo];
+    double length = std::sqrt(dx * dx + dy * dy);
+    if (length == 0.0) return {0.0, lo};
+    double worst = -1.0;
+    Index worst_at = lo;
+    for (Index p = lo; p <= hi; ++p) {
+        double distance = std::fabs((x[p] - x[lo]) * dy - (y[p] - y[lo]) * dx) / length / tolerance[p];
+        if (distance > worst) {
+            worst = distance;
+            worst_at = p;
+        }
+    }
+    return {worst, worst_at};
+}
+
+// Cut runs at their worst point until every point is within its tolerance.
+Runs split_by_residual(const Reals& x, const Reals& y, Index fit, const Moments& moments,
+                       const Ints& a, const Ints& b, const Ints& cluster, const Reals& tolerance,
+                       Index min_points) {
+    Runs out;
+    const Index shortest = std::max<Index>(min_points, 1);
+    std::vector<std::pair<Index, Index>> stack;
+    for (std::size_t k = 0; k < a.size(); ++k) {
+        stack.assign(1, {a[k], b[k]});
+        while (!stack.empty()) {
+            auto [lo, hi] = stack.back();
+            stack.pop_back();
+            if (hi - lo + 1 < shortest) continue;
+            Line line = fit_run(fit, moments, lo, hi);
+            auto [worst, worst_at] = farthest_in_tolerances(
+                x, y, tolerance, lo, hi, std::cos(line.alpha), std::sin(line.alpha), line.rho);
+            if (worst <= 1.0) {
+                out.a.push_back(lo);
+                out.b.push_back(hi);
+                out.group.push_back(cluster[k]);
+                continue;
+            }
+            if (worst_at - lo < shortest || hi - worst_at < shortest) {
+                auto [bend, bend_at] = farthest_from_chord_in_tolerances(x, y, tolerance, lo, hi);
+                if (bend > 1.0 && bend_at - lo >= shortest && hi - bend_at >= shortest) {
+                    stack.push_back({bend_at + 1, hi});
+                    stack.push_back({lo, bend_at});
+                    continue;
+                }
+            }
+            stack.push_back({worst_at + 1, hi});  // right part after the left
+            stack.push_back({lo, worst_at - 1});
+        }
+    }
+    return out;
+}
 
 // The noise line the thresholds use: the noise_sigma override, else the sensor profile's
 // noise or the scan's own (one constant, its value at the median range, with

@@ -3,10 +3,13 @@
 #pragma once
 
 #include <array>
+#include <utility>
 
 #include "scanlines/core.hpp"
 #include "scanlines/steps/assemble.hpp"
 #include "scanlines/steps/breakpoints.hpp"
+#include "scanlines/steps/fit.hpp"
+#include "scanlines/steps/select.hpp"
 #include "scanlines/steps/stack.hpp"
 
 namespace scanlines {
@@ -57,6 +60,21 @@ enum AdaptiveStage : int {
 };
 extern const std::array<const char*, N_ADAPTIVE_STAGES> ADAPTIVE_STAGE_NAMES;
 using StageSeconds = std::array<double, N_ADAPTIVE_STAGES>;
+
+// The adaptive method's own steps, bound for the tests (scanlines/methods/adaptive.py
+// documents them; the rest of its own steps are adaptive.cpp's alone).
+
+// ABD's lambda (radians) for beams step apart: abd_lambda="auto".
+double auto_abd_lambda(double step);
+
+// How far each return may lie from its segment's line: floor, or RESIDUAL_SIGMAS noise
+// sigmas where that is more.
+Reals residual_tolerances(const Reals& r, NoiseLine noise, double floor);
+
+// Extend the sweep (from done inserted) until the "bic" choice with noise sigma is
+// certain: (best level, inserted).
+std::pair<Index, Index> sweep_decided(Sweep& sweep, const RunCost& cost, bool shared, Index done,
+                                      Index n_points, double sigma, double penalty);
 
 // The whole method on one scan; grid: the thresholds of a fixed dkth_range (else empty).
 // With seconds, the time of each stage is added to it.

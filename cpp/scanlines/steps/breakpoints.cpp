@@ -11,11 +11,7 @@ namespace scanlines {
 
 namespace {
 
-constexpr double PI = 3.141592653589793;
 constexpr double INF = std::numeric_limits<double>::infinity();
-const double DEGREE = PI / 180.0;  // math.radians(d) is d * (pi / 180)
-const double ABD_LAMBDA_FLOOR = 10.0 * DEGREE;
-const double MAX_BRIDGED_SHARE = std::sin(1.0 * DEGREE) / std::sin(14.0 * DEGREE);
 constexpr double MAX_STEP_GROWTH = 2.5;
 
 double gap_factor(const BreakpointRule& rule, Index gap, double step) {
@@ -75,12 +71,6 @@ bool continues_line_at(const Reals& x, const Reals& y, const Ints& gap, const Re
 }
 
 }  // namespace
-
-double auto_abd_lambda(double step) {
-    step = std::fabs(step);
-    double bridged = std::asin(std::min(std::sin(step) / MAX_BRIDGED_SHARE, 1.0));
-    return std::min(std::max(ABD_LAMBDA_FLOOR, step + bridged), 0.5 * PI);
-}
 
 BreakpointRule make_rule(Index kind, double k, double noise_k, double line_k, double abd_lambda,
                          double pdbs_c0, double jump_distance, NoiseLine noise) {

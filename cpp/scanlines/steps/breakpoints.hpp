@@ -23,9 +23,6 @@ struct BreakpointRule {
     double abd_lambda, pdbs_c0, jump_distance;
 };
 
-// ABD's lambda (radians) for beams step apart.
-double auto_abd_lambda(double step);
-
 BreakpointRule make_rule(Index kind, double k, double noise_k, double line_k, double abd_lambda,
                          double pdbs_c0, double jump_distance, NoiseLine noise);
 

@@ -134,15 +134,6 @@ Lines fit_many(Index fit, const Moments& moments, const Ints& a, const Ints& b) 
     return out;
 }
 
-Reals inverse_square_sums(const Reals& r) {
-    Reals out(r.size() + 1, 0.0);
-    for (std::size_t i = 0; i < r.size(); ++i) {
-        double ri = std::max(r[i], 1e-6);
-        out[i + 1] = out[i] + 1.0 / (ri * ri);
-    }
-    return out;
-}
-
 double run_cost(const RunCost& cost, Index a, Index b) {
     double rho, sse;
     if (cost.fit == PAPER) {

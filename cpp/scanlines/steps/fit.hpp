@@ -98,9 +98,6 @@ struct RunCost {
 // Floor of run_cost's weight cos^2 of the incidence (72 deg).
 constexpr double MIN_INCIDENCE_WEIGHT = 0.1;
 
-// Running sums of 1 / r^2 (a micrometre floor keeps one absurd range harmless).
-Reals inverse_square_sums(const Reals& r);
-
 // Fitting error of run [a, b]; in noise units when cost.inv_r2 is given.
 double run_cost(const RunCost& cost, Index a, Index b);
 

@@ -10,49 +10,6 @@ namespace {
 constexpr double INF = std::numeric_limits<double>::infinity();
 }
 
-Runs merge_by_criterion(const RunCost& cost, const Ints& a_in, const Ints& b_in,
-                        const Ints& cluster_in, double segment_cost) {
-    Ints a = a_in, b = b_in, cluster = cluster_in;
-    Index m = static_cast<Index>(a.size());
-    Reals part(m), joined(std::max<Index>(m - 1, 0), NAN);
-    for (Index k = 0; k < m; ++k) part[k] = run_cost(cost, a[k], b[k]);
-    for (Index k = 0; k < m - 1; ++k)
-        if (cluster[k] == cluster[k + 1]) joined[k] = run_cost(cost, a[k], b[k + 1]);
-    while (m >= 2) {
-        Index best = -1;
-        double best_change = INF;
-        for (Index k = 0; k < m - 1; ++k) {
-            double change = joined[k] - part[k] - part[k + 1] - segment_cost;
-            if (change < best_change) {  // NaN (other cluster, no line) never wins
-                best = k;
-                best_change = change;
-            }
-        }
-        if (best < 0 || !(best_change < 0.0)) break;
-        b[best] = b[best + 1];
-        part[best] = joined[best];
-        for (Index k = best + 1; k < m - 1; ++k) {
-            a[k] = a[k + 1];
-            b[k] = b[k + 1];
-            cluster[k] = cluster[k + 1];
-            part[k] = part[k + 1];
-        }
-        for (Index k = best; k < m - 2; ++k) joined[k] = joined[k + 1];
-        --m;
-        for (Index k : {best - 1, best}) {
-            if (0 <= k && k < m - 1) {
-                bool same = cluster[k] == cluster[k + 1];
-                double value = run_cost(cost, a[k], b[k + 1]);
-                joined[k] = same ? value : NAN;
-            }
-        }
-    }
-    a.resize(m);
-    b.resize(m);
-    cluster.resize(m);
-    return {a, b, cluster};
-}
-
 double chi_square(double rho_1, double alpha_1, double rho_2, double alpha_2,
                   const double* covariance_1, const double* covariance_2) {
     auto [d_rho, d_alpha] = hesse_difference(rho_1, alpha_1, rho_2, alpha_2);

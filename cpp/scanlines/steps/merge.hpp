@@ -7,10 +7,6 @@
 
 namespace scanlines {
 
-// Greedily merge the neighbour pair that lowers the criterion most, until none does.
-Runs merge_by_criterion(const RunCost& cost, const Ints& a, const Ints& b, const Ints& cluster,
-                        double segment_cost);
-
 // dL^T (P_1 + P_2)^-1 dL of two lines (covariances row-major 2 x 2); NaN where singular.
 double chi_square(double rho_1, double alpha_1, double rho_2, double alpha_2,
                   const double* covariance_1, const double* covariance_2);

@@ -143,33 +143,9 @@ NoiseLine resolve_noise(NoiseLine noise, const Returns& returns, const Ints& gap
     return scan_noise(returns, gap);
 }
 
-double residual_noise(const RunCost& cost, const Ints& a, const Ints& b, double fallback) {
-    Reals per_run;
-    for (std::size_t k = 0; k < a.size(); ++k) {
-        if (b[k] - a[k] + 1 >= MIN_RUN_FOR_NOISE) {
-            double value = std::sqrt(run_cost(cost, a[k], b[k]) / static_cast<double>(b[k] - a[k] - 1));
-            if (std::isfinite(value)) per_run.push_back(value);
-        }
-    }
-    if (per_run.empty()) return fallback;
-    return median(per_run);
-}
-
 Reals return_sigmas(const Reals& r, NoiseLine noise) {
     Reals out(r.size());
     for (std::size_t i = 0; i < r.size(); ++i) out[i] = noise_at(noise, r[i]);
-    return out;
-}
-
-Reals residual_tolerances(const Reals& r, NoiseLine noise, double floor) {
-    Reals out(r.size());
-    for (std::size_t i = 0; i < r.size(); ++i) out[i] = std::max(floor, RESIDUAL_SIGMAS * noise_at(noise, r[i]));
-    return out;
-}
-
-Reals variance_sums(const Reals& sigma) {
-    Reals out(sigma.size() + 1, 0.0);
-    for (std::size_t i = 0; i < sigma.size(); ++i) out[i + 1] = out[i] + sigma[i] * sigma[i];
     return out;
 }
 

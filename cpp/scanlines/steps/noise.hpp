@@ -47,24 +47,8 @@ NoiseLine scan_noise(const Returns& returns, const Ints& gap);
 // noise if known, else the scan's own.
 NoiseLine resolve_noise(NoiseLine noise, const Returns& returns, const Ints& gap);
 
-// Fewest points of a run that residual_noise measures.
-constexpr Index MIN_RUN_FOR_NOISE = 8;
-// Noise sigmas a return may lie from its segment's line before the residual bound cuts.
-constexpr double RESIDUAL_SIGMAS = 5.0;
-
-// Noise from the fits of the runs [a, b]: the median of sqrt(cost / (n - 2)) over runs of
-// MIN_RUN_FOR_NOISE points or more; fallback without any such run.
-double residual_noise(const RunCost& cost, const Ints& a, const Ints& b, double fallback);
-
 // The noise sigma at each range.
 Reals return_sigmas(const Reals& r, NoiseLine noise);
-
-// How far each return may lie from its segment's line: floor, or RESIDUAL_SIGMAS noise
-// sigmas where that is more.
-Reals residual_tolerances(const Reals& r, NoiseLine noise, double floor);
-
-// Running sums of sigma^2.
-Reals variance_sums(const Reals& sigma);
 
 // Per-return sigma of the segment covariances: range_sigma where it is a number (NaN: not
 // given), else noise as resolve_noise resolves it.

@@ -141,29 +141,6 @@ Index extend_sweep(Sweep& sweep, const RunCost& cost, bool shared, Index done, I
     return upto;
 }
 
-std::pair<Index, Index> sweep_decided(Sweep& sweep, const RunCost& cost, bool shared, Index done,
-                                      Index n_points, double sigma, double penalty) {
-    const double log_n = std::log(static_cast<double>(std::max<Index>(n_points, 2)));
-    Index best = 0;
-    double best_value = INF;
-    Index scored = 0;
-    while (true) {
-        for (Index m = scored; m <= done; ++m) {
-            double value =
-                criterion_value(BIC, sweep.sse[m], sweep.segments[m], log_n, sigma, penalty);
-            if (value < best_value) {
-                best = m;
-                best_value = value;
-            }
-        }
-        scored = done + 1;
-        if (done == sweep.useful ||
-            !(penalty * log_n * static_cast<double>(sweep.segments[done]) < best_value))
-            return {best, done};
-        done = extend_sweep(sweep, cost, shared, done, std::min(done + SWEEP_CHUNK, sweep.useful));
-    }
-}
-
 Levels sweep_levels(const RunCost& cost, const Ints& start, const Ints& end,
                     const Ints& candidates, const Reals& scores, const Reals& grid, bool use_grid,
                     Index max_evaluations, bool shared) {

@@ -11,9 +11,6 @@ namespace scanlines {
 
 enum Criterion : Index { BIC = 0, SSE = 1 };
 
-// Candidates sweep_decided inserts between two checks of its bound.
-constexpr Index SWEEP_CHUNK = 8;
-
 // low, low + step, ... up to high, at most max_evaluations values.
 Reals threshold_grid(double low, double high, double step, Index max_evaluations);
 
@@ -57,11 +54,6 @@ Sweep start_sweep(const RunCost& cost, const Ints& start, const Ints& end, const
 
 // Insert candidates done .. upto - 1 and score each cut; returns upto.
 Index extend_sweep(Sweep& sweep, const RunCost& cost, bool shared, Index done, Index upto);
-
-// Extend the sweep (from done inserted) until the "bic" choice with noise sigma is
-// certain: (best level, inserted).
-std::pair<Index, Index> sweep_decided(Sweep& sweep, const RunCost& cost, bool shared, Index done,
-                                      Index n_points, double sigma, double penalty);
 
 // Every cut of the clusters that a threshold makes, scored: sse[m] and segments[m] of the
 // cut with the m best ranked candidates; levels[t] the cut of each tried threshold.

@@ -28,16 +28,7 @@ inline double line_residual(const Reals& x, const Reals& y, Index p, double rho,
 Runs split_at_farthest(const Reals& x, const Reals& y, const Moments& moments, const Runs& runs,
                        double threshold, Index reference);
 
-// Cut runs at their worst point until every point is within its tolerance.
-Runs split_by_residual(const Reals& x, const Reals& y, Index fit, const Moments& moments,
-                       const Ints& a, const Ints& b, const Ints& cluster, const Reals& tolerance,
-                       Index min_points);
-
 // Runs and their cluster number after cutting the clusters at corners.
 Runs cut_at(const Ints& start, const Ints& end, const Ints& corners, bool shared);
-
-// Each cut moved by one position where that fits better: (a, b).
-std::pair<Ints, Ints> refine_cuts(const RunCost& cost, const Ints& a, const Ints& b,
-                                  const Ints& owner);
 
 }  // namespace scanlines

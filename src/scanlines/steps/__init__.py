@@ -4,7 +4,9 @@ Each step is implemented once, in C++ (``cpp/scanlines/steps/``, one file per mo
 compiled at install as :mod:`scanlines._core`). These modules document the steps, declare
 their parameters and constants, and give the Python side (the methods whose search is
 numpy, ground truth, sensor profiles, the tests) the steps as functions over numpy arrays
-and the bundles below; they trust their arguments and validate nothing. The validated
+and the bundles below; they trust their arguments and validate nothing. A step here is
+used by two methods or more; one method's own steps are in its files
+(``cpp/scanlines/methods/``, :mod:`scanlines.methods`). The validated
 entry points are :class:`~scanlines.Scan` and :class:`~scanlines.Extractor`;
 ``docs/ARCHITECTURE.md`` gives the conventions.
 
@@ -17,8 +19,8 @@ entry points are :class:`~scanlines.Scan` and :class:`~scanlines.Extractor`;
 ``fit``          line fits from running sums (total least squares, the paper's 5-point
                  OLS), fitting costs, covariances (:class:`~scanlines.steps.fit.Moments`)
 ``select``       the threshold sweep and its criterion (BIC, smallest SSE)
-``split``        recursive splits (end-point fit, residual bound), cuts at corners
-``merge``        merging neighbours (by the criterion, by chi-square)
+``split``        recursive splits (end-point fit), cuts at corners
+``merge``        merging neighbours by chi-square
 ``events``       corners and breakpoints between consecutive segments
 ``assemble``     the result arrays of an :class:`~scanlines.Extraction`
 ``arrays``       the array types the compiled steps take

@@ -60,7 +60,6 @@ __all__ = [
     "RULE_CODES",
     "BreakpointRule",
     "RuleSpec",
-    "auto_abd_lambda",
     "break_flags",
     "published_clustering",
     "threshold",
@@ -147,25 +146,6 @@ class RuleSpec(NamedTuple):
 
 NO_RULE = -1
 """The ``breakpoints`` code of a method that works on the whole scan: cuts at missing beams only."""
-
-MAX_BRIDGED_SHARE: float = _core.MAX_BRIDGED_SHARE
-"""Largest step, as a share of the range, that the incidence bound alone bridges in
-:func:`auto_abd_lambda` (``sin 1 deg / sin 14 deg``, 7.2 %: ``lambda`` = 15 deg at 1 deg
-resolution)."""
-
-
-def auto_abd_lambda(step: float) -> float:
-    """ABD's ``lambda`` (radians) for beams ``step`` apart.
-
-    10 deg (Borges and Aldon's: walls up to 80 deg incidence stay one cluster), raised
-    where it would bridge steps of more than :data:`MAX_BRIDGED_SHARE` of the range: on
-    scans coarser than 0.67 deg (15 deg at 1 deg). There, returns on a wall near grazing
-    incidence are many noise sigmas apart, so the line-continuation test keeps such walls
-    whole, while the 10 deg bound would also bridge depth steps of 10 % of the range,
-    which then pass for corners (``docs/decisions/breakpoints.md``). At most 90 deg
-    (scans coarser than 4 deg cannot keep to the share).
-    """
-    return _core.auto_abd_lambda(float(step))
 
 
 def threshold(rule: BreakpointRule, r_from: float, r_to: float, gap: int, step: float) -> float:

@@ -1,17 +1,13 @@
 """Merging neighbouring runs whose lines agree.
 
-``merge_by_criterion``  joins two neighbouring runs of one cluster when the joined fit
-                        explains the points as well, by the criterion the threshold
-                        sweep uses: ``(SSE_joined - SSE_1 - SSE_2) / sigma^2 < penalty ln(n)``.
-                        It undoes cuts at noise peaks that a single global threshold
-                        lets through (the adaptive method).
 ``merge_by_chi_square`` joins neighbouring runs of one group whose lines agree within
                         a chi-square bound on ``(rho, alpha)``, with covariances
                         propagated from the range noise and the angle difference wrapped
-                        to ``(-pi, pi]``, as the merge of split-and-merge [1]_ [2]_.
+                        to ``(-pi, pi]``, as the merge of split-and-merge [1]_ [2]_ (and
+                        of the adaptive method, after its merge by its criterion).
 
-Both are greedy: the best pair first, refitted, until no pair passes. The chi-square of
-two lines is ``dL^T (P_1 + P_2)^-1 dL``, NaN (never merged) where the sum is singular.
+Greedy: the best pair first, refitted, until no pair passes. The chi-square of two lines
+is ``dL^T (P_1 + P_2)^-1 dL``, NaN (never merged) where the sum is singular.
 
 References
 ----------

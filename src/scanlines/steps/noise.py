@@ -8,9 +8,9 @@
 ``covariance_sigmas``  each return's sigma for the segment covariances.
 
 A method given a sensor profile's line uses it; without one, each scan measures its own
-(:func:`scan_noise`). The adaptive method also takes a scale of the noise from the
-fitted lines of a first segmentation: the median of ``sqrt(cost / (n - 2))`` over runs of
-8 points or more (short runs fit their own noise).
+(:func:`scan_noise`). What the adaptive method alone takes from the noise (a scale from
+the lines of a first segmentation, the residual bound's tolerances) is in its own files
+(:mod:`scanlines.methods.adaptive`).
 """
 
 from __future__ import annotations
@@ -33,7 +33,6 @@ __all__ = [
     "noise_at",
     "offset_power_sums",
     "parabola_at_centre",
-    "residual_tolerances",
     "scan_noise",
 ]
 
@@ -92,14 +91,6 @@ def scan_noise(returns: Returns, gap: np.ndarray) -> NoiseLine:
     :data:`MIN_NOISE_SIGMA`.
     """
     return NoiseLine(*_core.scan_noise(*returns, int64s(gap)))
-
-
-def residual_tolerances(r: np.ndarray, noise: NoiseLine, floor: float) -> np.ndarray:
-    """How far each return (at ranges ``r``) may lie from its segment's line: ``floor``
-    (metres), or 5 times the noise sigma at its range where that is more (Gaussian noise
-    puts one return in about 1.7 million farther, so on a noisy sensor the bound cuts at
-    shapes, not at noise)."""
-    return _core.residual_tolerances(float64s(r), tuple(noise), float(floor))
 
 
 def covariance_sigmas(

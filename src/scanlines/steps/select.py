@@ -4,10 +4,9 @@ For each threshold the clusters are cut at the candidates scoring above it, each
 part is fitted and the sum of squared fitting errors is recorded; the cut with
 the best criterion is kept. Thresholds are nested (a lower threshold keeps every
 corner of a higher one), so the sweep inserts candidates in decreasing score
-order and scores every threshold from running sums. Under ``"bic"`` the sweep stops as
-soon as no lower threshold can win (:func:`sweep_decided`): each segment charges the
-criterion ``penalty ln(n)``, the charge only grows as thresholds fall, and once it alone
-reaches the best value found, the choice is made; the result is the full sweep's.
+order and scores every threshold from running sums (:func:`sweep_levels`; a sweep can
+also be extended a few candidates at a time, :func:`start_sweep` and
+:func:`extend_sweep`, as the adaptive method's early stop under ``"bic"`` does).
 
 Criteria
 --------
@@ -19,8 +18,8 @@ Criteria
            extra segment must explain more than ``penalty * ln(n)`` units of
            noise variance.
 
-The kernels are C++ (``cpp/scanlines/steps/select.cpp``), called by the adaptive
-method's kernel; the functions here call their bindings.
+The kernels are C++ (``cpp/scanlines/steps/select.cpp``), called by the adaptive and
+paper methods' kernels; the functions here call their bindings.
 
 References
 ----------
@@ -42,13 +41,11 @@ __all__ = [
     "CRITERIA",
     "CRITERION_CODES",
     "SSE",
-    "SWEEP_CHUNK",
     "Sweep",
     "best_level",
     "extend_sweep",
     "level_corners",
     "start_sweep",
-    "sweep_decided",
     "sweep_levels",
     "threshold_grid",
 ]
@@ -56,8 +53,6 @@ __all__ = [
 CRITERIA = ("bic", "sse")
 CRITERION_CODES = {"bic": 0, "sse": 1}
 BIC, SSE = 0, 1
-#: Candidates :func:`sweep_decided` inserts between two checks of its bound.
-SWEEP_CHUNK = 8
 
 Sweep = _core.Sweep
 """A threshold sweep in progress (:func:`start_sweep`, :func:`extend_sweep`).
@@ -114,21 +109,6 @@ def extend_sweep(sweep: Sweep, cost: RunCost, shared: bool, done: int, upto: int
     ``upto``, the count inserted.
     """
     return _core.extend_sweep(sweep, cost, bool(shared), int(done), int(upto))
-
-
-def sweep_decided(sweep: Sweep, cost: RunCost, shared: bool, done: int, n_points: int,
-                  sigma: float, penalty: float) -> tuple[int, int]:  # fmt: skip
-    """Extend ``sweep`` (from ``done`` inserted) until the ``"bic"`` choice with noise
-    ``sigma`` is certain; returns ``(best level, inserted)``.
-
-    The value of the cut with ``m`` candidates is at least ``penalty ln(n) segments[m]``
-    (its SSE term is not negative) and ``segments`` never falls, so once that charge
-    reaches the best value so far no later cut can win (ties go to the first): the level
-    is the full sweep's, found without inserting the rest.
-    """
-    return _core.sweep_decided(
-        sweep, cost, bool(shared), int(done), int(n_points), float(sigma), float(penalty)
-    )
 
 
 def sweep_levels(cost: RunCost, start, end, candidates, scores, grid, use_grid: bool,

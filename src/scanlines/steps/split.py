@@ -1,5 +1,5 @@
-"""Splitting runs of points: at the point farthest from the chord, at a residual bound,
-and at the corners a sweep chose.
+"""Splitting runs of points: at the point farthest from the chord, and at the corners a
+sweep chose.
 
 ``split_at_farthest``  the recursive split of iterative end-point fit [1]_ [2]_
                        (``reference`` :data:`CHORD`: a run is split while a point is
@@ -9,15 +9,11 @@ and at the corners a sweep chose.
                        interior point farthest from the chord, runs are split depth
                        first, and the split point joins the part whose line (fitted
                        without it) it is nearer, so no point is lost.
-``split_by_residual``  a hard bound: while a point of a run lies farther than its
-                       tolerance from its line, the run is cut at its worst point (as
-                       iterative end-point fit does) and that point is left out of both
-                       parts; when the worst point lies in a run's last few points and the
-                       run bends away from the chord of its ends by more than the
-                       tolerance (an arc), the run is cut where it is farthest from that
-                       chord instead: arcs become chains of segments in O(n log n).
-``cut_at``, ``refine_cuts``  the runs of clusters cut at chosen corners, and each cut
-                       moved by one position where that fits better.
+``cut_at``             the runs of clusters cut at chosen corners (the adaptive and
+                       paper methods).
+
+The adaptive method's own splits (each cut moved by one position where that fits better,
+the residual bound) are in its files (:mod:`scanlines.methods.adaptive`).
 
 References
 ----------
