@@ -5,6 +5,7 @@
 #include <nanobind/ndarray.h>
 
 #include <array>
+#include <tuple>
 #include <cstring>
 #include <type_traits>
 #include <utility>
@@ -73,6 +74,7 @@ inline Flags flags_of(const In<bool, nb::ndim<1>>& array) {
 
 using InReals = In<double, nb::ndim<1>>;
 using InInts = In<Index, nb::ndim<1>>;
+using InFlags = In<bool, nb::ndim<1>>;
 
 // The Returns of the Python side's (index, r, x, y).
 inline Returns returns_of(const InInts& index, const InReals& r, const InReals& x,
@@ -113,6 +115,27 @@ inline BreakpointRule breakpoint_rule_of(const nb::handle& rule) {
 inline RunCost run_cost_of(Index fit, const In<double, nb::ndim<2>>& table, double ox, double oy,
                            const InReals& inv_r2, const InReals& variances) {
     return {fit, moments_of(table, ox, oy), vector_of(inv_r2), vector_of(variances)};
+}
+
+// The tuples the steps' Python side builds (scanlines.steps: Returns, RunCost with its
+// Moments), taken as they are.
+using ReturnsTuple = std::tuple<InInts, InReals, InReals, InReals>;
+using CostTuple =
+    std::tuple<Index, std::tuple<In<double, nb::ndim<2>>, double, double>, InReals, InReals>;
+
+inline Returns returns_tuple_of(const ReturnsTuple& t) {
+    return returns_of(std::get<0>(t), std::get<1>(t), std::get<2>(t), std::get<3>(t));
+}
+
+// A view of the caller's moments: valid while the call's arguments are.
+inline RunCost cost_of(const CostTuple& t) {
+    const auto& [table, ox, oy] = std::get<1>(t);
+    return run_cost_of(std::get<0>(t), table, ox, oy, std::get<2>(t), std::get<3>(t));
+}
+
+template <typename T>
+nb::object copy_to_numpy(const std::vector<T>& values) {
+    return to_numpy(std::vector<T>(values));
 }
 
 inline nb::tuple runs_to_numpy(Runs&& runs) {

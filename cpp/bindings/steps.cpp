@@ -1,15 +1,18 @@
 // The steps the Python side calls on its own: the fits and covariances of the methods
 // whose search is numpy, the clustering and finishing stages around it, the noise
-// estimate of sensor profiles, and assembly for ground truth.
+// estimate of sensor profiles, assembly for ground truth, and the threshold sweep and
+// denoising for the tests of the steps.
 #include <nanobind/stl/pair.h>
 #include <nanobind/stl/tuple.h>
 
 #include "arrays.hpp"
 #include "scanlines/methods/clustered.hpp"
 #include "scanlines/steps/assemble.hpp"
+#include "scanlines/steps/denoise.hpp"
 #include "scanlines/steps/fit.hpp"
 #include "scanlines/steps/merge.hpp"
 #include "scanlines/steps/noise.hpp"
+#include "scanlines/steps/select.hpp"
 
 namespace scanlines::bind {
 
@@ -169,9 +172,131 @@ nb::tuple parabola_at_centre_binding(const InInts& index, const InReals& r, Inde
     return nb::make_tuple(p.residual, p.leverage, p.slope);
 }
 
+// The sweep and criterion (scanlines/steps/select.py), for the tests of the steps.
+void bind_select(nb::module_& m) {
+    m.def(
+        "threshold_grid",
+        [](double low, double high, double step, Index max_evaluations) {
+            return to_numpy(threshold_grid(low, high, step, max_evaluations));
+        },
+        "low, low + step, ... up to high, at most max_evaluations values.");
+    // A process may import the module twice (two copies of the package side by side,
+    // tools/benchmarks/compare_versions.py): the type is registered once.
+    if (nb::type<Sweep>().is_valid()) {
+        m.attr("Sweep") = nb::type<Sweep>();
+    } else {
+        nb::class_<Sweep>(m, "Sweep", "A threshold sweep in progress (scanlines.steps.select).")
+            .def_prop_ro("ranked", [](const Sweep& s) { return copy_to_numpy(s.ranked); })
+            .def_prop_ro("ranked_score",
+                         [](const Sweep& s) { return copy_to_numpy(s.ranked_score); })
+            .def_ro("useful", &Sweep::useful)
+            .def_prop_ro("accepted", [](const Sweep& s) { return flags_to_numpy(s.accepted); })
+            .def_prop_ro("parent_a", [](const Sweep& s) { return copy_to_numpy(s.parent_a); })
+            .def_prop_ro("parent_b", [](const Sweep& s) { return copy_to_numpy(s.parent_b); })
+            .def_prop_ro("sse", [](const Sweep& s) { return copy_to_numpy(s.sse); })
+            .def_prop_ro("segments", [](const Sweep& s) { return copy_to_numpy(s.segments); });
+    }
+    m.def(
+        "start_sweep",
+        [](const CostTuple& cost, const InInts& start, const InInts& end, const InInts& candidates,
+           const InReals& scores, const InReals& grid, bool use_grid, Index max_evaluations) {
+            return start_sweep(cost_of(cost), vector_of(start), vector_of(end),
+                               vector_of(candidates), vector_of(scores), vector_of(grid), use_grid,
+                               max_evaluations);
+        },
+        "A sweep of the clusters [start, end] with no candidate inserted yet.");
+    m.def(
+        "extend_sweep",
+        [](Sweep& sweep, const CostTuple& cost, bool shared, Index done, Index upto) {
+            return extend_sweep(sweep, cost_of(cost), shared, done, upto);
+        },
+        "Insert candidates done .. upto - 1 of the sweep (in place); returns upto.");
+    m.def(
+        "sweep_levels",
+        [](const CostTuple& cost, const InInts& start, const InInts& end, const InInts& candidates,
+           const InReals& scores, const InReals& grid, bool use_grid, Index max_evaluations,
+           bool shared) {
+            Levels out = sweep_levels(cost_of(cost), vector_of(start), vector_of(end),
+                                      vector_of(candidates), vector_of(scores), vector_of(grid),
+                                      use_grid, max_evaluations, shared);
+            return nb::make_tuple(to_numpy(std::move(out.ranked)), flags_to_numpy(out.accepted),
+                                  to_numpy(std::move(out.sse)), to_numpy(std::move(out.segments)),
+                                  to_numpy(std::move(out.thresholds)),
+                                  to_numpy(std::move(out.levels)));
+        },
+        "Every cut a threshold makes: (ranked, accepted, sse, segments, thresholds, levels).");
+    m.def(
+        "best_level",
+        [](Index criterion, const InReals& sse, const InInts& segments, const InInts& levels,
+           Index n_points, double sigma, double penalty) {
+            auto [best, values] = best_level(criterion, vector_of(sse), vector_of(segments),
+                                             vector_of(levels), n_points, sigma, penalty);
+            return nb::make_tuple(best, to_numpy(std::move(values)));
+        },
+        "Index of the best tried threshold (the first on a tie) and every criterion value.");
+    m.def(
+        "level_corners",
+        [](const InInts& ranked, const InFlags& accepted, Index level) {
+            return to_numpy(level_corners(vector_of(ranked), flags_of(accepted), level));
+        },
+        "Sorted positions of the accepted candidates among the level best.");
+}
+
+// Denoising (scanlines/steps/denoise.py), for the tests of the steps.
+void bind_denoise(nb::module_& m) {
+    m.def(
+        "literal_noise",
+        [](const InReals& d) { return flags_to_numpy(literal_noise(vector_of(d))); },
+        "Step 2 as written, on neighbour distances d (length n - 1): a mask of n points.");
+    m.def(
+        "isolated_noise",
+        [](const ReturnsTuple& returns, const InInts& gap, double step, nb::handle rule,
+           const InFlags& breaks) {
+            return flags_to_numpy(isolated_noise(returns_tuple_of(returns), vector_of(gap), step,
+                                                 breakpoint_rule_of(rule), flags_of(breaks)));
+        },
+        "Points cut off from both neighbours that are themselves continuous (a spike).");
+    m.def(
+        "window_means",
+        [](const InReals& x, const InReals& y, const InFlags& noise, Index window,
+           const InFlags& breaks) {
+            auto [mx, my] =
+                window_means(vector_of(x), vector_of(y), flags_of(noise), window, flags_of(breaks));
+            return nb::make_tuple(to_numpy(std::move(mx)), to_numpy(std::move(my)));
+        },
+        "Step 3: noise point i and its neighbours become the mean of window points.");
+    m.def(
+        "small_clusters",
+        [](const InFlags& breaks, Index min_points, bool seam_joined) {
+            return flags_to_numpy(small_clusters(flags_of(breaks), min_points, seam_joined));
+        },
+        "Mask of the points of clusters with fewer than min_points returns.");
+    m.def(
+        "in_between_clusters",
+        [](const InReals& r, const InInts& gap, const InFlags& breaks, const InFlags& small,
+           double margin) {
+            return flags_to_numpy(in_between_clusters(vector_of(r), vector_of(gap),
+                                                      flags_of(breaks), flags_of(small), margin));
+        },
+        "Mask of the returns of two-return clusters that lie in depth between their neighbours.");
+    m.def(
+        "denoise",
+        [](const ReturnsTuple& returns, Index n_beams, double step, bool full_circle,
+           nb::handle rule, Index kind, Index window, Index min_cluster_points, double margin) {
+            Denoised out = denoise(returns_tuple_of(returns), n_beams, step, full_circle,
+                                   breakpoint_rule_of(rule), kind, window, min_cluster_points,
+                                   margin);
+            return nb::make_tuple(returns_to_numpy(std::move(out.returns)),
+                                  to_numpy(std::move(out.outliers)), flags_to_numpy(out.breaks));
+        },
+        "Steps 2-3 by kind: (returns, beams dropped as noise, break flags or empty).");
+}
+
 }  // namespace
 
 void bind_steps(nb::module_& m) {
+    bind_select(m);
+    bind_denoise(m);
     m.def("fit_run", &fit_run_binding);
     m.def("hesse_difference", &hesse_difference);
     m.def("offset_power_sums", &offset_power_sums_binding);
