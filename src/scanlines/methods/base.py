@@ -8,7 +8,7 @@ an :class:`~scanlines.Extraction`. An instance holds resolved, validated paramet
 parameter: a method's settings are read by name only in its module and its kernel.
 
 :class:`CompiledMethod`
-    The whole method is one compiled kernel (adaptive, iepf, pdbs, split_merge,
+    The whole method is one compiled kernel (adaptive, paper, iepf, pdbs, split_merge,
     partition, surfaces; C++ in ``cpp/scanlines/methods/``), called once per stack of scans
     without the GIL. Its settings become one record per group, the fields each parameter
     declares (:meth:`~scanlines.params.Settings.record`), which the kernel's binding reads
