@@ -190,12 +190,44 @@ _RIDGE = 1e-6
 """The ridge of :func:`icp`'s steps: this share of the normal matrix's mean diagonal."""
 
 
+class LineSystem(NamedTuple):
+    """The Huber-weighted normal equations of point-to-line residuals: the normal matrix
+    ``J' W J``, the gradient ``J' W e`` and the weighted sum of squares ``e' W e``."""
+
+    normal: np.ndarray
+    gradient: np.ndarray
+    weighted_sse: float
+
+
 class LineStep(NamedTuple):
     """One Gauss-Newton step: the pose update ``(dx, dy, dtheta)`` and the normal matrix
     ``J' W J`` (before any ridge) it was solved with."""
 
     update: np.ndarray
     normal: np.ndarray
+
+
+def point_to_line_system(
+    lever: np.ndarray, normals: np.ndarray, residuals: np.ndarray, huber: float
+) -> LineSystem:
+    """The normal equations of a pose update that brings points onto their lines: the one
+    linearisation of :func:`point_to_line_step` (scan to scan, scan to map) and of the map
+    tracker's steps with a prior (:func:`scanlines.map.tracking.track_points`).
+
+    A point ``p`` on a line of unit normal ``n`` has the residual ``e = n . p - rho``; a
+    small update ``(dx, dy, dtheta)`` turning about a centre ``c`` changes it by
+    ``n . (dx, dy) + dtheta (n_y l_x - n_x l_y)``, ``l = p - c`` (``lever``, K x 2). The
+    weights are Huber's (``huber`` metres)."""
+    a = np.abs(residuals)
+    weight = np.where(a <= huber, 1.0, huber / np.maximum(a, 1e-12))
+    jac = np.column_stack(
+        (normals[:, 0], normals[:, 1], normals[:, 1] * lever[:, 0] - normals[:, 0] * lever[:, 1])
+    )
+    return LineSystem(
+        jac.T @ (weight[:, None] * jac),
+        jac.T @ (weight * residuals),
+        float(np.sum(weight * residuals**2)),
+    )
 
 
 def point_to_line_step(
@@ -205,30 +237,22 @@ def point_to_line_step(
     huber: float,
     ridge: float | None = None,
 ) -> LineStep | None:
-    """One Huber-weighted Gauss-Newton step on point-to-line residuals: the pose update
-    that brings points onto their lines, the one step of :func:`icp` (scan to scan) and of
+    """One Huber-weighted Gauss-Newton step on point-to-line residuals
+    (:func:`point_to_line_system`): the pose update that brings points onto their lines,
+    the one step of :func:`icp` (scan to scan) and of
     :func:`scanlines.map.align.align_points` (scan to map).
 
-    A point ``p`` on a line of unit normal ``n`` has the residual ``e = n . p - rho``; a
-    small update ``(dx, dy, dtheta)`` turning about a centre ``c`` changes it by
-    ``n . (dx, dy) + dtheta (n_y l_x - n_x l_y)``, ``l = p - c`` (``lever``, K x 2). The
-    weights are Huber's (``huber`` metres). With a ``ridge``, that share of the normal
-    matrix's mean diagonal is added to it, so a direction the points do not constrain (a
-    corridor's axis) stays where it is; without one, ``None`` where the normal matrix is
-    not finite or its determinant not positive."""
-    a = np.abs(residuals)
-    weight = np.where(a <= huber, 1.0, huber / np.maximum(a, 1e-12))
-    jac = np.column_stack(
-        (normals[:, 0], normals[:, 1], normals[:, 1] * lever[:, 0] - normals[:, 0] * lever[:, 1])
-    )
-    h = jac.T @ (weight[:, None] * jac)
+    With a ``ridge``, that share of the normal matrix's mean diagonal is added to it, so a
+    direction the points do not constrain (a corridor's axis) stays where it is; without
+    one, ``None`` where the normal matrix is not finite or its determinant not positive."""
+    h, gradient, _ = point_to_line_system(lever, normals, residuals, huber)
     if ridge is None:
         if not np.all(np.isfinite(h)) or np.linalg.det(h) <= 0:
             return None
         solved = h
     else:
         solved = h + np.eye(3) * (ridge * np.trace(h) / 3.0 + 1e-12)
-    return LineStep(-np.linalg.solve(solved, jac.T @ (weight * residuals)), h)
+    return LineStep(-np.linalg.solve(solved, gradient), h)
 
 
 def _subsample(points: np.ndarray, most: int) -> np.ndarray:

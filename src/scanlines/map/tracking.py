@@ -24,6 +24,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from scanlines.geometry.poses import Pose, compose, relative_pose
+from scanlines.geometry.registration import point_to_line_system
 from scanlines.geometry.transform import points_to_world
 from scanlines.map.align import HUBER, MIN_PAIRS, LineSet, _near, _subsample, nearest_segments
 
@@ -122,15 +123,13 @@ def track_points(
             return refuse("too few returns near a map line", pairs)
         p, n = world[ok], normals[nearest[ok]]
         e = np.sum(n * p, axis=1) - lines.rho[nearest[ok]]
-        lever = p - x[:2]
-        jac = np.column_stack((n[:, 0], n[:, 1], n[:, 1] * lever[:, 0] - n[:, 0] * lever[:, 1]))
-        weight = np.where(np.abs(e) <= HUBER, 1.0, HUBER / np.maximum(np.abs(e), 1e-12))
-        residual = float(np.sum(weight * e**2) / max(pairs - 3, 1))
+        system = point_to_line_system(p - x[:2], n, e, HUBER)
+        residual = system.weighted_sse / max(pairs - 3, 1)
         s2 = max(residual, settings.sigma_floor**2)
-        data = jac.T @ (weight[:, None] * jac) / s2
+        data = system.normal / s2
         offset = x - np.array(start)
         offset[2] = _wrap(offset[2])
-        gradient = jac.T @ (weight * e) / s2 + info_prior @ offset
+        gradient = system.gradient / s2 + info_prior @ offset
         step = -np.linalg.solve(data + info_prior, gradient)
         x = x + step
         if np.abs(step).max() < settings.tolerance:
