@@ -16,7 +16,6 @@ namespace scanlines::bind {
 namespace {
 
 using InTable = In<double, nb::ndim<2>>;
-using NoisePair = std::pair<double, double>;
 
 nb::object flags_array(const Flags& flags) { return flags_to_numpy(flags); }
 

@@ -2,7 +2,6 @@
 #pragma once
 
 #include <cmath>
-#include <utility>
 
 #include "scanlines/core.hpp"
 #include "scanlines/steps/fit.hpp"
