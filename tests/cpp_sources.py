@@ -77,7 +77,8 @@ def _parameter_name(parameter: str) -> str:
 def _function_head(head: str) -> tuple[str, str] | None:
     """(name, parameter text) when the text before a ``{`` heads a function definition."""
     head = head.strip()
-    if not head or re.match(r"(template\s*<.*>\s*)?(struct|class|union|enum|namespace)\b", head, re.S):
+    declared_type = r"(template\s*<.*>\s*)?(struct|class|union|enum|namespace)\b"
+    if not head or re.match(declared_type, head, re.S):
         return None
     for m in re.finditer(r"(~?[A-Za-z_]\w*|operator\s*\S+?)\s*\(", head):
         if m.group(1) in KEYWORDS or "=" in head[: m.start()]:
@@ -172,9 +173,7 @@ def _aliases(body: str, names: set[str]) -> set[str]:
         names |= found
 
 
-def settings_walk(
-    defined: list[Function], root: str, parameter: str
-) -> list[tuple[str, str]]:
+def settings_walk(defined: list[Function], root: str, parameter: str) -> list[tuple[str, str]]:
     """The calls that pass a settings record (or a part of it: a group, a field, a local
     name bound to one) on from ``root``'s ``parameter``, followed into every function defined
     in ``defined`` that receives it: (caller, callee) per call site, each function's body
