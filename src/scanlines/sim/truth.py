@@ -256,9 +256,23 @@ def _hit_points(edge: np.ndarray, r: np.ndarray, theta: np.ndarray) -> np.ndarra
 
 
 def _dont_care(
-    world, pose, edge, r, theta, hit_points, incidence, returns, run_starts, run_lengths,
-    left, right, is_break, is_corner, full_circle, sigma,
-) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    world: World,
+    pose: tuple[float, float, float],
+    edge: np.ndarray,
+    r: np.ndarray,
+    theta: np.ndarray,
+    hit_points: np.ndarray,
+    incidence: np.ndarray,
+    returns: np.ndarray,
+    run_starts: np.ndarray,
+    run_lengths: np.ndarray,
+    left: np.ndarray,
+    right: np.ndarray,
+    is_break: np.ndarray,
+    is_corner: np.ndarray,
+    full_circle: bool,
+    sigma: Callable[[np.ndarray], np.ndarray] | None,
+) -> tuple[np.ndarray, np.ndarray]:
     """Which breakpoints and which corners (events ``left``, ``right``) are don't care:
     junctions; with ``sigma``, also depth steps and turns the noise hides."""
     n = len(edge)
