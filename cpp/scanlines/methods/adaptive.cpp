@@ -293,7 +293,7 @@ RunCost run_cost_of(const AdaptiveSteps::Selection& s, const Returns& returns,
     return {s.fit, std::move(moments), inverse_square_sums(returns.r), std::move(variances)};
 }
 
-// Step 5's score at every position: the turn angle, or eq. 13.
+// The corner score at every position: the turn angle, or the paper's eq. 13.
 Reals corner_scores(const Clusters& clusters, Index n_beams, double step, const Moments& moments,
                     Index window, Index kind) {
     const Returns& ret = clusters.returns;
@@ -302,7 +302,7 @@ Reals corner_scores(const Clusters& clusters, Index n_beams, double step, const 
     return slope_scores(ret.r, gap, step, clusters.start, clusters.end, kind == DK_SIGNED);
 }
 
-// Step 5's candidates: the peaks of the scores, and their scores.
+// The corner candidates: the peaks of the scores, and their scores.
 struct Candidates {
     Ints positions;
     Reals scores;
@@ -336,7 +336,8 @@ double measured_scale(const RunCost& cost, const Ints& start, const Ints& end,
     return std::max(residual_noise(cost, runs.a, runs.b, 1.0), 1e-3);
 }
 
-// Steps 6-7 over every tried threshold (the "sse" criterion, or a fixed dkth_range).
+// The threshold sweep's choice over every tried threshold (the "sse" criterion, or a fixed
+// dkth_range).
 Choice chosen_by_full_sweep(const RunCost& cost, const Clusters& clusters,
                             const Candidates& candidates, double typical,
                             const AdaptiveSteps::Selection& s, const Reals& grid) {
@@ -360,8 +361,8 @@ Choice chosen_by_full_sweep(const RunCost& cost, const Clusters& clusters,
     return {corners, scale, s.noise_units ? scale * scale : typical * typical};
 }
 
-// Steps 6-7 by the "bic" criterion on the candidates' own scores: the sweep stops where
-// the choice is certain.
+// The threshold sweep's choice by the "bic" criterion on the candidates' own scores: the
+// sweep stops where the choice is certain.
 Choice chosen_by_decided_sweep(const RunCost& cost, const Clusters& clusters,
                                const Candidates& candidates, const AdaptiveSteps::Selection& s,
                                const Reals& grid) {
@@ -382,8 +383,8 @@ Choice chosen_by_decided_sweep(const RunCost& cost, const Clusters& clusters,
     return {corners, scale, scale * scale};
 }
 
-// Step 6: runs [a, b] (and the cluster of each) after cutting at the corners, refining,
-// merging and bounding the residuals, small ones dropped.
+// The segments: runs [a, b] (and the cluster of each) after cutting at the corners,
+// refining, merging and bounding the residuals, small ones dropped.
 GroupedRuns segments(const Clusters& clusters, const RunCost& cost, const Choice& choice,
                      const AdaptiveSteps::Cutting& s, NoiseLine noise, const Reals& sigma) {
     const Returns& ret = clusters.returns;
@@ -427,8 +428,7 @@ Reals direction_sigmas(const Returns& returns, const Moments& moments, const Int
     return out;
 }
 
-// Step 7: the clustering's breakpoints with the corners and jumps between the kept
-// segments; with the corner check, two lines whose turn is within noise (sigma of the scaled
+// The clustering's breakpoints with the corners and jumps between the kept segments; with the corner check, two lines whose turn is within noise (sigma of the scaled
 // noise model at the typical range) of their directions meet at no corner.
 Events junctions(const Clusters& clusters, const Moments& moments, const GroupedRuns& runs,
                  const Reals& sigma, double noise, const AdaptiveSteps::Junctions& s) {
@@ -503,20 +503,20 @@ ScanResult adaptive_scan(View<double> ranges, View<bool> valid, const Stack& sen
     Reals sigma = return_sigmas(clusters.returns.r, noise.line);
     const RunCost cost = run_cost_of(s.selection, clusters.returns, sigma);
 
-    // Steps 4-5: the corner score at every position, its peaks the candidates.
+    // Step 4: the corner score at every position, its peaks the candidates.
     Reals scores = corner_scores(clusters, n_beams, step, cost.moments, window, s.corner_score);
     Candidates candidates = corner_candidates(scores, clusters);
 
-    // Steps 6-7: the threshold sweep's choice of corners.
+    // Step 5: the threshold sweep's choice of corners.
     Choice choice = s.selection.decided
                         ? chosen_by_decided_sweep(cost, clusters, candidates, s.selection, grid)
                         : chosen_by_full_sweep(cost, clusters, candidates, noise.typical,
                                                s.selection, grid);
 
-    // The segments: cut at the corners, refined, merged, bounded; small ones dropped.
+    // Step 6: the segments, cut at the corners, refined, merged, bounded; small ones dropped.
     GroupedRuns runs = segments(clusters, cost, choice, s.cutting, noise.line, sigma);
 
-    // Breakpoints, corners and jumps between the segments.
+    // Step 7: breakpoints, and the corners and jumps between the segments.
     Events events = junctions(clusters, cost.moments, runs, sigma, choice.scale * noise.typical,
                               s.junctions);
     events.outliers = std::move(clean.outliers);
