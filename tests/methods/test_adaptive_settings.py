@@ -43,6 +43,13 @@ def test_only_adaptive_steps_reads_the_switches():
         if switch.search(function.body)
     }
     assert readers == {"adaptive_steps"}
+    # The record's segments, events and output groups hold the switches of several stages:
+    # only adaptive_steps reads them.
+    group = re.compile(r"\.(segments|events|output)\.")
+    readers = {
+        function.name for function in cpp_sources.functions(ADAPTIVE) if group.search(function.body)
+    }
+    assert readers == {"adaptive_steps"}
 
 
 def test_adaptive_scan_reads_like_its_stages():
