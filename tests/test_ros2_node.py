@@ -261,7 +261,6 @@ def test_a_sample_that_does_not_decode_is_counted_and_the_others_of_its_take_go_
 
     domain = 65
     extractor = Extractor()
-    extractor.warm_up()
     log = io.StringIO()
     node = LineNode(extractor, domain_id=domain, loopback=True, features_topic="/features", log=log)
     features = reader_of(domain, "/features", msg.ScanFeatures)

@@ -111,7 +111,8 @@ class Extractor:
     Parameters
     ----------
     method:
-        A name from :func:`method_names`; ``"adaptive"`` is the paper's method.
+        A name from :func:`method_names`; ``"paper"`` is the paper's method as printed,
+        ``"adaptive"`` the same steps changed to work on real logs.
     preset:
         A named parameter set of the method (``"paper"``: the paper, literally).
     sensor_profile:
@@ -198,12 +199,6 @@ class Extractor:
             method = self._learned[line] = type(self._method)(self.params, line)
         return method
 
-    def warm_up(self) -> None:
-        """Extract a small synthetic scan once, so that the lazy imports are done before the
-        first real scan. The kernels are compiled when the package is installed, so this
-        takes milliseconds; it is kept for code written when they compiled on first use."""
-        self(_warm_up_scan())
-
     def batch(
         self,
         ranges: np.ndarray,
@@ -285,19 +280,6 @@ def _extract_stack(method: Any, arrays: tuple[Any, ...], jobs: int) -> Extractio
         return ExtractionTable.join(list(pool.map(part, range(parts))))
 
 
-def _warm_up_scan() -> Scan:
-    """A room 6 x 4 m with a box in it, seen at 1 deg over 270 deg, two beams lost."""
-    bearings = np.radians(np.arange(-135.0, 135.5, 1.0))
-    cos, sin = np.cos(bearings), np.sin(bearings)
-    with np.errstate(divide="ignore"):
-        walls = np.stack((np.where(cos > 0, 4.0, -2.0) / cos, np.where(sin > 0, 2.5, -1.5) / sin))
-    ranges = np.where(walls > 0, walls, np.inf).min(axis=0)
-    box = (bearings > 0.3) & (bearings < 0.5)
-    ranges[box] = 2.0 / np.cos(bearings[box] - 0.4)
-    ranges[[40, 41]] = 0.0
-    return Scan(ranges, bearings[0], np.radians(1.0), range_max=30.0)
-
-
 def float32(value: float) -> float:
     """``value`` rounded to float32 precision (infinities stay; beyond float32's range a
     range bound becomes infinite, which it is for every float32 range)."""
@@ -338,8 +320,8 @@ def extract(
     scan:
         The :class:`~scanlines.Scan`.
     method:
-        ``"adaptive"`` (the paper's method, with defaults that hold on real noisy
-        scans), or another of :func:`method_names`:
+        ``"adaptive"`` (the paper's steps, each changed where real noisy scans need it;
+        the method as printed is ``paper``), or another of :func:`method_names`:
         {other_methods}.
     preset:
         A named parameter set of the method; ``"paper"`` runs the adaptive method

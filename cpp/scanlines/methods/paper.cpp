@@ -68,8 +68,8 @@ ScanResult paper_scan(View<double> ranges, View<bool> valid, const Stack& sensor
 
     // The parts: the corner point shared by both sides; those of min_points returns and
     // min_length kept.
-    Runs parts = cut_at(start, end, corners, true);
-    Runs runs;
+    GroupedRuns parts = cut_at(start, end, corners, true);
+    GroupedRuns runs;
     for (std::size_t k = 0; k < parts.a.size(); ++k) {
         Index a = parts.a[k], b = parts.b[k];
         double dx = ret.x[b] - ret.x[a], dy = ret.y[b] - ret.y[a];
