@@ -143,19 +143,23 @@ def test_batch_equals_the_calls_to_the_bit_while_learning():
         assert table[k].breakpoints.tolist() == extraction.breakpoints.tolist()
 
 
+def _lines_in_order(extractor: Extractor, scans: list[Scan]) -> list[bytes]:
+    return [extractor(scan).lines.tobytes() for scan in scans]
+
+
 def test_threads_sharing_a_bare_extractor_each_learn_from_their_own_scans():
     import threading
 
     scans = _noisy_intel_scans(48)
     shares = [scans[k::8] for k in range(8)]  # each thread's scans, in its order
-    expected = [[Extractor("surfaces")(scan).lines.tobytes() for scan in share] for share in shares]
+    expected = [_lines_in_order(Extractor("surfaces"), share) for share in shares]
     shared = Extractor("surfaces")
     got: list[list[bytes]] = [[] for _ in shares]
     start = threading.Barrier(len(shares))
 
     def work(k: int) -> None:
         start.wait()
-        got[k] = [shared(scan).lines.tobytes() for scan in shares[k]]
+        got[k] = _lines_in_order(shared, shares[k])
 
     threads = [threading.Thread(target=work, args=(k,)) for k in range(len(shares))]
     for thread in threads:
