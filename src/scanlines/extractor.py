@@ -20,7 +20,7 @@ from scanlines.extraction import Extraction, ExtractionTable
 from scanlines.methods import REGISTRY, method_class
 from scanlines.params import resolve
 from scanlines.scan import Scan, as_array, valid_returns
-from scanlines.sensor.learned_noise import NoiseLearner
+from scanlines.sensor.learned_noise import Geometry, NoiseLearner
 from scanlines.sensor.profile import SensorProfile, as_profile
 
 __all__ = ["Extractor", "MethodInfo", "ParamInfo", "extract", "method_info", "method_names"]
@@ -121,7 +121,9 @@ class Extractor:
         takes. Without one, each scan's noise is measured from that scan alone; a method
         that learns the noise (``surfaces``) takes each scan's noise from the sensor's
         scans before it, up to :data:`~scanlines.sensor.learned_noise.LEARNED_SCANS` of them
-        (:class:`~scanlines.sensor.learned_noise.NoiseLearner`), then keeps that line.
+        (:class:`~scanlines.sensor.learned_noise.NoiseLearner`), then keeps that line; each
+        thread learns from the scans it gave, so results do not depend on scheduling, and
+        :meth:`batch` gives what the calls give.
     **params:
         Overrides of single parameters (see :func:`method_info`).
 
@@ -179,17 +181,18 @@ class Extractor:
         step, angle_min = float32(scan.angle_increment), float32(scan.angle_min)
         valid = valid_returns(ranges, float32(scan.range_min), float32(scan.range_max))
         cos, sin = self._bearings(len(scan), step)
-        extraction = self._method_for(scan).extract(ranges, valid, cos, sin, step, angle_min)
+        geometry = (len(scan), angle_min, step)
+        extraction = self._method_for(geometry).extract(ranges, valid, cos, sin, step, angle_min)
         if self._learner is not None:
-            self._learner.learn(scan)
+            self._learner.learn(geometry, ranges, valid, cos, sin)
         return extraction
 
-    def _method_for(self, scan: Scan) -> Any:
-        """The method to extract ``scan`` with: with the noise learned from the sensor's
-        scans before it, if the extractor learns the noise."""
+    def _method_for(self, geometry: Geometry) -> Any:
+        """The method to extract a scan of sensor ``geometry`` with: with the noise learned
+        from the sensor's scans before it (in this thread), if the extractor learns it."""
         if self._learner is None:
             return self._method
-        line = self._learner.line(NoiseLearner.geometry(scan))
+        line = self._learner.line(geometry)
         if line is None:
             return self._method
         method = self._learned.get(line)
@@ -233,20 +236,18 @@ class Extractor:
         if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
             raise ParameterError(f"jobs must be an integer >= 1, got {jobs!r}")
         tables, row = [], 0
-        fields = (sensor.angle_min, sensor.angle_increment, sensor.range_min, sensor.range_max)
+        geometry = (stack.shape[1], angle_min, step)
         learner = self._learner
         while (
-            learner is not None
-            and row < len(stack)
-            and not learner.frozen(NoiseLearner.geometry(sensor))
+            learner is not None and row < len(stack) and not learner.frozen(geometry)
         ):  # the noise still learned: row by row
             rows = slice(row, row + 1)
-            method = self._method_for(sensor)
+            method = self._method_for(geometry)
             tables.append(method.extract_many(stack[rows], valid[rows], cos, sin, step, angle_min))
-            learner.learn(Scan(stack[row], *fields))
+            learner.learn(geometry, stack[row], valid[row], cos, sin)
             row += 1
         if row < len(stack) or not tables:
-            method, rows = self._method_for(sensor), slice(row, None)
+            method, rows = self._method_for(geometry), slice(row, None)
             arrays = (stack[rows], valid[rows], cos, sin, step, angle_min)
             tables.append(_extract_stack(method, arrays, jobs))
         return tables[0] if len(tables) == 1 else ExtractionTable.join(tables)

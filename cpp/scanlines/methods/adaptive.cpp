@@ -528,11 +528,7 @@ ScanResult adaptive_scan(View<double> ranges, View<bool> valid, const Stack& sen
 }
 
 Table adaptive_stack(const Stack& stack, const AdaptiveSettings& s, const Reals& grid) {
-    const AdaptiveSteps steps = adaptive_steps(s);
-    Table table;
-    for (Index row = 0; row < stack.rows; ++row)
-        table.add(adaptive_scan(stack.row_ranges(row), stack.row_valid(row), stack, steps, grid));
-    return table;
+    return each_row(stack, adaptive_scan, adaptive_steps(s), grid);
 }
 
 #ifdef SCANLINES_STAGE_TIMES

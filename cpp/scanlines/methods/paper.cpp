@@ -99,10 +99,7 @@ ScanResult paper_scan(View<double> ranges, View<bool> valid, const Stack& sensor
 }
 
 Table paper_stack(const Stack& stack, const PaperSettings& s, const Reals& grid) {
-    Table table;
-    for (Index row = 0; row < stack.rows; ++row)
-        table.add(paper_scan(stack.row_ranges(row), stack.row_valid(row), stack, s, grid));
-    return table;
+    return each_row(stack, paper_scan, s, grid);
 }
 
 }  // namespace scanlines

@@ -16,6 +16,7 @@ constexpr double INF = std::numeric_limits<double>::infinity();
 constexpr double PI = 3.141592653589793;
 const double GRAZING_ANGLE = 10.0 * (PI / 180.0);  // as math.radians(10.0) rounds
 constexpr double CUT_SIGMAS = 5.0;
+constexpr double EVENT_SIGMAS = 3.0;
 constexpr Index LOOK_BACK = 256;
 constexpr int ROUNDS = 3;
 constexpr int C = Sums::COLUMNS;
@@ -318,6 +319,36 @@ Index corner_between(const Returns& ret, const Sums& sums, const Reals& sigma, c
     double to_begin = std::hypot(cx - x[begin], cy - y[begin]);
     if (to_end > reach || to_begin > reach) return -1;
     return to_end <= to_begin ? end : begin;
+}
+
+std::pair<Ints, Ints> events(const Returns& ret, const Partition& part, const Reals& sigma,
+                             const Ints& positions, double step, ScanShape shape) {
+    const Index n = ret.size();
+    Ints breakpoints, corners;
+    const Index m = static_cast<Index>(positions.size());
+    if (m == 0) return {breakpoints, corners};
+    Ints owner(n, -1);
+    for (std::size_t k = 0; k < part.runs.a.size(); ++k)
+        for (Index p = part.runs.a[k]; p <= part.runs.b[k]; ++p) owner[p] = static_cast<Index>(k);
+    Ints wide(n + 1, 0);  // beam gaps too wide to bridge, counted up to each position
+    for (Index p = 0; p + 1 < n; ++p) wide[p + 1] = wide[p] + (part.gap[p] > MAX_BRIDGED_GAP);
+    const Index last = shape.ring ? m : m - 1;
+    for (Index k = 0; k < last; ++k) {
+        Index p = positions[k], q = positions[(k + 1) % m];
+        if (owner[p] >= 0 && owner[p] == owner[q]) continue;
+        bool across_gap = q > p && wide[q] > wide[p];
+        Index beams = py_mod(ret.index[q] - ret.index[p], shape.n_beams);
+        if (across_gap || !continuous(ret, p, q, beams, step, sigma, EVENT_SIGMAS)) {
+            breakpoints.push_back(ret.index[p]);
+        } else if (owner[p] >= 0 && owner[q] >= 0) {
+            Index at = corner_between(ret, part.sums, sigma, part.runs, owner[p], owner[q],
+                                      EVENT_SIGMAS);
+            if (at >= 0) corners.push_back(ret.index[at]);
+        }
+    }
+    if (shape.full_circle && !shape.ring) breakpoints.push_back(ret.index[positions[m - 1]]);
+    std::sort(breakpoints.begin(), breakpoints.end());
+    return {breakpoints, corners};
 }
 
 Ints kept_runs(const Returns& ret, const Flags& held, const Runs& runs, Index min_points,

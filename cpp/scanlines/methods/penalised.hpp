@@ -99,6 +99,19 @@ std::pair<Returns, bool> seam_at_widest_gap(Returns ret, const Ints& gap, Index 
 Index corner_between(const Returns& ret, const Sums& sums, const Reals& sigma, const Runs& runs,
                      Index i, Index j, double sigmas);
 
+// Whether a scan is a full circle, whether its returns close into a ring, its beam count.
+struct ScanShape {
+    bool full_circle, ring;
+    Index n_beams;
+};
+
+// Breakpoints where a surface ends and corners where two segments meet, read between
+// consecutive returns of `positions` (every return, or the held ones only): a breakpoint
+// at the first of two returns farther apart than a surface can put them, a corner between
+// neighbouring runs whose lines turn and meet (corner_between).
+std::pair<Ints, Ints> events(const Returns& ret, const Partition& part, const Reals& sigma,
+                             const Ints& positions, double step, ScanShape shape);
+
 // The runs (their numbers) that hold at least min_points returns in their fit and are at least min_length long.
 Ints kept_runs(const Returns& ret, const Flags& held, const Runs& runs, Index min_points,
                 double min_length);

@@ -103,17 +103,11 @@ ScanResult split_merge_scan(View<double> ranges, View<bool> valid, const Stack& 
 }  // namespace
 
 Table iepf_stack(const Stack& stack, const SplitSettings& s) {
-    Table table;
-    for (Index row = 0; row < stack.rows; ++row)
-        table.add(iepf_scan(stack.row_ranges(row), stack.row_valid(row), stack, s));
-    return table;
+    return each_row(stack, iepf_scan, s);
 }
 
 Table split_merge_stack(const Stack& stack, const SplitSettings& s) {
-    Table table;
-    for (Index row = 0; row < stack.rows; ++row)
-        table.add(split_merge_scan(stack.row_ranges(row), stack.row_valid(row), stack, s));
-    return table;
+    return each_row(stack, split_merge_scan, s);
 }
 
 }  // namespace scanlines

@@ -39,15 +39,14 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 from scanlines._core import surfaces_stack
-from scanlines.methods.base import CompiledMethod
-from scanlines.methods.partition import OBJECTIVE
+from scanlines.methods.penalised import OBJECTIVE, PenalisedMethod
 from scanlines.params import MAX_METRES, Param, Settings, auto_or, number
 from scanlines.steps.assemble import output_settings
 
 __all__ = ["Surfaces"]
 
 
-class Surfaces(CompiledMethod):
+class Surfaces(PenalisedMethod):
     """The surfaces a scan sees as line segments, by one penalised-likelihood objective
     (module docstring)."""
 
@@ -61,7 +60,7 @@ class Surfaces(CompiledMethod):
             ),
         },
         segments={
-            **OBJECTIVE,  # partition's objective: the same parameters, the same domains
+            **OBJECTIVE,  # the penalised objective: partition's parameters, the same domains
             "footprint": Param(
                 0.05,
                 number(low=0.0, high=MAX_METRES),

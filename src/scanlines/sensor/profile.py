@@ -310,6 +310,13 @@ def noise_samples(scan: Scan) -> tuple[np.ndarray, np.ndarray]:
     return local_residuals(*_returns_of(scan))
 
 
+def noise_samples_of(ranges, valid, cos, sin) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`noise_samples` of a scan's arrays: its ranges, its mask of beams with a return
+    and its bearing tables relative to beam 0."""
+    returns = valid_returns(ranges, valid, cos, sin)
+    return local_residuals(returns, beam_gaps(returns.index, ranges.shape[0]))
+
+
 def pooled_noise_line(samples: list[np.ndarray], at: list[np.ndarray]) -> NoiseLine | None:
     """The noise line of pooled per-scan samples, as :func:`estimate_profile` measures it;
     None when they are too few."""
