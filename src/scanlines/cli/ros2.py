@@ -33,8 +33,10 @@ ROS_ARGS = "scanlines.ros_args"
 
 HELP = (
     "ROS 2 node over DDS (no ROS install): LaserScan in; laser_line_extraction's line "
-    "segments and Marker, and a MarkerArray, out. --play LOG publishes a log's scans (and "
-    "its poses on /tf). ROS arguments follow --ros-args: -r FROM:=TO (-r __ns:=/NS, "
+    "segments and Marker, and a MarkerArray, out; with --map MAP.json it also localises "
+    "each scan on the map as AMCL does (amcl_pose, map -> odom on /tf, /initialpose, the map "
+    "on /map). --play LOG publishes a log's scans (its odometry on /odom and /tf, the "
+    "mounting on /tf_static). ROS arguments follow --ros-args: -r FROM:=TO (-r __ns:=/NS, "
     "-r __node:=NAME), -p NAME:=VALUE, --params-file FILE (NAME: ros__parameters: ...); "
     "parameters are the options' names with _ (method, preset, sensor_profile, topic, "
     "markers_topic...) and the method's parameters."
@@ -108,11 +110,36 @@ def ros2_command(
         typer.Option(help="Also publish the full result (scanlines/msg/ScanFeatures) here."),
     ] = None,
     frame_id: Annotated[
-        str, typer.Option(help="--play: the scans' frame_id (the child frame of /tf).")
+        str, typer.Option(help="--play: the scans' frame_id (the laser's frame).")
     ] = "laser",
-    odom_frame: Annotated[
-        str, typer.Option(help="--play: the frame of the log's poses on /tf.")
+    odom_frame: Annotated[str, typer.Option(help="The odometry's frame.")] = "odom",
+    base_frame: Annotated[str, typer.Option(help="The robot's frame (odometry's child).")] = (
+        "base_link"
+    ),
+    restamp: Annotated[
+        bool,
+        typer.Option(
+            help="--play: stamps that only go forward: the log's intervals where positive, "
+            "the median positive interval where the log's clock steps back."
+        ),
+    ] = False,
+    map_file: Annotated[
+        Path | None,
+        typer.Option(
+            "--map",
+            metavar="MAP.json",
+            help="Node: localise each scan on this line map (`scanlines map` writes it) "
+            "from the pose given on /initialpose.",
+        ),
+    ] = None,
+    odometry: Annotated[
+        str,
+        typer.Option(
+            help="--map: the odometry from the odom topic (nav_msgs/Odometry) or from /tf "
+            "(odom-frame -> base-frame).",
+        ),
     ] = "odom",
+    global_frame: Annotated[str, typer.Option(help="--map: the map's frame.")] = "map",
     domain_id: Annotated[
         int, typer.Option(help="ROS domain id.", show_default="$ROS_DOMAIN_ID, else 0")
     ] = _domain_default(),
@@ -148,9 +175,18 @@ def ros2_command(
         options = apply_parameters(options, values)
         play_log(
             play, rate, scans, on_error, ros.resolve(options.topics["topic"]), ros.resolve("/tf"),
-            frame_id, odom_frame, domain_id, loopback, wait,
+            frame_id, odom_frame, domain_id, loopback, wait, restamp=restamp,
+            odom_topic=ros.resolve("odom"), tf_static_topic=ros.resolve("/tf_static"),
+            base_frame=base_frame,
         )  # fmt: skip
         return
+    live = None
+    if odometry not in ("odom", "tf"):
+        raise ParameterError(f"--odometry must be odom or tf, got {odometry!r}")
+    if map_file is not None:
+        from scanlines.ros2.live import LiveFrames
+
+        live = (map_file, LiveFrames(global_frame, odom_frame, base_frame, odometry))
     chosen = NodeOptions(
         *method_options(method, preset, param, config),
         sensor_profile=sensor_profile,
@@ -162,7 +198,7 @@ def ros2_command(
             "features_topic": features_topic or None,
         },
     )
-    _node(apply_parameters(chosen, values), ros, domain_id, loopback, max_scans, duration)
+    _node(apply_parameters(chosen, values), ros, domain_id, loopback, max_scans, duration, live)
 
 
 def _ros_arguments(words: list[str] | None):
@@ -186,7 +222,38 @@ def _ros_arguments(words: list[str] | None):
     return ros, values
 
 
-def _node(options, ros, domain_id, loopback, max_scans, duration) -> None:
+def _live(node, map_file, frames, ros):
+    """The node's localisation on ``map_file`` (AMCL's topics, resolved), the map
+    published; and its start-up line."""
+    from scanlines.map.localize import read_line_map
+    from scanlines.ros2.live import LiveLocalisation, LiveTopics
+    from scanlines.ros2.localizer import Localizer
+
+    lines, frame = read_line_map(map_file)
+    topics = LiveTopics(*(ros.resolve(name) for name in (
+        "odom", "/tf", "/tf_static", "initialpose", "amcl_pose", "map", "scanlines/map_markers"
+    )))  # fmt: skip
+    localizer = Localizer(lines, frame, base_frame=frames.base_frame)
+    live = LiveLocalisation(localizer, node.participant, topics=topics, frames=frames)
+    node.attach(live)
+    live.publish_map()
+    source = (
+        f"{topics.tf} ({frames.odom_frame} -> {frames.base_frame})"
+        if frames.odometry == "tf"
+        else f"{topics.odom} (Odometry)"
+    )
+    line = (
+        f"scanlines ros2: localising on {map_file} ({len(lines.rho)} lines): odometry from "
+        f"{source}, the laser's mounting from {topics.tf_static} (else the lever learnt), "
+        f"the initial pose from {topics.initialpose}; publishing {topics.amcl_pose} "
+        f"(PoseWithCovarianceStamped), {frames.global_frame} -> {frames.odom_frame} on "
+        f"{topics.tf}, the map on {topics.map} (OccupancyGrid) and {topics.map_markers} "
+        "(MarkerArray)"
+    )
+    return live, line
+
+
+def _node(options, ros, domain_id, loopback, max_scans, duration, live=None) -> None:
     from scanlines.extractor import Extractor
     from scanlines.ros2 import LineNode
     from scanlines.sensor.profile import read_profile
@@ -210,13 +277,23 @@ def _node(options, ros, domain_id, loopback, max_scans, duration) -> None:
     )
     line = start_line(ros.fully_qualified_name, domain_id, extractor, options, path, topics)
     print(line, file=sys.stderr, flush=True)
+    if live is not None:
+        _, line = _live(node, *live, ros)
+        print(line, file=sys.stderr, flush=True)
     try:
         node.spin(max_scans=max_scans, duration=duration)
     except BaseException as stop:
         if is_interrupt(stop):
-            stop.add_note(node.stats.summary())  # the interrupt's one line carries it
+            stop.add_note(_summary(node))  # the interrupt's one line carries it
         raise
-    print(f"scanlines ros2: {node.stats.summary()}", file=sys.stderr, flush=True)
+    print(f"scanlines ros2: {_summary(node)}", file=sys.stderr, flush=True)
+
+
+def _summary(node) -> str:
+    text = node.stats.summary()
+    if node.localisation is not None:
+        text += f"; {node.localisation.stats.summary()}"
+    return text
 
 
 _KINDS = (
