@@ -127,7 +127,8 @@ def test_the_map_grid_has_5_cm_cells_occupied_along_every_line():
     for a, b in zip(lines.start, lines.end, strict=True):
         for t in np.linspace(0, 1, 50):
             x, y = frame.world(a + t * (b - a))
-            assert grid[int((y - y0) // CELL), int((x - x0) // CELL)] == OCCUPIED
+            i, j = np.floor((np.array([y, x]) - [y0, x0]) / CELL).astype(int)
+            assert grid[i, j] == OCCUPIED
     # 2 m + 2.5 m of lines at 5 cm: about 90 cells, and not many more
     assert 85 <= (grid == OCCUPIED).sum() <= 100
     assert x0 <= 10.0 and y0 <= -5.0 and x0 + grid.shape[1] * CELL >= 12.0
