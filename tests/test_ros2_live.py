@@ -128,7 +128,7 @@ def run_live(domain, map_path, scans, mounting, count, sigma, *node_args):
     markers = Subscriber(domain, "/scanlines/map_markers", msg.MarkerArray,
                          "visualization_msgs/msg/MarkerArray", store, latched_qos())  # fmt: skip
     node = scanlines("ros2", "--map", str(map_path), "--loopback", "--domain-id", str(domain),
-                     "--max-scans", str(count), "--duration", "400", *node_args)  # fmt: skip
+                     "--max-scans", str(count), "--duration", "150", *node_args)  # fmt: skip
     player = None
     try:
         initial = initial_pose_writer(domain)
@@ -138,7 +138,7 @@ def run_live(domain, map_path, scans, mounting, count, sigma, *node_args):
         initial.write(rviz_pose(start, scans[0].timestamp, sigma))
         initial.wait_for_acks(int(5e9))
         player = scanlines("ros2", "--play", str(sample("intel")), "--restamp", "--scans",
-                           f":{count}", "--rate", "100", "--loopback", "--domain-id",
+                           f":{count}", "--rate", "40", "--loopback", "--domain-id",
                            str(domain), "--wait", "60")  # fmt: skip
         got = poses.take(count, 120)
         moved = tf.take(10 * count, 5)

@@ -88,7 +88,7 @@ def _first_pass(log: Path, selection: slice, on_error: str):
     times: list[float | None] = []
     mounting = None
     with open_log(log, options=reader_options(on_error=on_error)) as reader:
-        for _, scan in _playable(select(reader.enumerate(), selection), log, on_error, Counter()):
+        for scan in _playable(select(reader.enumerate(), selection), log, on_error, Counter()):
             if not times:
                 mounting = getattr(reader, "recorded_mounting", None)
             times.append(scan.timestamp)
