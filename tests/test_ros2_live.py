@@ -22,8 +22,14 @@ from scanlines.io import open_log
 from scanlines.map.filter import INITIAL_SIGMA
 from scanlines.map.localize import localize, read_line_map
 from scanlines.ros2 import messages as msg
-from scanlines.ros2.dds import default_qos, latched_qos, participant, ros_topic, take_serialized
-from scanlines.ros2.dds import wait_for_match
+from scanlines.ros2.dds import (
+    default_qos,
+    latched_qos,
+    participant,
+    ros_topic,
+    take_serialized,
+    wait_for_match,
+)
 from scanlines.ros2.map_topics import rasterise
 from scanlines.ros2.player import monotonic_stamps
 
@@ -154,9 +160,7 @@ def run_live(domain, map_path, scans, mounting, count, sigma, *node_args):
     return got, moved, maps, arrays, err, played
 
 
-def test_the_node_localises_each_scan_as_localize_does_and_says_so_as_amcl(
-    store, intel_map, intel
-):
+def test_the_node_localises_each_scan_as_localize_does_and_says_so_as_amcl(store, intel_map, intel):
     """Every scan's amcl_pose within 1 cm of ``localize``'s pose for the same scan (the
     laser's pose less the mounting), stamped with the scan's restamped stamp; ``map ->
     odom`` on /tf composes with the odometry to it; the map on /map and as markers."""
@@ -182,7 +186,9 @@ def test_the_node_localises_each_scan_as_localize_does_and_says_so_as_amcl(
         errors.append(math.hypot(p.position.x - base[0], p.position.y - base[1]))
         assert abs(math.remainder(yaw(p.orientation) - base[2], math.tau)) < 1e-3
         covariance = np.asarray(message.pose.covariance).reshape(6, 6)
-        assert covariance[0, 0] > 0 and covariance[5, 5] > 0 and covariance[2, 2] == 0
+        assert covariance[0, 0] > 0
+        assert covariance[5, 5] > 0
+        assert covariance[2, 2] == 0
     assert max(errors) < AGREEMENT
     # map -> odom, dated ahead as AMCL's, composed with the odometry, is the pose
     to_odom = [t for m in moved for t in m.transforms if t.child_frame_id == "odom"]
@@ -196,14 +202,16 @@ def test_the_node_localises_each_scan_as_localize_does_and_says_so_as_amcl(
             (message.pose.pose.position.x, message.pose.pose.position.y), abs=1e-6
         )
     (grid,) = maps
-    assert grid.header.frame_id == "map" and grid.info.resolution == pytest.approx(0.05)
+    assert grid.header.frame_id == "map"
+    assert grid.info.resolution == pytest.approx(0.05)
     cells, (x0, y0) = rasterise(lines, frame)
     assert (grid.info.height, grid.info.width) == cells.shape
     assert (grid.info.origin.position.x, grid.info.origin.position.y) == (x0, y0)
     assert np.array_equal(np.asarray(grid.data, dtype=np.int8), cells.ravel())
     (array,) = arrays
     (marker,) = array.markers
-    assert marker.type == msg.Marker.LINE_LIST and len(marker.points) == 2 * len(lines.rho)
+    assert marker.type == msg.Marker.LINE_LIST
+    assert len(marker.points) == 2 * len(lines.rho)
     assert f"{count} scans localised" in err.splitlines()[-1]
     assert "latency scan to pose: median" in err.splitlines()[-1]
     assert any("step back" in line and "--restamp'ed" in line for line in played.splitlines())

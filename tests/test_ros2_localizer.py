@@ -11,6 +11,8 @@ from hypothesis import strategies as st
 
 pytest.importorskip("cyclonedds")
 
+import itertools
+
 from scanlines.data import sample
 from scanlines.geometry.poses import compose, invert, relative_pose
 from scanlines.io import open_log
@@ -56,9 +58,11 @@ def test_odometry_is_interpolated_at_a_stamp_and_exact_at_its_own():
     x, y, yaw = buffer.at(2.5)
     assert (x, y) == pytest.approx((1.5, 1.0))
     assert abs(math.remainder(yaw - math.pi, math.tau)) < 1e-12  # the short way round
-    assert buffer.at(0.5) is None and buffer.at(3.5) is None
+    assert buffer.at(0.5) is None
+    assert buffer.at(3.5) is None
     buffer.add(2.0, (9.0, 9.0, 0.0))  # the same stamp again replaces
-    assert buffer.at(2.0) == (9.0, 9.0, 0.0) and len(buffer.times) == 3
+    assert buffer.at(2.0) == (9.0, 9.0, 0.0)
+    assert len(buffer.times) == 3
 
 
 def test_static_frames_chain_from_the_base_to_the_laser():
@@ -131,7 +135,9 @@ def test_the_map_grid_has_5_cm_cells_occupied_along_every_line():
             assert grid[i, j] == OCCUPIED
     # 2 m + 2.5 m of lines at 5 cm: about 90 cells, and not many more
     assert 85 <= (grid == OCCUPIED).sum() <= 100
-    assert x0 <= 10.0 and y0 <= -5.0 and x0 + grid.shape[1] * CELL >= 12.0
+    assert x0 <= 10.0
+    assert y0 <= -5.0
+    assert x0 + grid.shape[1] * CELL >= 12.0
 
 
 #: Logs' times: milliseconds over some days, as loggers print them.
@@ -141,14 +147,15 @@ times = st.lists(st.integers(0, 10**9).map(lambda ms: ms / 1000), min_size=1, ma
 @given(times)
 def test_restamped_stamps_only_go_forward_and_keep_the_logs_positive_intervals(log):
     stamps = monotonic_stamps(log)
-    assert len(stamps) == len(log) and stamps[0] == log[0]
+    assert len(stamps) == len(log)
+    assert stamps[0] == log[0]
     steps = np.diff(stamps)
     assert np.all(steps > 0)
     for k, step in enumerate(steps):
         if log[k + 1] > log[k]:
             assert step == pytest.approx(log[k + 1] - log[k])
-    back, largest = steps_back(log)
-    assert back == sum(1 for a, b in zip(log, log[1:], strict=False) if b <= a)
+    back, _largest = steps_back(log)
+    assert back == sum(1 for a, b in itertools.pairwise(log) if b <= a)
     if back == 0:
         assert stamps == pytest.approx(log)
 
@@ -157,9 +164,10 @@ def test_restamping_the_intel_excerpt_uses_the_median_where_its_clock_steps_back
     scans = intel_scans(10_000)
     log = [scan.timestamp for scan in scans]
     back, largest = steps_back(log)
-    assert back >= 7 and largest > 0.3
+    assert back >= 7
+    assert largest > 0.3
     stamps = monotonic_stamps(log)
-    positive = [b - a for a, b in zip(log, log[1:], strict=False) if b > a]
+    positive = [b - a for a, b in itertools.pairwise(log) if b > a]
     usual = float(np.median(positive))
     for k in range(len(log) - 1):
         want = log[k + 1] - log[k] if log[k + 1] > log[k] else usual

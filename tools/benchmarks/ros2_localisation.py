@@ -14,8 +14,7 @@ from scanlines.geometry.poses import compose, invert
 from scanlines.io import open_log
 from scanlines.map.localize import localize, read_line_map
 from scanlines.ros2 import messages as msg
-from scanlines.ros2.dds import default_qos, participant, ros_topic, take_serialized
-from scanlines.ros2.dds import wait_for_match
+from scanlines.ros2.dds import default_qos, participant, ros_topic, take_serialized, wait_for_match
 from scanlines.ros2.player import monotonic_stamps
 
 #: Seconds the node may take to start.
@@ -82,11 +81,10 @@ def collect(readers, expected: int, timeout: float) -> dict:
                 if info.valid_data:
                     got[name].append((bytes(data), info.source_timestamp))
                     more = True
+        quiet = time.monotonic() - last
         if more:
             last = time.monotonic()
-        elif len(got["poses"]) >= expected and time.monotonic() - last > 5:
-            break
-        elif time.monotonic() - last > 30:
+        elif quiet > 30 or (quiet > 5 and len(got["poses"]) >= expected):
             break
         time.sleep(0.005)
     return got

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import bisect
 import math
-from collections.abc import Sequence
 
 from scanlines.geometry.poses import Pose, compose
 
@@ -44,7 +43,11 @@ def strip_frame(name: str) -> str:
 def _between(a: Pose, b: Pose, w: float) -> Pose:
     """``a`` moved a fraction ``w`` of the way to ``b`` (the heading the short way)."""
     turn = math.remainder(b[2] - a[2], math.tau)
-    return (a[0] + w * (b[0] - a[0]), a[1] + w * (b[1] - a[1]), math.remainder(a[2] + w * turn, math.tau))
+    return (
+        a[0] + w * (b[0] - a[0]),
+        a[1] + w * (b[1] - a[1]),
+        math.remainder(a[2] + w * turn, math.tau),
+    )
 
 
 class OdometryBuffer:
@@ -111,10 +114,3 @@ class StaticFrames:
             pose = compose(pose, step)
         return pose
 
-
-def covariance_of(sigmas: Sequence[float]) -> list[float]:
-    """A 6 x 6 covariance (x, y, z, roll, pitch, yaw; row-major) with ``sigmas`` (x, y,
-    yaw) squared on the diagonal."""
-    values = [0.0] * 36
-    values[0], values[7], values[35] = (s * s for s in sigmas)
-    return values

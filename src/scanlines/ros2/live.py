@@ -171,7 +171,10 @@ class LiveLocalisation:
         parent, child = strip_frame(self.frames.odom_frame), strip_frame(self.frames.base_frame)
         for message in _take(self._odometry, msg.TFMessage):
             for t in message.transforms:
-                if strip_frame(t.header.frame_id) == parent and strip_frame(t.child_frame_id) == child:
+                if (
+                    strip_frame(t.header.frame_id) == parent
+                    and strip_frame(t.child_frame_id) == child
+                ):
                     pose = pose_of(t.transform.translation, t.transform.rotation)
                     buffer.add(seconds_of(t.header.stamp), pose)
 

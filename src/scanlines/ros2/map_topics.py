@@ -43,7 +43,7 @@ def rasterise(lines: LineSet, frame: LocalFrame, cell: float = CELL):
         )
     grid = np.full((height, width), FREE, dtype=np.int8)
     for a, b in zip(start, end, strict=True):
-        steps = max(2, int(math.ceil(np.hypot(*(b - a)) / (0.5 * cell))) + 1)
+        steps = max(2, math.ceil(np.hypot(*(b - a)) / (0.5 * cell)) + 1)
         points = a + np.linspace(0.0, 1.0, steps)[:, None] * (b - a)
         cells = np.floor((points - low) / cell).astype(np.int64)
         grid[np.clip(cells[:, 1], 0, height - 1), np.clip(cells[:, 0], 0, width - 1)] = OCCUPIED
@@ -76,7 +76,10 @@ def map_markers(lines: LineSet, frame: LocalFrame, frame_id: str, stamp: msg.Tim
     end = frame.world(np.asarray(lines.end, dtype=np.float64).reshape(-1, 2))
     points = []
     for a, b in zip(start, end, strict=True):
-        points += [msg.Point(float(a[0]), float(a[1]), 0.0), msg.Point(float(b[0]), float(b[1]), 0.0)]
+        points += [
+            msg.Point(float(a[0]), float(a[1]), 0.0),
+            msg.Point(float(b[0]), float(b[1]), 0.0),
+        ]
     marker = msg.Marker(
         header=msg.Header(stamp=stamp, frame_id=frame_id),
         ns=MAP_MARKER_NS,

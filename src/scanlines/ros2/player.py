@@ -3,6 +3,7 @@ and its odometry on ``/odom`` and ``/tf``, the laser's mounting on ``/tf_static`
 
 from __future__ import annotations
 
+import itertools
 import math
 import statistics
 import time
@@ -50,7 +51,7 @@ def steps_back(times: Sequence[float | None]) -> tuple[int, float]:
     """How many times ``times`` step back (or stand still) from one scan to the next, and
     the largest step back (seconds; scans without a time left out)."""
     known = [t for t in times if t is not None]
-    back = [a - b for a, b in zip(known, known[1:], strict=False) if b <= a]
+    back = [a - b for a, b in itertools.pairwise(known) if b <= a]
     return len(back), max(back, default=0.0)
 
 
@@ -59,8 +60,7 @@ def monotonic_stamps(times: Sequence[float | None]) -> list[float]:
     positive, the median positive interval where the log's time steps back, stands still or
     is missing."""
     intervals = [
-        b - a if a is not None and b is not None else -1.0
-        for a, b in zip(times, times[1:], strict=False)
+        b - a if a is not None and b is not None else -1.0 for a, b in itertools.pairwise(times)
     ]
     positive = [d for d in intervals if d > 0]
     usual = statistics.median(positive) if positive else DEFAULT_INTERVAL
@@ -168,9 +168,7 @@ class Player:
         return published
 
     def _mount(self, mounting: Pose, stamp: msg.Time) -> None:
-        self.static_writer.write(
-            convert.transform(mounting, stamp, self.base_frame, self.frame_id)
-        )
+        self.static_writer.write(convert.transform(mounting, stamp, self.base_frame, self.frame_id))
 
     def _odometry(self, pose: Pose, stamp: msg.Time) -> None:
         """The base's ``pose`` on ``/odom`` and ``/tf``."""
