@@ -113,4 +113,3 @@ class StaticFrames:
         for step in reversed(chain):
             pose = compose(pose, step)
         return pose
-
