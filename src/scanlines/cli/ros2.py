@@ -180,13 +180,6 @@ def ros2_command(
             base_frame=base_frame,
         )  # fmt: skip
         return
-    live = None
-    if odometry not in ("odom", "tf"):
-        raise ParameterError(f"--odometry must be odom or tf, got {odometry!r}")
-    if map_file is not None:
-        from scanlines.ros2.live import LiveFrames
-
-        live = (map_file, LiveFrames(global_frame, odom_frame, base_frame, odometry))
     chosen = NodeOptions(
         *method_options(method, preset, param, config),
         sensor_profile=sensor_profile,
@@ -197,8 +190,31 @@ def ros2_command(
             "marker_array_topic": marker_array_topic or None,
             "features_topic": features_topic or None,
         },
+        live={
+            "map": None if map_file is None else str(map_file),
+            "odometry": odometry,
+            "global_frame_id": global_frame,
+            "odom_frame_id": odom_frame,
+            "base_frame_id": base_frame,
+        },
     )
-    _node(apply_parameters(chosen, values), ros, domain_id, loopback, max_scans, duration, live)
+    options = apply_parameters(chosen, values)
+    live = _live_options(options.live)
+    _node(options, ros, domain_id, loopback, max_scans, duration, live)
+
+
+def _live_options(values: dict):
+    """The map's path and the frames of the live localisation (``None``: no map)."""
+    from scanlines.errors import ParameterError
+    from scanlines.ros2.live import LiveFrames
+
+    if values["odometry"] not in ("odom", "tf"):
+        raise ParameterError(f"--odometry must be odom or tf, got {values['odometry']!r}")
+    if values["map"] is None:
+        return None
+    frames = LiveFrames(values["global_frame_id"], values["odom_frame_id"],
+                        values["base_frame_id"], values["odometry"])  # fmt: skip
+    return Path(values["map"]), frames
 
 
 def _ros_arguments(words: list[str] | None):
