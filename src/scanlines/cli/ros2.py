@@ -140,6 +140,13 @@ def ros2_command(
         ),
     ] = "odom",
     global_frame: Annotated[str, typer.Option(help="--map: the map's frame.")] = "map",
+    initial_pose: Annotated[
+        str | None,
+        typer.Option(
+            help="--map: X,Y,YAW: where the robot's base stands in the map (metres, radians) "
+            "at the first scan, as if sent on /initialpose (which may still move it).",
+        ),
+    ] = None,
     domain_id: Annotated[
         int, typer.Option(help="ROS domain id.", show_default="$ROS_DOMAIN_ID, else 0")
     ] = _domain_default(),
@@ -200,7 +207,27 @@ def ros2_command(
     )
     options = apply_parameters(chosen, values)
     live = _live_options(options.live)
+    if live is not None:
+        live = (*live, None if initial_pose is None else _pose(initial_pose))
     _node(options, ros, domain_id, loopback, max_scans, duration, live)
+
+
+def _pose(text: str) -> tuple[float, float, float]:
+    """``X,Y,YAW`` as numbers, or one line saying what is wrong."""
+    import math
+
+    from scanlines.errors import ParameterError
+
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        values = []
+    if len(values) != 3 or not all(math.isfinite(v) for v in values):
+        raise ParameterError(
+            f"--initial-pose: {text!r} is not X,Y,YAW (three finite numbers: metres, metres, "
+            "radians)"
+        )
+    return values[0], values[1], values[2]
 
 
 def _live_options(values: dict):
@@ -238,7 +265,7 @@ def _ros_arguments(words: list[str] | None):
     return ros, values
 
 
-def _live(node, map_file, frames, ros):
+def _live(node, map_file, frames, initial, ros):
     """The node's localisation on ``map_file`` (AMCL's topics, resolved), the map
     published; and its start-up line."""
     from scanlines.map.localize import read_line_map
@@ -250,6 +277,8 @@ def _live(node, map_file, frames, ros):
         "odom", "/tf", "/tf_static", "initialpose", "amcl_pose", "map", "scanlines/map_markers"
     )))  # fmt: skip
     localizer = Localizer(lines, frame, base_frame=frames.base_frame)
+    if initial is not None:
+        localizer.set_initial(0.0, initial)
     live = LiveLocalisation(localizer, node.participant, topics=topics, frames=frames)
     node.attach(live)
     live.publish_map()
@@ -261,7 +290,8 @@ def _live(node, map_file, frames, ros):
     line = (
         f"scanlines ros2: localising on {map_file} ({len(lines.rho)} lines): odometry from "
         f"{source}, the laser's mounting from {topics.tf_static} (else the lever learnt), "
-        f"the initial pose from {topics.initialpose}; publishing {topics.amcl_pose} "
+        f"the initial pose from {'--initial-pose, then ' if initial else ''}"
+        f"{topics.initialpose}; publishing {topics.amcl_pose} "
         f"(PoseWithCovarianceStamped), {frames.global_frame} -> {frames.odom_frame} on "
         f"{topics.tf}, the map on {topics.map} (OccupancyGrid) and {topics.map_markers} "
         "(MarkerArray)"
