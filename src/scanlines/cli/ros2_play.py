@@ -102,8 +102,9 @@ def _stamps_note(times: list, restamp: bool) -> list[float] | None:
 
     count, largest = steps_back(times)
     if count:
+        times_text = "once" if count == 1 else f"{count:,} times"
         text = (
-            f"the log's stamps step back or stand still {count} times (by up to "
+            f"the log's stamps step back or stand still {times_text} (by up to "
             f"{largest:.3f} s): tf2 and RViz drop or reset on that; "
         )
         text += (
