@@ -234,3 +234,25 @@ def test_odometry_from_tf_and_rvizs_covariance(store, intel_map, intel):
         base = compose(frame.world_pose(want.pose), invert(mounting))
         p = message.pose.pose.position
         assert math.hypot(p.x - base[0], p.y - base[1]) < AGREEMENT
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--map", "nothere.json"], "nothere.json: no such file or directory"),
+        (["--map", "MAP", "--initial-pose", "1,2"],
+         "--initial-pose: '1,2' is not X,Y,YAW (three finite numbers: metres, metres, radians)"),
+        (["--map", "MAP", "--odometry", "wheels"], "--odometry must be odom or tf, got 'wheels'"),
+        (["--map", "MAP", "--ros-args", "-p", "base_frame_id:=''"],
+         "--ros-args: parameter base_frame_id (-p base_frame_id:=''): a frame's name, got an "
+         "empty string"),
+    ],
+)  # fmt: skip
+def test_a_bad_live_option_is_one_line_before_any_dds(intel_map, tmp_path, args, message):
+    args = [str(intel_map) if a == "MAP" else a for a in args]
+    done = subprocess.run(
+        [sys.executable, "-m", "scanlines", "ros2", "--loopback", "--duration", "1", *args],
+        capture_output=True, text=True, timeout=120, cwd=tmp_path,
+    )  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.splitlines() == [f"scanlines: error: {message}"]

@@ -265,14 +265,22 @@ def _ros_arguments(words: list[str] | None):
     return ros, values
 
 
-def _live(node, map_file, frames, initial, ros):
-    """The node's localisation on ``map_file`` (AMCL's topics, resolved), the map
-    published; and its start-up line."""
+def _read_map(map_file: Path):
+    """The lines and frame of ``map_file``; one line when it is not there."""
+    from scanlines.errors import NO_SUCH_FILE, ParameterError
     from scanlines.map.localize import read_line_map
+
+    if not map_file.is_file():
+        raise ParameterError(f"{map_file}: {NO_SUCH_FILE}")
+    return read_line_map(map_file)
+
+
+def _live(node, map_file, lines, frame, frames, initial, ros):
+    """The node's localisation on the map (AMCL's topics, resolved), the map published;
+    and its start-up line."""
     from scanlines.ros2.live import LiveLocalisation, LiveTopics
     from scanlines.ros2.localizer import Localizer
 
-    lines, frame = read_line_map(map_file)
     topics = LiveTopics(*(ros.resolve(name) for name in (
         "odom", "/tf", "/tf_static", "initialpose", "amcl_pose", "map", "scanlines/map_markers"
     )))  # fmt: skip
@@ -306,6 +314,7 @@ def _node(options, ros, domain_id, loopback, max_scans, duration, live=None) -> 
 
     path = options.sensor_profile
     profile = None if path is None else read_profile(path)
+    the_map = None if live is None else _read_map(live[0])  # before any DDS
     extractor = Extractor(options.method, options.preset, sensor_profile=profile, **options.params)
     topics = {
         name: None if given is None else ros.resolve(given)
@@ -324,7 +333,7 @@ def _node(options, ros, domain_id, loopback, max_scans, duration, live=None) -> 
     line = start_line(ros.fully_qualified_name, domain_id, extractor, options, path, topics)
     print(line, file=sys.stderr, flush=True)
     if live is not None:
-        _, line = _live(node, *live, ros)
+        _, line = _live(node, live[0], *the_map, *live[1:], ros)
         print(line, file=sys.stderr, flush=True)
     try:
         node.spin(max_scans=max_scans, duration=duration)
