@@ -21,7 +21,14 @@ import numpy as np
 from scanlines.map.filter import INITIAL_SIGMA
 from scanlines.ros2 import convert
 from scanlines.ros2 import messages as msg
-from scanlines.ros2.dds import default_qos, latched_qos, prepare, ros_topic, take_serialized
+from scanlines.ros2.dds import (
+    default_qos,
+    latched_qos,
+    prepare,
+    ros_topic,
+    sensor_data_qos,
+    take_serialized,
+)
 from scanlines.ros2.frames import pose_of, seconds_of, strip_frame
 from scanlines.ros2.localizer import LivePose, Localizer
 from scanlines.ros2.map_topics import map_markers, occupancy_grid
@@ -125,8 +132,9 @@ class LiveLocalisation:
 
         if frames.odometry == "tf":
             self._odometry = DataReader(dp, topic(topics.tf, msg.TFMessage), default_qos(TAKE))
-        else:
-            self._odometry = DataReader(dp, topic(topics.odom, msg.Odometry), default_qos(TAKE))
+        else:  # best effort matches a reliable /odom and a best-effort one (drivers send both)
+            odom = topic(topics.odom, msg.Odometry)
+            self._odometry = DataReader(dp, odom, sensor_data_qos(TAKE))
         self._static = DataReader(dp, topic(topics.tf_static, msg.TFMessage), latched_qos(100))
         self._initial = DataReader(dp, topic(topics.initialpose, msg.PoseWithCovarianceStamped),
                                    default_qos())  # fmt: skip
