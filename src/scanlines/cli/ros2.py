@@ -129,7 +129,7 @@ def ros2_command(
             "--map",
             metavar="MAP.json",
             help="Node: localise each scan on this line map (`scanlines map` writes it) "
-            "from the pose given on /initialpose.",
+            "from the pose given on /initialpose (or --initial-pose).",
         ),
     ] = None,
     odometry: Annotated[
