@@ -120,6 +120,22 @@ def test_an_initial_pose_is_carried_by_the_odometry_to_the_next_scan(intel_map):
     assert got.laser == pytest.approx(frame.world_pose(run.tracked[0].pose), abs=1e-9)
 
 
+def test_an_initial_pose_from_another_clock_applies_at_the_next_scan(intel_map):
+    """RViz stamps with the wall clock while a log plays on its own: a pose stamped more
+    than a second ahead of the newest odometry applies at the next scan, uncarried."""
+    lines, frame = intel_map
+    scans = intel_scans(3)
+    live = Localizer(lines, frame)
+    live.odometry.add(346.0, scans[0].pose)
+    assert live.set_initial(1.7e9, scans[1].pose) == 0.0
+    assert live.set_initial(346.5, scans[1].pose) == 346.5  # within a second: the log's clock
+    live.set_initial(1.7e9, scans[1].pose)
+    live.odometry.add(347.0, scans[1].pose)
+    got = live.localise(scans[1].points[scans[1].valid], 347.0, "laser")
+    run = localize(enumerate(scans[1:]), lines, frame, (scans[1].timestamp, scans[1].pose))
+    assert got.laser == pytest.approx(frame.world_pose(run.tracked[0].pose), abs=1e-9)
+
+
 def test_the_map_grid_has_5_cm_cells_occupied_along_every_line():
     lines = LineSet(
         np.zeros(2), np.zeros(2), np.array([[0.0, 0.0], [1.0, -1.0]]),

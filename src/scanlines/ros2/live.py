@@ -198,11 +198,15 @@ class LiveLocalisation:
         xy, yaw = max(c[0], c[7]), c[35]
         sigma = (math.sqrt(xy), math.sqrt(yaw)) if xy > 0 and yaw > 0 else INITIAL_SIGMA
         stamp = seconds_of(message.header.stamp)
-        self.localizer.set_initial(stamp, pose, sigma)
+        taken = self.localizer.set_initial(stamp, pose, sigma)
+        when = (
+            f"at stamp {stamp:.3f}"
+            if taken == stamp
+            else f"stamped {stamp:.3f}, ahead of the odometry (another clock): at the next scan"
+        )
         self._say(
             f"initial pose x {pose[0]:.3f} m, y {pose[1]:.3f} m, yaw {math.degrees(pose[2]):.1f} "
-            f"deg in {frame_id} at stamp {stamp:.3f} (sigma {sigma[0]:.3f} m, "
-            f"{math.degrees(sigma[1]):.2f} deg)"
+            f"deg in {frame_id} {when} (sigma {sigma[0]:.3f} m, {math.degrees(sigma[1]):.2f} deg)"
         )
 
     def on_scan(self, scan: Any, header: msg.Header, received: float) -> None:

@@ -14,7 +14,8 @@ base's odometry stands for the laser's and the filter's learnt lever for the mou
 filter (:class:`~scanlines.map.filter.LineMapFilter`) then steps as ``scanlines localize``
 steps, on the same increments, so a log played into the node gives ``localize``'s poses. An
 initial pose applies at the first scan stamped at or after it, carried by the odometry from
-its stamp to the scan's (a stamp of zero: the next scan).
+its stamp to the scan's (a stamp of zero: the next scan; one more than a second ahead of the
+newest odometry is another clock's, RViz's wall clock while a log plays: the next scan too).
 """
 
 from __future__ import annotations
@@ -35,6 +36,9 @@ __all__ = ["LivePose", "Localizer"]
 #: Seconds by which a scan may come before the initial pose's stamp and still take it
 #: (a stamp's nanoseconds rounded).
 STAMP_SLACK = 1e-6
+#: Seconds an initial pose may be stamped ahead of the newest odometry before its stamp is
+#: taken for another clock's (RViz's wall clock against a played log's).
+OTHER_CLOCK = 1.0
 
 
 class LivePose(NamedTuple):
@@ -80,10 +84,15 @@ class Localizer:
 
     def set_initial(
         self, stamp: float, pose: Pose, sigma: tuple[float, float] = INITIAL_SIGMA
-    ) -> None:
+    ) -> float:
         """Where the base stands in the map (world frame) at ``stamp`` (0: the next scan),
-        with standard deviations ``sigma`` (metres, radians)."""
+        with standard deviations ``sigma`` (metres, radians). Returns the stamp taken: 0
+        for one from another clock (module docstring)."""
+        newest = self.odometry.newest
+        if newest is not None and stamp > newest + OTHER_CLOCK:
+            stamp = 0.0
         self._initial = (stamp, tuple(float(v) for v in pose), sigma)
+        return stamp
 
     def mounting(self, laser_frame: str) -> Pose | None:
         """The laser's pose on the base from the static transforms, if they hold it."""
