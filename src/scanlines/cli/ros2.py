@@ -39,7 +39,8 @@ HELP = (
     "mounting on /tf_static). ROS arguments follow --ros-args: -r FROM:=TO (-r __ns:=/NS, "
     "-r __node:=NAME), -p NAME:=VALUE, --params-file FILE (NAME: ros__parameters: ...); "
     "parameters are the options' names with _ (method, preset, sensor_profile, topic, "
-    "markers_topic...) and the method's parameters."
+    "markers_topic, map, odometry...), AMCL's global_frame_id, odom_frame_id and "
+    "base_frame_id, and the method's parameters."
 )
 
 
