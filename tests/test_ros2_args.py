@@ -444,3 +444,23 @@ def test_the_readmes_ros_commands_parse_and_its_start_line_is_the_nodes():
             (example,) = re.findall(r"^scanlines ros2: node .*$", section, flags=re.MULTILINE)
             assert shown == example
     assert "ros2 launch docs/ros2/scanlines.launch.py" in commands
+
+
+def test_amcls_frame_parameters_and_the_map_set_the_live_localisation():
+    given = NodeOptions(
+        "adaptive",
+        live={"map": None, "odometry": "odom", "global_frame_id": "map",
+              "odom_frame_id": "odom", "base_frame_id": "base_link"},
+    )  # fmt: skip
+    chosen = node_options(
+        ["-p", "map:=/maps/lab.json", "-p", "base_frame_id:=base_footprint", "-p",
+         "odometry:=tf"],
+        given,
+    )  # fmt: skip
+    assert chosen.live == {"map": "/maps/lab.json", "odometry": "tf", "global_frame_id": "map",
+                           "odom_frame_id": "odom", "base_frame_id": "base_footprint"}  # fmt: skip
+    assert node_options(["-p", "map:=''"], chosen).live["map"] is None
+    with pytest.raises(ParameterError, match=r"parameter odometry \(-p odometry:=wheels\): "):
+        node_options(["-p", "odometry:=wheels"], given)
+    with pytest.raises(ParameterError, match=r"parameter odom_frame_id .*empty string"):
+        node_options(["-p", "odom_frame_id:=''"], given)

@@ -11,6 +11,7 @@ __all__ = [
     "LOOPBACK_CONFIG",
     "RECEIVE_BUFFER",
     "default_qos",
+    "latched_qos",
     "loopback_config",
     "participant",
     "prepare",
@@ -93,6 +94,19 @@ def default_qos(depth: int = 10) -> Any:
     return Qos(
         Policy.Reliability.Reliable(duration(milliseconds=100)),
         Policy.Durability.Volatile,
+        Policy.History.KeepLast(depth),
+    )
+
+
+def latched_qos(depth: int = 1) -> Any:
+    """ROS 2's "latched" profile (``/map``, ``/tf_static``): reliable, transient local, keep
+    last ``depth``: a subscriber that comes later still gets the last ``depth`` messages."""
+    from cyclonedds.core import Policy, Qos
+    from cyclonedds.util import duration
+
+    return Qos(
+        Policy.Reliability.Reliable(duration(milliseconds=100)),
+        Policy.Durability.TransientLocal,
         Policy.History.KeepLast(depth),
     )
 

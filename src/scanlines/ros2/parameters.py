@@ -32,7 +32,14 @@ NODE_PARAMETERS = {
     "marker_array_topic": "the MarkerArray topic (--marker-array-topic)",
     "features_topic": "the ScanFeatures topic (--features-topic)",
     "use_sim_time": "taken, no effect: every output carries its scan's stamp",
+    "map": "a line map to localise on (--map; empty: none)",
+    "odometry": "where the odometry comes from, odom or tf (--odometry)",
+    "global_frame_id": "the map's frame, AMCL's name (--global-frame)",
+    "odom_frame_id": "the odometry's frame, AMCL's name (--odom-frame)",
+    "base_frame_id": "the robot's frame, AMCL's name (--base-frame)",
 }
+#: The live localisation's parameters (strings).
+LIVE = ("map", "odometry", "global_frame_id", "odom_frame_id", "base_frame_id")
 #: The topic parameters, and those an empty name turns off.
 TOPICS = ("topic", "segments_topic", "markers_topic", "marker_array_topic", "features_topic")
 OPTIONAL_TOPICS = ("markers_topic", "marker_array_topic", "features_topic")
@@ -49,6 +56,7 @@ class NodeOptions:
     params: dict[str, Any] = field(default_factory=dict)
     sensor_profile: Path | None = None
     topics: dict[str, str | None] = field(default_factory=dict)
+    live: dict[str, str | None] = field(default_factory=dict)
 
 
 def apply_parameters(options: NodeOptions, values: dict[str, Parameter]) -> NodeOptions:
@@ -111,6 +119,16 @@ def apply_parameters(options: NodeOptions, values: dict[str, Parameter]) -> Node
         except ParameterError as error:
             raise fail(name, str(error)) from None
         topics[name] = given or None
+    live = dict(options.live)
+    for name in LIVE:
+        given = text(name)
+        if given is None:
+            continue
+        if name == "odometry" and given not in ("odom", "tf"):
+            raise fail(name, f"odom or tf, got {given!r}")
+        if not given and name != "map":
+            raise fail(name, "a frame's name, got an empty string")
+        live[name] = given or None
     return replace(
         options,
         method=method,
@@ -122,6 +140,7 @@ def apply_parameters(options: NodeOptions, values: dict[str, Parameter]) -> Node
         if profile
         else None,
         topics=topics,
+        live=live,
     )
 
 
