@@ -18,6 +18,7 @@ from scanlines.cli.eval_reports import (
 )
 from scanlines.cli.maps import AlignOption, MapLogOption, MapPosesOption
 from scanlines.cli.trajectory import ReferenceOption, TrajectoryOption
+from scanlines.reader_options import SCANS_HELP, parse_scans
 
 if TYPE_CHECKING:
     from scanlines.evaluation.evaluate import EvalResult
@@ -100,8 +101,7 @@ def eval_command(
     plots: Annotated[bool, typer.Option(help="Write bars.png and worst.png.")] = True,
     real: RealOption = None,
     scans: Annotated[
-        int | None,
-        typer.Option("--scans", min=2, help="With --real: the first N scans of each log."),
+        str | None, typer.Option("--scans", help=f"With --real or --map: {SCANS_HELP}")
     ] = None,
     pairs: PairsOption = None,
     bare: BareOption = False,
@@ -197,7 +197,8 @@ def eval_command(
         _check_real_options(sensor, scenes_per_sensor, seed, scenes, save_scenes, noise, specs)
         _refuse_tolerances("--real", tol_beams=tol_beams, tol_rho=tol_rho, tol_alpha=tol_alpha)
         results = [
-            repeatability_with_progress(log, specs, scans, profile, pairs, bare) for log in real
+            repeatability_with_progress(log, specs, parse_scans(scans), profile, pairs, bare)
+            for log in real
         ]
         from scanlines.evaluation.repeatability import write_results
 
