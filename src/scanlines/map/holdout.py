@@ -154,8 +154,9 @@ def evaluate_map(
     ``open_indexed()`` opens the log afresh (a context manager giving a reader with
     ``enumerate()``); the log is read twice, one scan in memory at a time; ``limit``: only
     its first ``limit`` scans, or those a slice of scan indices selects; ``source``: the
-    log's name, for error messages; ``align`` or ``track``: how the map is built (:func:`~scanlines.map.build.build_map`), the held-out
-    scans then also localised the same way.
+    log's name, for error messages; ``align`` or ``track``: how the map is built
+    (:func:`~scanlines.map.build.build_map`), the held-out scans then also localised the
+    same way.
     """
     from scanlines.reader_options import select_scans
 
