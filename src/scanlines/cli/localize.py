@@ -67,8 +67,8 @@ def initial_pose_of(log: Path, options, given: str | None, source: Path | None):
     if gaps[nearest] > INITIAL_POSE_TOLERANCE:
         raise ParameterError(
             f"{source}: no pose within {1000 * INITIAL_POSE_TOLERANCE:.0f} ms of the first time "
-            f"of {log.name}, {first!r} s (its poses run from {trajectory.times[0]!r} to "
-            f"{trajectory.times[-1]!r} s); give --initial-pose T,X,Y,YAW"
+            f"of {log.name}, {first!r} s (its poses run from {float(trajectory.times[0])!r} "
+            f"to {float(trajectory.times[-1])!r} s); give --initial-pose T,X,Y,YAW"
         )
     x, y, yaw = (float(v) for v in trajectory.poses[nearest])
     return first, (x, y, yaw)
