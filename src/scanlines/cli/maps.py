@@ -271,6 +271,8 @@ def evaluate_map_command(
     poses: Path | None,
     out: Path,
     align: bool = False,
+    *,
+    range_max: float | None = None,
 ) -> None:
     """``scanlines eval --map LOG``: the map of every scan but each 10th, scored on those."""
     import time
@@ -289,14 +291,15 @@ def evaluate_map_command(
     if spec.is_truth:
         raise ParameterError("--map scores a method; 'truth' has no scans to map")
     params = [f"{name}={value}" for name, value in spec.params]
-    prepared = prepare(log, {}, poses, None, spec.method, spec.preset, params, None,
+    options = reader_options(range_max=range_max)
+    prepared = prepare(log, options, poses, None, spec.method, spec.preset, params, None,
                        sensor_profile, scans)  # fmt: skip
     profile = prepared["profile"]
     if profile is None:
         raise ParameterError(f"{log}: no sensor profile could be measured; give --sensor-profile")
     started = time.perf_counter()
     score, build = evaluate_map(
-        lambda: open_log(log), prepared["extractor"], profile.sigma_at,
+        lambda: open_log(log, options=options), prepared["extractor"], profile.sigma_at,
         poses=prepared["poses"], settings=prepared["settings"], limit=parse_scans(scans),
         track=TrackSettings() if align else None, source=str(log),
     )  # fmt: skip

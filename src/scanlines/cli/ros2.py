@@ -22,6 +22,7 @@ from scanlines.cli.common import (
     OnErrorOption,
     ParamOption,
     PresetOption,
+    RangeMaxOption,
     ScansOption,
     guarded,
     method_options,
@@ -90,6 +91,7 @@ def ros2_command(
     ] = None,
     scans: ScansOption = None,
     on_error: OnErrorOption = "fail",
+    range_max: RangeMaxOption = None,
     topic: Annotated[
         str, typer.Option(help="The LaserScan topic (relative: under the namespace).")
     ] = "scan",
@@ -148,7 +150,7 @@ def ros2_command(
         options = apply_parameters(options, values)
         play_log(
             play, rate, scans, on_error, ros.resolve(options.topics["topic"]), ros.resolve("/tf"),
-            frame_id, odom_frame, domain_id, loopback, wait,
+            frame_id, odom_frame, domain_id, loopback, wait, range_max=range_max,
         )  # fmt: skip
         return
     chosen = NodeOptions(

@@ -20,6 +20,8 @@ def play_log(
     domain_id: int,
     loopback: bool,
     wait: float,
+    *,
+    range_max: float | None = None,
 ) -> None:
     """Publish the scans of ``log`` (``topic`` and ``tf_topic`` resolved already), with a
     line on stderr at the first scan saying whether the log's poses go on ``/tf``, and a
@@ -35,7 +37,7 @@ def play_log(
         raise ParameterError(f"--on-error must be fail or skip, got {on_error!r}")
     selection = parse_slice(scans)
     skipped: Counter[str] = Counter()
-    with open_log(log, options=reader_options(on_error=on_error)) as reader:
+    with open_log(log, options=reader_options(on_error=on_error, range_max=range_max)) as reader:
         # a missing or unreadable log fails before waiting for anyone
         player = Player(
             domain_id=domain_id,
