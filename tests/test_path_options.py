@@ -141,7 +141,7 @@ def test_an_unknown_method_is_one_line_naming_the_methods(command, tmp_path) -> 
     assert out.returncode == 2
     (line,) = out.stderr.strip().splitlines()
     assert line.startswith("scanlines: error: --method 'foo' is not a method; methods: ")
-    assert "adaptive" in line and "iepf" in line and "surfaces" in line
+    assert all(name in line for name in ("adaptive", "iepf", "surfaces"))
 
 
 def test_the_method_commands_are_the_extracting_ones() -> None:
