@@ -27,9 +27,10 @@ TERMINATED = 143
 #: How an NPZ without ``range_max`` is read (:mod:`scanlines.io.npz`), in the help of every
 #: command that reads one.
 NPZ_HELP = (
-    "An .npz holds ranges, angle_min, angle_increment and range_max; without range_max, "
-    "the largest range, where at least 1 % of the beams hold it exactly, is read as a "
-    "no-return code (the SICK 81.83 m), not as a wall."
+    "An .npz holds ranges, angle_min, angle_increment and range_max; without range_max "
+    "(an .npz key, a .csv's '# range_max=' comment or --range-max), the largest range, where "
+    "at least 1 % of the beams hold it exactly, is read as a no-return code (the SICK "
+    "81.83 m), not as a wall."
 )
 LogArgument = Annotated[
     Path,
