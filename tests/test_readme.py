@@ -110,3 +110,21 @@ def test_no_example_names_a_log_it_does_not_qualify() -> None:
         first = text.index(name)
         said = text[max(0, first - 1500) : first + 1500]
         assert "not shipped" in said, name
+
+
+def test_the_provenance_lists_every_shipped_excerpt() -> None:
+    """PROVENANCE.md's table names each sample with its file's size and sha256."""
+    import hashlib
+    import re
+
+    from scanlines.data import SAMPLES, provenance, sample
+
+    text = provenance()
+    assert text.count('| `"') == len(SAMPLES) == 3
+    assert "Three short excerpts" in text
+    for name, file_name in SAMPLES.items():
+        data = sample(name).read_bytes()
+        row = re.search(rf'^\| `"{name}"` \| `{re.escape(file_name)}` \| ([\d,]+) B.*$', text, re.M)
+        assert row is not None, name
+        assert int(row.group(1).replace(",", "")) == len(data)
+        assert hashlib.sha256(data).hexdigest() in row.group(0)
