@@ -130,9 +130,9 @@ def input_paths(arguments: dict[str, Any]) -> list[tuple[str, Path]]:
 
 
 def check_input_paths(arguments: dict[str, Any]) -> None:
-    """Every file a command reads is there and readable, before any work: else one
-    :class:`~scanlines.errors.ScanlinesError` ``PATH: no such file or directory`` (or
-    ``permission denied``), whatever the option."""
+    """Every file a command reads is there and readable, before any work: else an
+    :class:`OSError` naming it, which :func:`guarded` prints as ``PATH: no such file or
+    directory`` (or ``PATH: permission denied``), whatever the option."""
     import errno
     import os
 

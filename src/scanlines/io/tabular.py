@@ -9,7 +9,11 @@ Lines starting with ``#`` are comments. Comments before the first row may
 carry the geometry as ``key=value`` or ``key: value`` pairs, e.g.
 ``# angle_min=-1.5708 angle_increment=0.0087266 range_max=30``; keyword
 options override them. ``angle_min`` and ``angle_increment`` (radians) must
-come from one or the other.
+come from one or the other. Without ``range_max`` from either, the largest
+range, when at least 1 % of all beams hold exactly it, is a no-return code
+(the SICK LMS writes 81.83 m), read as no return as the NPZ reader does
+(:class:`~scanlines.io.npz.LargestRange`; one pass over the file before the
+scans), and :attr:`CsvReader.notes` says so.
 
 An optional header row (the first non-comment row, if it is not numeric) names
 the columns. When its first name is ``timestamp``, ``time``, ``stamp`` or
