@@ -283,8 +283,13 @@ def test_a_file_that_is_no_parameters_file_is_one_line_naming_it(tmp_path, text,
         node_options(["--params-file", str(path)])
     assert str(raised.value).startswith(str(path) + message)
     assert "\n" not in str(raised.value)
-    with pytest.raises(ParameterError, match="cannot read the parameters file"):
+    with pytest.raises(ParameterError) as missing:
         node_options(["--params-file", str(tmp_path / "missing.yaml")])
+    assert str(missing.value) == f"{tmp_path / 'missing.yaml'}: no such file or directory"
+    folder = tmp_path / "folder.yaml"
+    folder.mkdir()
+    with pytest.raises(ParameterError, match="cannot read the parameters file"):
+        node_options(["--params-file", str(folder)])
 
 
 def test_a_file_without_an_entry_for_the_node_says_so(tmp_path):
