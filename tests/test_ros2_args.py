@@ -12,6 +12,7 @@ import pytest
 pytest.importorskip("yaml")
 
 from cli_helpers import scanlines
+from scanlines.data import sample
 from scanlines.errors import ParameterError
 from scanlines.ros2.names import Remap, expand, resolve
 from scanlines.ros2.parameters import NodeOptions, apply_parameters
@@ -319,7 +320,7 @@ def test_the_command_refuses_a_bad_parameter_with_one_line_and_exit_2(tmp_path):
     assert done.stderr.splitlines() == [
         "scanlines: error: --ros-args: -r __ns:=relative: a namespace is absolute: it starts with /"
     ]
-    done = scanlines("ros2", "--play", str(tmp_path / "x.log"), "--ros-args", "-p", "k:=0")
+    done = scanlines("ros2", "--play", sample("intel"), "--ros-args", "-p", "k:=0")
     assert done.returncode == 2
     assert "parameter k (-p k:=0): k must be" in done.stderr
 

@@ -173,7 +173,8 @@ ConfigMethodOption = Annotated[
     str | None,
     typer.Option(
         "--method",
-        help=f"Extraction method: {', '.join(BUILTIN_METHODS)} (or one registered).",
+        metavar=f"[{'|'.join(BUILTIN_METHODS)}]",
+        help="Extraction method (or one registered with scanlines.methods.register).",
         show_default="the --config file's, else adaptive",
     ),
 ]
