@@ -328,11 +328,12 @@ def test_eval_command_on_saved_scenes(eval_run, tmp_path):
         (["--noise", "loud"], "noise must be one of"),
         (["--tol-beams", "-1"], "bad tolerance"),
         (["-n", "0"], "scenes per sensor must be an integer >= 1"),
-        (["--scenes", "missing.npz", "--seed", "1"], "--seed and --noise"),
+        (["--scenes", "there.npz", "--seed", "1"], "--seed and --noise"),
         (["--scenes", "missing.npz"], "missing.npz"),
     ],
 )
 def test_eval_command_bad_input_exits_2(args, message, tmp_path):
+    (tmp_path / "there.npz").write_bytes(b"")  # there: the option check speaks first
     out = run("eval", "-n", "1", "--out", str(tmp_path), *args, cwd=tmp_path)
     assert out.returncode == 2, out.stderr
     lines = out.stderr.strip().splitlines()

@@ -242,6 +242,7 @@ def test_eval_real_bare_writes_the_mode_and_the_fidelity(tmp_path):
     ],
 )
 def test_bare_needs_real_and_no_profile(args, message, tmp_path):
+    (tmp_path / "p.json").write_text("{}")  # there, so that --bare's own check speaks
     out = scanlines("eval", *args, cwd=tmp_path)
     assert out.returncode == 2
     assert message in out.stderr

@@ -64,6 +64,8 @@ def repeatability_with_progress(
     profile: SensorProfile | None = None,
     pairs: int | None = None,
     bare: bool = False,
+    *,
+    range_max: float | None = None,
 ) -> RepeatabilityResult:
     """The repeatability of ``specs`` on ``log``, with a progress bar; prints its table."""
     from scanlines.cli.eval_reports import _print_repeatability, _progress
@@ -72,7 +74,8 @@ def repeatability_with_progress(
     tol = RepeatTolerances(max_pairs=pairs)
     with _progress(f"{log.name}: pairs, then scans per method", unit="steps") as advance:
         result = repeatability(
-            log, specs, scans, tol=tol, on_progress=advance, sensor_profile=profile, bare=bare
-        )
+            log, specs, scans, tol=tol, on_progress=advance, sensor_profile=profile, bare=bare,
+            **({} if range_max is None else {"range_max": range_max}),
+        )  # fmt: skip
     _print_repeatability(result)
     return result

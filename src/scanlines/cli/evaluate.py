@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from scanlines.cli.common import guarded, jobs_option
+from scanlines.cli.common import RangeMaxOption, guarded, jobs_option
 from scanlines.cli.eval_real import BareOption, PairsOption, RealOption
 from scanlines.cli.eval_reports import (
     TABLE_WIDTH,
@@ -18,6 +18,7 @@ from scanlines.cli.eval_reports import (
 )
 from scanlines.cli.maps import AlignOption, MapLogOption, MapPosesOption
 from scanlines.cli.trajectory import ReferenceOption, TrajectoryOption
+from scanlines.reader_options import SCANS_HELP, parse_scans
 
 if TYPE_CHECKING:
     from scanlines.evaluation.evaluate import EvalResult
@@ -100,11 +101,11 @@ def eval_command(
     plots: Annotated[bool, typer.Option(help="Write bars.png and worst.png.")] = True,
     real: RealOption = None,
     scans: Annotated[
-        int | None,
-        typer.Option("--scans", min=2, help="With --real: the first N scans of each log."),
+        str | None, typer.Option("--scans", help=f"With --real or --map: {SCANS_HELP}")
     ] = None,
     pairs: PairsOption = None,
     bare: BareOption = False,
+    range_max: RangeMaxOption = None,
     family: Annotated[
         bool,
         typer.Option(
@@ -181,7 +182,9 @@ def eval_command(
             )
         from scanlines.cli.maps import evaluate_map_command
 
-        evaluate_map_command(map_log, specs[0], scans, sensor_profile, poses, out, align)
+        evaluate_map_command(
+            map_log, specs[0], scans, sensor_profile, poses, out, align, range_max=range_max
+        )
         return
     if poses is not None or align:
         raise ParameterError("--poses and --align go with a --map LOG")
@@ -197,7 +200,10 @@ def eval_command(
         _check_real_options(sensor, scenes_per_sensor, seed, scenes, save_scenes, noise, specs)
         _refuse_tolerances("--real", tol_beams=tol_beams, tol_rho=tol_rho, tol_alpha=tol_alpha)
         results = [
-            repeatability_with_progress(log, specs, scans, profile, pairs, bare) for log in real
+            repeatability_with_progress(
+                log, specs, parse_scans(scans), profile, pairs, bare, range_max=range_max
+            )
+            for log in real
         ]
         from scanlines.evaluation.repeatability import write_results
 

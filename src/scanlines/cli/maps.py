@@ -17,6 +17,8 @@ from scanlines.cli.common import (
     ParamOption,
     PresetOption,
     ProfileOption,
+    RangeMaxOption,
+    ScansOption,
     TopicOption,
     guarded,
     reader_options,
@@ -78,9 +80,6 @@ PosesOutOption = Annotated[
         "their covariances beside it (NAME.cov.json).",
     ),
 ]
-FirstScansOption = Annotated[
-    int | None, typer.Option("--scans", min=1, help="Only the first N scans of the log.")
-]
 
 
 def register(app: typer.Typer) -> None:
@@ -96,7 +95,7 @@ def map_command(
     out: Annotated[Path, typer.Option(help=OUT_HELP)],
     poses: PosesOption = None,
     min_scans: MinScansOption = None,
-    scans: FirstScansOption = None,
+    scans: ScansOption = None,
     method: ConfigMethodOption = None,
     preset: PresetOption = None,
     param: ParamOption = None,
@@ -108,6 +107,7 @@ def map_command(
     overwrite: OverwriteOption = False,
     on_error: OnErrorOption = "fail",
     max_beams: MaxBeamsOption = None,
+    range_max: RangeMaxOption = None,
     topic: TopicOption = None,
     align: TrackOption = False,
     poses_out: PosesOutOption = None,
@@ -124,7 +124,9 @@ def map_command(
     writable(poses_out, overwrite)
     if poses_out is not None:
         writable(poses_out.with_name(poses_out.stem + ".cov.json"), overwrite)
-    options = reader_options(topic=topic, on_error=on_error, max_beams=max_beams)
+    options = reader_options(
+        topic=topic, on_error=on_error, max_beams=max_beams, range_max=range_max
+    )
     prepared = prepare(log, options, poses, min_scans, method, preset, param, config,
                        sensor_profile, scans)  # fmt: skip
     if align:
@@ -202,7 +204,7 @@ def prepare(
     param: list[str] | None,
     config: Path | None,
     sensor_profile: Path | None,
-    scans: int | None,
+    scans: str | None,
 ) -> dict[str, Any]:
     """The extractor, pose source and fusion settings of a map command, every option
     checked before the log is read for the map."""
@@ -213,6 +215,7 @@ def prepare(
     from scanlines.io import open_log
     from scanlines.map.fusion import FusionSettings
     from scanlines.map.poses import RegistrationOdometry, choose_poses
+    from scanlines.reader_options import parse_scans
 
     method, preset, params = method_options(method, preset, param, config)
     Extractor(method, preset, **params)  # bad parameters fail before the log is read
@@ -221,20 +224,19 @@ def prepare(
         source = choose_poses(islice(iter(reader), 10), poses)
     if isinstance(source, RegistrationOdometry):
         typer.echo(f"poses: {log.name} carries none; {source.name}", err=True)
-    selection = slice(None) if scans is None else slice(0, scans)
+    selection = parse_scans(scans)
     profile = profile_for_run(log, options, selection, sensor_profile)
     extractor = Extractor(method, preset, sensor_profile=profile, **params)
     return {"extractor": extractor, "poses": source, "settings": settings, "profile": profile}
 
 
-def run_build(log: Path, options: ReaderOptions, prepared: dict[str, Any], scans: int | None):
-    from itertools import islice
-
+def run_build(log: Path, options: ReaderOptions, prepared: dict[str, Any], scans: str | None):
     from scanlines.io import open_log
     from scanlines.map import build_map
+    from scanlines.reader_options import parse_scans, select_scans
 
     with open_log(log, options=options) as reader:
-        indexed = reader.enumerate() if scans is None else islice(reader.enumerate(), scans)
+        indexed = select_scans(reader.enumerate(), parse_scans(scans))
         return build_map(
             indexed, prepared["extractor"], poses=prepared["poses"], settings=prepared["settings"],
             track=prepared.get("track"), source=str(log),
@@ -264,11 +266,13 @@ def map_meta(log: Path, build, prepared: dict[str, Any]) -> dict[str, Any]:
 def evaluate_map_command(
     log: Path,
     spec,
-    scans: int | None,
+    scans: str | None,
     sensor_profile: Path | None,
     poses: Path | None,
     out: Path,
     align: bool = False,
+    *,
+    range_max: float | None = None,
 ) -> None:
     """``scanlines eval --map LOG``: the map of every scan but each 10th, scored on those."""
     import time
@@ -282,19 +286,21 @@ def evaluate_map_command(
     from scanlines.map.holdout import evaluate_map
     from scanlines.map.tracking import TrackSettings
     from scanlines.outputs import write_text_atomically
+    from scanlines.reader_options import parse_scans
 
     if spec.is_truth:
         raise ParameterError("--map scores a method; 'truth' has no scans to map")
     params = [f"{name}={value}" for name, value in spec.params]
-    prepared = prepare(log, {}, poses, None, spec.method, spec.preset, params, None,
+    options = reader_options(range_max=range_max)
+    prepared = prepare(log, options, poses, None, spec.method, spec.preset, params, None,
                        sensor_profile, scans)  # fmt: skip
     profile = prepared["profile"]
     if profile is None:
         raise ParameterError(f"{log}: no sensor profile could be measured; give --sensor-profile")
     started = time.perf_counter()
     score, build = evaluate_map(
-        lambda: open_log(log), prepared["extractor"], profile.sigma_at,
-        poses=prepared["poses"], settings=prepared["settings"], limit=scans,
+        lambda: open_log(log, options=options), prepared["extractor"], profile.sigma_at,
+        poses=prepared["poses"], settings=prepared["settings"], limit=parse_scans(scans),
         track=TrackSettings() if align else None, source=str(log),
     )  # fmt: skip
     seconds = time.perf_counter() - started

@@ -22,6 +22,7 @@ from scanlines.cli.common import (
     OnErrorOption,
     ParamOption,
     PresetOption,
+    RangeMaxOption,
     ScansOption,
     guarded,
     method_options,
@@ -93,6 +94,7 @@ def ros2_command(
     ] = None,
     scans: ScansOption = None,
     on_error: OnErrorOption = "fail",
+    range_max: RangeMaxOption = None,
     topic: Annotated[
         str, typer.Option(help="The LaserScan topic (relative: under the namespace).")
     ] = "scan",
@@ -185,7 +187,7 @@ def ros2_command(
             play, rate, scans, on_error, ros.resolve(options.topics["topic"]), ros.resolve("/tf"),
             frame_id, odom_frame, domain_id, loopback, wait, restamp=restamp,
             odom_topic=ros.resolve("odom"), tf_static_topic=ros.resolve("/tf_static"),
-            base_frame=base_frame,
+            base_frame=base_frame, range_max=range_max,
         )  # fmt: skip
         return
     chosen = NodeOptions(

@@ -26,6 +26,7 @@ def play_log(
     odom_topic: str = "/odom",
     tf_static_topic: str = "/tf_static",
     base_frame: str = "base_link",
+    range_max: float | None = None,
 ) -> None:
     """Publish the scans of ``log`` (the topics resolved already), with a line on stderr
     where the log's stamps step back (read through once first), a line at the first scan
@@ -46,7 +47,7 @@ def play_log(
     # a missing or unreadable log fails before waiting for anyone
     times, mounting = _first_pass(log, selection, on_error)
     stamps = _stamps_note(times, restamp)
-    with open_log(log, options=reader_options(on_error=on_error)) as reader:
+    with open_log(log, options=reader_options(on_error=on_error, range_max=range_max)) as reader:
         player = Player(
             domain_id=domain_id,
             loopback=loopback,

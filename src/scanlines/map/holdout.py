@@ -144,7 +144,7 @@ def evaluate_map(
     poses=None,
     settings: FusionSettings | None = None,
     every: int = 10,
-    limit: int | None = None,
+    limit: int | slice | None = None,
     align: AlignSettings | None = None,
     track: TrackSettings | None = None,
     source: str | None = None,
@@ -153,14 +153,17 @@ def evaluate_map(
 
     ``open_indexed()`` opens the log afresh (a context manager giving a reader with
     ``enumerate()``); the log is read twice, one scan in memory at a time; ``limit``: only
-    its first scans; ``source``: the log's name, for error messages; ``align`` or
-    ``track``: how the map is built (:func:`~scanlines.map.build.build_map`), the held-out
-    scans then also localised the same way.
+    its first ``limit`` scans, or those a slice of scan indices selects; ``source``: the
+    log's name, for error messages; ``align`` or ``track``: how the map is built
+    (:func:`~scanlines.map.build.build_map`), the held-out scans then also localised the
+    same way.
     """
-    from itertools import islice
+    from scanlines.reader_options import select_scans
+
+    selection = limit if isinstance(limit, slice) else slice(limit)
 
     def indexed(reader):
-        return reader.enumerate() if limit is None else islice(reader.enumerate(), limit)
+        return select_scans(reader.enumerate(), selection)
 
     with open_indexed() as reader:
         build = build_map(

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from scanlines.errors import ParameterError
+from scanlines.errors import NO_SUCH_FILE, ParameterError
 from scanlines.ros2.names import Remap, expand, namespace_problem, node_name_problem
 
 __all__ = [
@@ -219,6 +219,8 @@ def file_parameters(path: Path, node: str) -> tuple[list[tuple[str, Any]], list[
     try:
         with path.open("rb") as handle:
             data = handle.read(MAX_FILE_BYTES + 1)
+    except FileNotFoundError:
+        raise ParameterError(f"{path}: {NO_SUCH_FILE}") from None
     except OSError as error:
         raise ParameterError(f"{path}: cannot read the parameters file: {error.strerror}") from None
     if len(data) > MAX_FILE_BYTES:
