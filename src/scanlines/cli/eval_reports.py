@@ -36,12 +36,13 @@ def _print_tables(result: EvalResult) -> None:
     from rich.console import Console
     from rich.table import Table
 
+    from scanlines.evaluation.eval_results import COUNT_RATE_CAPTION
     from scanlines.evaluation.evaluate import TABLE_COLUMNS, tolerance_caption
 
     config = result.config
     caption = (
         f"{tolerance_caption(config.tol)}. Rates pooled over scans; split/merge totals; "
-        "accuracy: mean per-scan rate; us/scan: median extraction time."
+        f"us/scan: median extraction time; {COUNT_RATE_CAPTION}."
     )
     console = Console()
     if not console.is_terminal:

@@ -38,25 +38,15 @@ MinScansOption = Annotated[
         "--min-scans", min=1, help="Lines seen by fewer scans are dropped as clutter (default 3)."
     ),
 ]
-MapLogOption = Annotated[
-    Path | None,
-    typer.Option(
-        "--map",
-        help="Score a line map instead: built from every scan of LOG but each 10th "
-        "(`scanlines map`), scored on those: coverage of their returns, median distance, "
-        "map lines per 100 m and per segment, the loop test. Writes map_eval.json into --out.",
-    ),
-]
 MapPosesOption = Annotated[
-    Path | None,
-    typer.Option("--poses", help="With --map: a TUM trajectory file of the log's poses."),
+    Path | None, typer.Option("--poses", help="A TUM trajectory file of the log's poses.")
 ]
 AlignOption = Annotated[
     bool,
     typer.Option(
         "--align",
-        help="With --map: track each scan on the map so far before fusing it (as `scanlines "
-        "map --align`); the held-out scans are then scored at their predicted poses and also "
+        help="Track each scan on the map so far before fusing it (as `scanlines map "
+        "--align`); the held-out scans are then scored at their predicted poses and also "
         "localised (aligned to the finished map).",
     ),
 ]
@@ -91,67 +81,38 @@ def register(app: typer.Typer) -> None:
     )(guarded(map_command))
 
 
-def map_command(
+def register_eval(group: typer.Typer) -> None:
+    group.command(
+        "map",
+        help="Score a line map: built from every scan of LOG but each 10th (`scanlines map`), "
+        "scored on those: coverage of their returns, median distance, map lines per 100 m and "
+        "per segment, the loop test. Writes map_eval.json into --out.",
+    )(guarded(eval_map_command))
+
+
+def eval_map_command(
     log: LogArgument,
-    out: Annotated[Path, typer.Option(help=OUT_HELP)],
-    poses: PosesOption = None,
-    min_scans: MinScansOption = None,
-    scans: FirstScansOption = None,
-    method: ConfigMethodOption = None,
-    preset: PresetOption = None,
-    param: ParamOption = None,
-    config: ConfigOption = None,
-    sensor_profile: ProfileOption = None,
-    plot: Annotated[
-        Path | None, typer.Option(help="Also draw the map (PNG, PDF, SVG figure).")
+    method: Annotated[
+        list[str] | None,
+        typer.Option("--method", "-m", help="The method spec scored (one; default adaptive)."),
     ] = None,
-    overwrite: OverwriteOption = False,
-    on_error: OnErrorOption = "fail",
-    max_beams: MaxBeamsOption = None,
-    topic: TopicOption = None,
-    align: TrackOption = False,
-    poses_out: PosesOutOption = None,
+    config: Annotated[
+        list[Path] | None,
+        typer.Option("--config", metavar="FILE", help="An extraction configuration instead."),
+    ] = None,
+    scans: FirstScansOption = None,
+    sensor_profile: ProfileOption = None,
+    poses: MapPosesOption = None,
+    align: AlignOption = False,
+    out: Annotated[Path, typer.Option(help="Folder for map_eval.json.")] = Path("scanlines-eval"),
 ) -> None:
-    from scanlines.cli.common import writable
+    from scanlines.cli.eval_options import method_specs
     from scanlines.errors import ParameterError
-    from scanlines.map.export import check_map_format, naming_output, write_map
 
-    check_map_format(out)  # an unknown suffix (or DXF without ezdxf) before the log is read
-    if poses_out is not None and not align:
-        raise ParameterError("--poses-out writes the tracked poses; it needs --align")
-    writable(out, overwrite)
-    writable(plot, overwrite)
-    writable(poses_out, overwrite)
-    if poses_out is not None:
-        writable(poses_out.with_name(poses_out.stem + ".cov.json"), overwrite)
-    options = reader_options(topic=topic, on_error=on_error, max_beams=max_beams)
-    prepared = prepare(log, options, poses, min_scans, method, preset, param, config,
-                       sensor_profile, scans)  # fmt: skip
-    if align:
-        from scanlines.map.tracking import TrackSettings
-
-        prepared["track"] = TrackSettings()
-    build = run_build(log, options, prepared, scans)
-    lines = build.line_map.lines()
-    meta = map_meta(log, build, prepared)
-    write_map(lines, out, meta=meta, overwrite=overwrite)
-    if plot is not None:
-        from scanlines.viz.figures import save
-        from scanlines.viz.maps import plot_map
-
-        with naming_output(plot, "the figure"):
-            save(plot_map(lines, title=f"line map of {log.name}"), plot)
-        typer.echo(f"figure: {plot}")
-    typer.echo(
-        f"{len(lines)} map lines from {build.segments} segments of {build.scans} scans "
-        f"({build.poses}); wrote {out}"
-    )
-    if build.pose_note:
-        typer.echo(f"poses: {build.pose_note}", err=True)
-    if build.without_pose:
-        typer.echo(f"{build.without_pose} scans had no pose and were not mapped", err=True)
-    if build.track is not None:
-        _report_tracking(build, meta["tracking"], poses_out)
+    specs = method_specs(method, config)
+    if len(specs) > 1:
+        raise ParameterError("eval map scores one method: give one --method or one --config")
+    evaluate_map_command(log, specs[0], scans, sensor_profile, poses, out, align)
 
 
 def _report_tracking(build, summary: dict[str, Any], poses_out: Path | None) -> None:
@@ -270,7 +231,7 @@ def evaluate_map_command(
     out: Path,
     align: bool = False,
 ) -> None:
-    """``scanlines eval --map LOG``: the map of every scan but each 10th, scored on those."""
+    """``scanlines eval map LOG``: the map of every scan but each 10th, scored on those."""
     import time
 
     from rich.console import Console
