@@ -115,6 +115,69 @@ def eval_map_command(
     evaluate_map_command(log, specs[0], scans, sensor_profile, poses, out, align)
 
 
+def map_command(
+    log: LogArgument,
+    out: Annotated[Path, typer.Option(help=OUT_HELP)],
+    poses: PosesOption = None,
+    min_scans: MinScansOption = None,
+    scans: FirstScansOption = None,
+    method: ConfigMethodOption = None,
+    preset: PresetOption = None,
+    param: ParamOption = None,
+    config: ConfigOption = None,
+    sensor_profile: ProfileOption = None,
+    plot: Annotated[
+        Path | None, typer.Option(help="Also draw the map (PNG, PDF, SVG figure).")
+    ] = None,
+    overwrite: OverwriteOption = False,
+    on_error: OnErrorOption = "fail",
+    max_beams: MaxBeamsOption = None,
+    topic: TopicOption = None,
+    align: TrackOption = False,
+    poses_out: PosesOutOption = None,
+) -> None:
+    from scanlines.cli.common import writable
+    from scanlines.errors import ParameterError
+    from scanlines.map.export import check_map_format, naming_output, write_map
+
+    check_map_format(out)  # an unknown suffix (or DXF without ezdxf) before the log is read
+    if poses_out is not None and not align:
+        raise ParameterError("--poses-out writes the tracked poses; it needs --align")
+    writable(out, overwrite)
+    writable(plot, overwrite)
+    writable(poses_out, overwrite)
+    if poses_out is not None:
+        writable(poses_out.with_name(poses_out.stem + ".cov.json"), overwrite)
+    options = reader_options(topic=topic, on_error=on_error, max_beams=max_beams)
+    prepared = prepare(log, options, poses, min_scans, method, preset, param, config,
+                       sensor_profile, scans)  # fmt: skip
+    if align:
+        from scanlines.map.tracking import TrackSettings
+
+        prepared["track"] = TrackSettings()
+    build = run_build(log, options, prepared, scans)
+    lines = build.line_map.lines()
+    meta = map_meta(log, build, prepared)
+    write_map(lines, out, meta=meta, overwrite=overwrite)
+    if plot is not None:
+        from scanlines.viz.figures import save
+        from scanlines.viz.maps import plot_map
+
+        with naming_output(plot, "the figure"):
+            save(plot_map(lines, title=f"line map of {log.name}"), plot)
+        typer.echo(f"figure: {plot}")
+    typer.echo(
+        f"{len(lines)} map lines from {build.segments} segments of {build.scans} scans "
+        f"({build.poses}); wrote {out}"
+    )
+    if build.pose_note:
+        typer.echo(f"poses: {build.pose_note}", err=True)
+    if build.without_pose:
+        typer.echo(f"{build.without_pose} scans had no pose and were not mapped", err=True)
+    if build.track is not None:
+        _report_tracking(build, meta["tracking"], poses_out)
+
+
 def _report_tracking(build, summary: dict[str, Any], poses_out: Path | None) -> None:
     """The summary of a tracked map: how far alignment moved the poses, the scans that did
     not fit (on stderr), and the poses written."""

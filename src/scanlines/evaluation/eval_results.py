@@ -331,5 +331,6 @@ TABLE_COLUMNS: tuple[tuple[str, Callable[[SummaryRecord], float], str], ...] = (
 )
 """Table columns: header, value of a :class:`SummaryRecord`, format. Rates are pooled
 (micro-averaged) over the scans; split and merge are totals; ``count rate`` is the mean
-over scans of the paper's count-based accuracy rate (:data:`COUNT_RATE_CAPTION`); ``sim. cm`` the mean environmental-similarity error;
-``us/scan`` the median extraction time."""
+over scans of the paper's count-based accuracy rate (:data:`COUNT_RATE_CAPTION`);
+``sim. cm`` the mean environmental-similarity error; ``us/scan`` the median extraction
+time."""
