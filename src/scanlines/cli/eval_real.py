@@ -98,13 +98,14 @@ def repeatability_with_progress(
     bare: bool = False,
 ) -> RepeatabilityResult:
     """The repeatability of ``specs`` on ``log``, with a progress bar; prints its table."""
-    from scanlines.cli.eval_reports import _print_repeatability, _progress
+    from scanlines.cli.eval_reports import _print_repeatability
+    from scanlines.cli.progress import progress
     from scanlines.evaluation.repeatability import RepeatTolerances, repeatability
 
     tol = RepeatTolerances(max_pairs=pairs)
-    with _progress(f"{log.name}: pairs, then scans per method", unit="steps") as advance:
+    with progress(f"{log.name}: pairs, then scans per method", unit="steps") as tick:
         result = repeatability(
-            log, specs, scans, tol=tol, on_progress=advance, sensor_profile=profile, bare=bare
+            log, specs, scans, tol=tol, on_progress=tick.update, sensor_profile=profile, bare=bare
         )
     _print_repeatability(result)
     return result

@@ -21,8 +21,8 @@ from scanlines.cli.eval_reports import (
     TABLE_WIDTH,
     _print_family,
     _print_tables,
-    _progress,
 )
+from scanlines.cli.progress import progress
 
 if TYPE_CHECKING:
     from scanlines.evaluation.evaluate import EvalResult
@@ -271,14 +271,14 @@ def _scene_set(
         return load_scene_set(scenes)
     if save_scenes is None:
         return None
-    with _progress("generating scenes") as advance:
+    with progress("generating scenes", unit="scenes") as tick:
         generated = generate_scene_set(
             sensors,
             DEFAULT_SCENES if n is None else n,
             0 if seed is None else seed,
             noise or "realistic",
             clutter=clutter,
-            on_scene=advance,
+            on_scene=tick.update,
         )
     generated.save(save_scenes)
     return generated
@@ -289,7 +289,7 @@ def _evaluate_with_progress(
 ) -> EvalResult:
     from scanlines.evaluation.evaluate import evaluate
 
-    with _progress("evaluating") as advance:
+    with progress("evaluating", unit="scenes") as tick:
         return evaluate(
             specs,
             sensors,
@@ -299,7 +299,7 @@ def _evaluate_with_progress(
             noise=noise,
             scenes=scene_set,
             workers=workers,
-            on_scene=advance,
+            on_scene=tick.update,
             clutter=clutter,
         )
 
@@ -320,7 +320,10 @@ def _labelled(names: list[str], specs, tolerance: int, profile, out: Path) -> No
             f"--labels: no hand labels for {', '.join(unknown)}; "
             f"choose from {', '.join(LABEL_FILES)} or all"
         )
-    result = evaluate_labelled(specs, samples, tolerance=tolerance, sensor_profile=profile)
+    with progress("scoring hand-labelled frames", unit="methods x logs") as tick:
+        result = evaluate_labelled(
+            specs, samples, tolerance=tolerance, sensor_profile=profile, on_progress=tick.update
+        )
     rows = result.rows()
     table = Table(
         title="hand-labelled frames of the shipped real logs",

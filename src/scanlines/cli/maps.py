@@ -254,15 +254,21 @@ def prepare(
 def run_build(log: Path, options: ReaderOptions, prepared: dict[str, Any], scans: int | None):
     from itertools import islice
 
+    from scanlines.cli.progress import progress
     from scanlines.io import open_log
     from scanlines.map import build_map
+    from scanlines.runs.runner import selected_count
 
     with open_log(log, options=options) as reader:
         indexed = reader.enumerate() if scans is None else islice(reader.enumerate(), scans)
-        return build_map(
-            indexed, prepared["extractor"], poses=prepared["poses"], settings=prepared["settings"],
-            track=prepared.get("track"), source=str(log),
-        )  # fmt: skip
+        total = selected_count(reader.scans_in_file, slice(0, scans))
+        what = "tracking and mapping" if prepared.get("track") else "mapping"
+        with progress(f"{what} {log.name}", total) as tick:
+            return build_map(
+                indexed, prepared["extractor"], poses=prepared["poses"],
+                settings=prepared["settings"], track=prepared.get("track"), source=str(log),
+                on_scan=tick.scan,
+            )  # fmt: skip
 
 
 def map_meta(log: Path, build, prepared: dict[str, Any]) -> dict[str, Any]:
@@ -300,6 +306,7 @@ def evaluate_map_command(
     from rich.console import Console
     from rich.table import Table
 
+    from scanlines.cli.progress import progress
     from scanlines.errors import ParameterError
     from scanlines.io import open_log
     from scanlines.map.export import dumps, naming_output
@@ -316,11 +323,13 @@ def evaluate_map_command(
     if profile is None:
         raise ParameterError(f"{log}: no sensor profile could be measured; give --sensor-profile")
     started = time.perf_counter()
-    score, build = evaluate_map(
-        lambda: open_log(log), prepared["extractor"], profile.sigma_at,
-        poses=prepared["poses"], settings=prepared["settings"], limit=scans,
-        track=TrackSettings() if align else None, source=str(log),
-    )  # fmt: skip
+    with progress(f"mapping {log.name}", scans) as tick:
+        score, build = evaluate_map(
+            lambda: open_log(log), prepared["extractor"], profile.sigma_at,
+            poses=prepared["poses"], settings=prepared["settings"], limit=scans,
+            track=TrackSettings() if align else None, source=str(log),
+            on_scan=lambda stage, _index: (tick.begin(f"{stage} {log.name}"), tick.scan()),
+        )  # fmt: skip
     seconds = time.perf_counter() - started
     table = Table(title=f"line map of {log.name}: {score.poses}", show_header=False)
     table.add_column("what", style="bold")

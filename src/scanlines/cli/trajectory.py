@@ -39,6 +39,7 @@ def evaluate_trajectory_command(
     from rich.console import Console
     from rich.table import Table
 
+    from scanlines.cli.progress import progress
     from scanlines.evaluation.trajectory import load_trajectory, trajectory_error
     from scanlines.map.export import dumps, naming_output
     from scanlines.outputs import write_text_atomically
@@ -47,7 +48,8 @@ def evaluate_trajectory_command(
         from scanlines.errors import ParameterError
 
         raise ParameterError("eval trajectory needs --reference (a TUM file or a log with poses)")
-    score = trajectory_error(load_trajectory(estimate), load_trajectory(reference))
+    with progress(f"reading {estimate.name} and {reference.name}", unit=None):
+        score = trajectory_error(load_trajectory(estimate), load_trajectory(reference))
     table = Table(title=f"{score.estimate} against {score.reference}", show_header=False)
     table.add_column("what", style="bold")
     table.add_column("value", justify="right")
