@@ -13,6 +13,7 @@ import numpy as np
 from scanlines.errors import ParameterError
 
 __all__ = [
+    "APPLIES_WHEN",
     "GROUPS",
     "MAX_COUNT",
     "MAX_METRES",
@@ -31,6 +32,7 @@ __all__ = [
     "kernel_settings",
     "number",
     "optional",
+    "param_applies",
     "radians",
     "resolve",
     "with_default",
@@ -73,6 +75,33 @@ class Param:
     check: Check
     doc: str
     kernel: tuple[KernelField, ...] | None = None
+
+
+APPLIES_WHEN: Mapping[str, tuple[str, tuple[Any, ...], bool]] = {
+    "k": ("breakpoints", ("paper",), True),
+    "noise_k": ("breakpoints", ("paper", "abd"), True),
+    "abd_lambda": ("breakpoints", ("abd",), True),
+    "pdbs_c0": ("breakpoints", ("pdbs",), True),
+    "jump_distance": ("breakpoints", ("fixed",), True),
+    "window": ("denoise", ("paper",), True),
+    "min_cluster_points": ("denoise", ("isolated",), True),
+    "slope_window": ("corner_score", ("turn",), True),
+    "dkth_step": ("dkth_range", ("auto",), False),
+    "merge_chi2": ("merge", (True,), True),
+}
+"""Parameters read only for some values of another: name -> (that parameter, the values,
+whether the name applies when it holds one of them (``True``) or when it holds none
+(``False``)). A method without that other parameter reads the name always."""
+
+
+def param_applies(name: str, values: Mapping[str, Any]) -> bool:
+    """Whether parameter ``name`` is read with the parameter ``values`` of a method
+    (:data:`APPLIES_WHEN`)."""
+    rule = APPLIES_WHEN.get(name)
+    if rule is None or rule[0] not in values:
+        return True
+    other, chosen, when_in = rule
+    return (values[other] in chosen) == when_in
 
 
 GROUPS = ("noise", "clustering", "segments", "events", "output")

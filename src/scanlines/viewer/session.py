@@ -42,21 +42,31 @@ class NoPoses(ParameterError):
 
 
 def methods() -> list[dict[str, Any]]:
-    """Every method with its parameters (default, doc, allowed values, domain) and presets:
-    what the viewer builds its controls from."""
+    """Every method with its parameters (default, doc, allowed values, domain, and when
+    another parameter decides whether it is read: ``applies``) and presets: what the viewer
+    builds its controls from."""
     from scanlines.extractor import method_info, method_names
+    from scanlines.params import APPLIES_WHEN
 
     described = []
     for name in method_names():
         info = method_info(name)
         params = [
             {"name": key, "default": p.default, "doc": p.doc, "allowed": p.allowed,
-             "domain": p.domain}
+             "domain": p.domain, "applies": _applies(APPLIES_WHEN.get(key), info.params)}
             for key, p in info.params.items()
         ]  # fmt: skip
         described.append({"name": name, "doc": info.doc, "params": params,
                           "presets": info.presets})  # fmt: skip
     return described
+
+
+def _applies(rule, params) -> dict[str, Any] | None:
+    """``{"param", "values", "when_in"}`` of an :data:`~scanlines.params.APPLIES_WHEN` rule
+    whose other parameter the method has; ``None``: always read."""
+    if rule is None or rule[0] not in params:
+        return None
+    return {"param": rule[0], "values": list(rule[1]), "when_in": rule[2]}
 
 
 class ViewerSession:
