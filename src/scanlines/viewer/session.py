@@ -144,7 +144,8 @@ class ViewerSession:
             "scans": store.count, "finished": store.finished, "error": store.error,
             "poses": store.with_pose, "reader": store.reader_info if store.finished else {},
             "poses_note": poses_note(store.reader_info) if store.with_pose else None,
-            "profile": self._profile_note, "config": self.config.to_dict(),
+            "profile": self._profile_note, "profile_noise": self._profile_noise(),
+            "config": self.config.to_dict(),
             "ready": self.ready.is_set(),
         }  # fmt: skip
 
@@ -160,6 +161,13 @@ class ViewerSession:
             finally:
                 self.ready.set()
                 self.store.resume()
+
+    def _profile_noise(self) -> dict[str, float] | None:
+        """The measured or given profile's noise (as a frame's ``noise``), once known."""
+        profile = self._profile if self._profile_note is not None else None
+        if profile is None:
+            return None
+        return profile.noise._asdict()
 
     def profile(self) -> SensorProfile | None:
         """The sensor profile of the extractions (measured once, on first use)."""
