@@ -119,6 +119,7 @@ class ConfigPanel {
   }
 
   changed(event, control) {
+    this.showApplying();
     if (control.read() === undefined) return;   // not a valid value yet: keep the last frame
     this.markChanged();
     this.onChange(event);
