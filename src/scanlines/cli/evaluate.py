@@ -166,6 +166,7 @@ def family_command(
     family_seed: Annotated[
         int, typer.Option("--family-seed", help="Seed of the drawn sensors.")
     ] = 0,
+    save_scenes: SaveScenesOption = None,
     out: OutOption = Path("scanlines-eval"),
     noise: NoiseOption = None,
     tol_beams: TolBeamsOption = None,
@@ -186,12 +187,13 @@ def family_command(
     sensors = list(_family_names(family_count, family_seed))
     n = DEFAULT_FAMILY_SCENES if scenes_per_sensor is None else scenes_per_sensor
     tol = _tolerances(tol_beams, tol_rho, tol_alpha, truth_dont_care)
+    scene_set = _scene_set(None, save_scenes, sensors, n, seed, noise, clutter)
     result = _evaluate_with_progress(
-        specs, sensors, n, 0 if seed is None else seed, noise or "realistic", tol, None,
+        specs, sensors, n, 0 if seed is None else seed, noise or "realistic", tol, scene_set,
         jobs_option(jobs), clutter,
     )  # fmt: skip
-    paths = _print_family(result, out)
-    echo_written([*paths, *_write_outputs(result, out, worst if plots else None)])
+    paths = [*_print_family(result, out), *_write_outputs(result, out, worst if plots else None)]
+    echo_written([*paths, *([] if save_scenes is None else [save_scenes])])
 
 
 def labels_command(
