@@ -595,3 +595,16 @@ def test_the_map_lines_lie_under_the_segments_and_are_thinner(page):
     assert drawn["widths"]["map"] < drawn["widths"]["segments"]
     legend = page.locator('#legend li[data-layer="map"] line').get_attribute("stroke-width")
     assert float(legend) == drawn["widths"]["map"]
+
+
+def test_both_configurations_fit_1400_by_900(page):
+    before = frames(page)
+    page.locator("#compare").check()
+    redrawn(page, before)
+    for panel in (0, 1):
+        choose(page, "breakpoints", "paper", panel)  # one more parameter shown
+    for selector in ("#configs", "#config-0", "#config-1"):
+        assert fits_sideways(page, selector), selector
+    assert page.evaluate("document.documentElement.scrollWidth") == 1400
+    ARTIFACTS.mkdir(exist_ok=True)
+    page.screenshot(path=ARTIFACTS / "viewer-1400x900-compare.png")
