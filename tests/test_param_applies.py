@@ -1,5 +1,5 @@
-"""The parameters the viewer hides (``scanlines.params.APPLIES_WHEN``) are the ones a
-method does not read: changing one that does not apply changes no feature."""
+"""The parameters the viewer hides (``Param.applies``) are the ones a method does not read:
+changing one that does not apply changes no feature."""
 
 from __future__ import annotations
 
@@ -7,12 +7,12 @@ import pytest
 
 from scanlines import Extractor, method_names
 from scanlines.data import sample
-from scanlines.extractor import method_info
+from scanlines.extractor import method_class, method_info
 from scanlines.io import open_log
-from scanlines.params import APPLIES_WHEN, param_applies
+from scanlines.params import param_applies
 
-#: A value of each governing parameter under which the rule's parameter is not read.
-NOT_READ_WITH = {
+#: Values of each deciding parameter to try: under some, the rule's parameter is not read.
+VALUES = {
     "breakpoints": ["paper", "abd", "pdbs", "fixed"],
     "denoise": ["none", "paper", "isolated"],
     "corner_score": ["dk", "turn"],
@@ -49,22 +49,34 @@ def _allowed(method: str, name: str, value) -> bool:
     return True
 
 
+def _rules() -> list[tuple[str, str, str]]:
+    """(method, parameter, the parameter deciding it) of every rule a method keeps."""
+    return [
+        (method, name, info.applies[0])
+        for method in method_names()
+        for name, info in method_info(method).params.items()
+        if info.applies is not None
+    ]
+
+
 CASES = [
-    (method, name, governing, value)
-    for method in method_names()
-    for name, (governing, _, _) in APPLIES_WHEN.items()
-    if name in method_info(method).params and governing in method_info(method).params
-    for value in NOT_READ_WITH[governing]
-    if not param_applies(name, {governing: value}) and _allowed(method, governing, value)
+    (method, name, other, value)
+    for method, name, other in _rules()
+    for value in VALUES[other]
+    if not param_applies(method_class(method).parameters[name], {other: value})
+    and _allowed(method, other, value)
 ]
 
 
-@pytest.mark.parametrize(("method", "name", "governing", "value"), CASES)
-def test_a_parameter_that_does_not_apply_changes_nothing(method, name, governing, value, scans):
-    base = Extractor(method, **{governing: value})
-    other = Extractor(method, **{governing: value, name: OTHER_VALUE[name]})
-    assert _features(base, scans) == _features(other, scans)
+@pytest.mark.parametrize(("method", "name", "other", "value"), CASES)
+def test_a_parameter_that_does_not_apply_changes_nothing(method, name, other, value, scans):
+    base = Extractor(method, **{other: value})
+    changed = Extractor(method, **{other: value, name: OTHER_VALUE[name]})
+    assert _features(base, scans) == _features(changed, scans)
 
 
-def test_every_rule_is_checked_on_some_method():
-    assert {name for _, name, _, _ in CASES} == set(APPLIES_WHEN)
+def test_the_rules_are_kept_where_the_method_has_the_deciding_parameter():
+    assert {name for _, name, _, _ in CASES} == set(OTHER_VALUE)
+    assert method_info("paper").params["window"].applies is None  # no denoise choice
+    assert method_info("adaptive").params["window"].applies == ("denoise", ("paper",), True)
+    assert method_info("split_merge").params["jump_distance"].applies is not None

@@ -13,7 +13,6 @@ import numpy as np
 from scanlines.errors import ParameterError
 
 __all__ = [
-    "APPLIES_WHEN",
     "GROUPS",
     "MAX_COUNT",
     "MAX_METRES",
@@ -69,38 +68,23 @@ class Param:
     """One parameter of a method: its default, its domain (a :class:`Check`), a one-line
     doc and how a compiled kernel reads it: ``kernel`` fields of its settings record
     (``None``: the one field its check implies, see :func:`kernel_settings`; ``()``:
-    none)."""
+    none); ``applies``: when another parameter's value decides whether it is read."""
 
     default: Any
     check: Check
     doc: str
     kernel: tuple[KernelField, ...] | None = None
+    #: ``(other, values, when_in)``: read only while the parameter ``other`` holds one of
+    #: ``values`` (``when_in``) or none of them (not ``when_in``); ``None``: always read.
+    #: The viewer hides a parameter that is not read; a method without ``other`` reads it.
+    applies: tuple[str, tuple[Any, ...], bool] | None = None
 
 
-APPLIES_WHEN: Mapping[str, tuple[str, tuple[Any, ...], bool]] = {
-    "k": ("breakpoints", ("paper",), True),
-    "noise_k": ("breakpoints", ("paper", "abd"), True),
-    "abd_lambda": ("breakpoints", ("abd",), True),
-    "pdbs_c0": ("breakpoints", ("pdbs",), True),
-    "jump_distance": ("breakpoints", ("fixed",), True),
-    "window": ("denoise", ("paper",), True),
-    "min_cluster_points": ("denoise", ("isolated",), True),
-    "slope_window": ("corner_score", ("turn",), True),
-    "dkth_step": ("dkth_range", ("auto",), False),
-    "merge_chi2": ("merge", (True,), True),
-}
-"""Parameters read only for some values of another: name -> (that parameter, the values,
-whether the name applies when it holds one of them (``True``) or when it holds none
-(``False``)). A method without that other parameter reads the name always."""
-
-
-def param_applies(name: str, values: Mapping[str, Any]) -> bool:
-    """Whether parameter ``name`` is read with the parameter ``values`` of a method
-    (:data:`APPLIES_WHEN`)."""
-    rule = APPLIES_WHEN.get(name)
-    if rule is None or rule[0] not in values:
+def param_applies(param: Param, values: Mapping[str, Any]) -> bool:
+    """Whether ``param`` is read with a method's parameter ``values`` (its ``applies``)."""
+    if param.applies is None or param.applies[0] not in values:
         return True
-    other, chosen, when_in = rule
+    other, chosen, when_in = param.applies
     return (values[other] in chosen) == when_in
 
 

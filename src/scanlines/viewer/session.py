@@ -46,14 +46,13 @@ def methods() -> list[dict[str, Any]]:
     another parameter decides whether it is read: ``applies``) and presets: what the viewer
     builds its controls from."""
     from scanlines.extractor import method_info, method_names
-    from scanlines.params import APPLIES_WHEN
 
     described = []
     for name in method_names():
         info = method_info(name)
         params = [
             {"name": key, "default": p.default, "doc": p.doc, "allowed": p.allowed,
-             "domain": p.domain, "applies": _applies(APPLIES_WHEN.get(key), info.params)}
+             "domain": p.domain, "applies": _applies(p.applies)}
             for key, p in info.params.items()
         ]  # fmt: skip
         described.append({"name": name, "doc": info.doc, "params": params,
@@ -61,10 +60,9 @@ def methods() -> list[dict[str, Any]]:
     return described
 
 
-def _applies(rule, params) -> dict[str, Any] | None:
-    """``{"param", "values", "when_in"}`` of an :data:`~scanlines.params.APPLIES_WHEN` rule
-    whose other parameter the method has; ``None``: always read."""
-    if rule is None or rule[0] not in params:
+def _applies(rule) -> dict[str, Any] | None:
+    """``{"param", "values", "when_in"}`` of a parameter's ``applies``; ``None``: always read."""
+    if rule is None:
         return None
     return {"param": rule[0], "values": list(rule[1]), "when_in": rule[2]}
 
