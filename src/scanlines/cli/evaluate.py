@@ -319,7 +319,7 @@ def _labelled(names: list[str], specs, tolerance: int, profile, out: Path) -> No
     unknown = sorted(set(samples) - set(LABEL_FILES))
     if unknown:
         raise ParameterError(
-            f"--labels: no hand labels for {', '.join(unknown)}; "
+            f"eval labels: no hand labels for {', '.join(unknown)}; "
             f"choose from {', '.join(LABEL_FILES)} or all"
         )
     with progress("scoring hand-labelled frames", unit="methods x logs") as tick:

@@ -315,7 +315,7 @@ def evaluate_map_command(
     from scanlines.outputs import write_text_atomically
 
     if spec.is_truth:
-        raise ParameterError("--map scores a method; 'truth' has no scans to map")
+        raise ParameterError("eval map scores a method; 'truth' has no scans to map")
     params = [f"{name}={value}" for name, value in spec.params]
     prepared = prepare(log, {}, poses, None, spec.method, spec.preset, params, None,
                        sensor_profile, scans)  # fmt: skip
