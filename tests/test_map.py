@@ -276,7 +276,7 @@ def test_map_command_with_a_tum_file(tmp_path):
 
 def test_eval_map_prints_and_writes_the_held_out_score(tmp_path):
     done = CliRunner().invoke(
-        app, ["eval", "--map", str(sample("intel")), "--scans", "200", "--out", str(tmp_path)]
+        app, ["eval", "map", str(sample("intel")), "--scans", "200", "--out", str(tmp_path)]
     )
     assert done.exit_code == 0, done.output
     assert "coverage" in done.output

@@ -35,13 +35,15 @@ class ParamInfo(NamedTuple):
     """One parameter of a method: its default, what it does, the values it takes (in
     words, and as ``domain``: ``{"type": "float", "low": 0.0, "high": 90.0, ...}``) and
     its group (:data:`~scanlines.params.GROUPS`; ``""`` for a method declaring flat
-    parameters)."""
+    parameters); ``applies``: the other parameter whose value decides whether it is read
+    (:attr:`scanlines.params.Param.applies`, kept only where the method has that other)."""
 
     default: Any
     doc: str
     allowed: str
     domain: dict[str, Any]
     group: str = ""
+    applies: tuple[str, tuple[Any, ...], bool] | None = None
 
 
 @dataclass(frozen=True)
@@ -98,6 +100,7 @@ def method_info(method: str) -> MethodInfo:
                 p.check.describe(),
                 p.check.domain(),
                 cls.settings.group_of(name) if cls.settings else "",
+                p.applies if p.applies and p.applies[0] in cls.parameters else None,
             )
             for name, p in cls.parameters.items()
         },

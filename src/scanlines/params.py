@@ -31,6 +31,7 @@ __all__ = [
     "kernel_settings",
     "number",
     "optional",
+    "param_applies",
     "radians",
     "resolve",
     "with_default",
@@ -67,12 +68,24 @@ class Param:
     """One parameter of a method: its default, its domain (a :class:`Check`), a one-line
     doc and how a compiled kernel reads it: ``kernel`` fields of its settings record
     (``None``: the one field its check implies, see :func:`kernel_settings`; ``()``:
-    none)."""
+    none); ``applies``: when another parameter's value decides whether it is read."""
 
     default: Any
     check: Check
     doc: str
     kernel: tuple[KernelField, ...] | None = None
+    #: ``(other, values, when_in)``: read only while the parameter ``other`` holds one of
+    #: ``values`` (``when_in``) or none of them (not ``when_in``); ``None``: always read.
+    #: The viewer hides a parameter that is not read; a method without ``other`` reads it.
+    applies: tuple[str, tuple[Any, ...], bool] | None = None
+
+
+def param_applies(param: Param, values: Mapping[str, Any]) -> bool:
+    """Whether ``param`` is read with a method's parameter ``values`` (its ``applies``)."""
+    if param.applies is None or param.applies[0] not in values:
+        return True
+    other, chosen, when_in = param.applies
+    return (values[other] in chosen) == when_in
 
 
 GROUPS = ("noise", "clustering", "segments", "events", "output")

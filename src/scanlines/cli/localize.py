@@ -104,6 +104,7 @@ def localize_command(
     import time
 
     from scanlines.cli.common import reader_options, writable
+    from scanlines.cli.progress import progress
     from scanlines.io import open_log
     from scanlines.map.export import naming_output
     from scanlines.map.localize import localize, read_line_map
@@ -115,8 +116,11 @@ def localize_command(
     writable(out.with_name(out.stem + ".cov.json"), overwrite)
     lines, frame = read_line_map(map_file)
     started = time.perf_counter()
-    with open_log(log, options=options) as reader:
-        run = localize(reader.enumerate(), lines, frame, initial)
+    with (
+        open_log(log, options=options) as reader,
+        progress(f"localising {log.name}", reader.scans_in_file) as tick,
+    ):
+        run = localize(reader.enumerate(), lines, frame, initial, on_scan=tick.scan)
     seconds = time.perf_counter() - started
     if not run.tracked:
         from scanlines.errors import ParameterError

@@ -40,25 +40,15 @@ MinScansOption = Annotated[
         "--min-scans", min=1, help="Lines seen by fewer scans are dropped as clutter (default 3)."
     ),
 ]
-MapLogOption = Annotated[
-    Path | None,
-    typer.Option(
-        "--map",
-        help="Score a line map instead: built from every scan of LOG but each 10th "
-        "(`scanlines map`), scored on those: coverage of their returns, median distance, "
-        "map lines per 100 m and per segment, the loop test. Writes map_eval.json into --out.",
-    ),
-]
 MapPosesOption = Annotated[
-    Path | None,
-    typer.Option("--poses", help="With --map: a TUM trajectory file of the log's poses."),
+    Path | None, typer.Option("--poses", help="A TUM trajectory file of the log's poses.")
 ]
 AlignOption = Annotated[
     bool,
     typer.Option(
         "--align",
-        help="With --map: track each scan on the map so far before fusing it (as `scanlines "
-        "map --align`); the held-out scans are then scored at their predicted poses and also "
+        help="Track each scan on the map so far before fusing it (as `scanlines map "
+        "--align`); the held-out scans are then scored at their predicted poses and also "
         "localised (aligned to the finished map).",
     ),
 ]
@@ -88,6 +78,43 @@ def register(app: typer.Typer) -> None:
         help="Build a line map from a log: every scan's segments moved into the world by the "
         "log's poses (or --poses, or scan registration) and fused into map lines.",
     )(guarded(map_command))
+
+
+def register_eval(group: typer.Typer) -> None:
+    group.command(
+        "map",
+        help="Score a line map: built from every scan of LOG but each 10th (`scanlines map`), "
+        "scored on those: coverage of their returns, median distance, map lines per 100 m and "
+        "per segment, the loop test. Writes map_eval.json into --out.",
+    )(guarded(eval_map_command))
+
+
+def eval_map_command(
+    log: LogArgument,
+    method: Annotated[
+        list[str] | None,
+        typer.Option("--method", "-m", help="The method spec scored (one; default adaptive)."),
+    ] = None,
+    config: Annotated[
+        list[Path] | None,
+        typer.Option("--config", metavar="FILE", help="An extraction configuration instead."),
+    ] = None,
+    scans: ScansOption = None,
+    sensor_profile: ProfileOption = None,
+    poses: MapPosesOption = None,
+    align: AlignOption = False,
+    out: Annotated[Path, typer.Option(help="Folder for map_eval.json.")] = Path("scanlines-eval"),
+    range_max: RangeMaxOption = None,
+) -> None:
+    from scanlines.cli.eval_options import method_specs
+    from scanlines.errors import ParameterError
+
+    specs = method_specs(method, config)
+    if len(specs) > 1:
+        raise ParameterError("eval map scores one method: give one --method or one --config")
+    evaluate_map_command(
+        log, specs[0], scans, sensor_profile, poses, out, align, range_max=range_max
+    )
 
 
 def map_command(
@@ -231,16 +258,23 @@ def prepare(
 
 
 def run_build(log: Path, options: ReaderOptions, prepared: dict[str, Any], scans: str | None):
+    from scanlines.cli.progress import progress
     from scanlines.io import open_log
     from scanlines.map import build_map
     from scanlines.reader_options import parse_scans, select_scans
+    from scanlines.runs.runner import selected_count
 
+    selection = parse_scans(scans)
     with open_log(log, options=options) as reader:
-        indexed = select_scans(reader.enumerate(), parse_scans(scans))
-        return build_map(
-            indexed, prepared["extractor"], poses=prepared["poses"], settings=prepared["settings"],
-            track=prepared.get("track"), source=str(log),
-        )  # fmt: skip
+        indexed = select_scans(reader.enumerate(), selection)
+        total = selected_count(reader.scans_in_file, selection)
+        what = "tracking and mapping" if prepared.get("track") else "mapping"
+        with progress(f"{what} {log.name}", total) as tick:
+            return build_map(
+                indexed, prepared["extractor"], poses=prepared["poses"],
+                settings=prepared["settings"], track=prepared.get("track"), source=str(log),
+                on_scan=tick.scan,
+            )  # fmt: skip
 
 
 def map_meta(log: Path, build, prepared: dict[str, Any]) -> dict[str, Any]:
@@ -274,12 +308,13 @@ def evaluate_map_command(
     *,
     range_max: float | None = None,
 ) -> None:
-    """``scanlines eval --map LOG``: the map of every scan but each 10th, scored on those."""
+    """``scanlines eval map LOG``: the map of every scan but each 10th, scored on those."""
     import time
 
     from rich.console import Console
     from rich.table import Table
 
+    from scanlines.cli.progress import progress
     from scanlines.errors import ParameterError
     from scanlines.io import open_log
     from scanlines.map.export import dumps, naming_output
@@ -289,7 +324,7 @@ def evaluate_map_command(
     from scanlines.reader_options import parse_scans
 
     if spec.is_truth:
-        raise ParameterError("--map scores a method; 'truth' has no scans to map")
+        raise ParameterError("eval map scores a method; 'truth' has no scans to map")
     params = [f"{name}={value}" for name, value in spec.params]
     options = reader_options(range_max=range_max)
     prepared = prepare(log, options, poses, None, spec.method, spec.preset, params, None,
@@ -298,11 +333,13 @@ def evaluate_map_command(
     if profile is None:
         raise ParameterError(f"{log}: no sensor profile could be measured; give --sensor-profile")
     started = time.perf_counter()
-    score, build = evaluate_map(
-        lambda: open_log(log, options=options), prepared["extractor"], profile.sigma_at,
-        poses=prepared["poses"], settings=prepared["settings"], limit=parse_scans(scans),
-        track=TrackSettings() if align else None, source=str(log),
-    )  # fmt: skip
+    with progress(f"mapping {log.name}") as tick:
+        score, build = evaluate_map(
+            lambda: open_log(log, options=options), prepared["extractor"], profile.sigma_at,
+            poses=prepared["poses"], settings=prepared["settings"], limit=parse_scans(scans),
+            track=TrackSettings() if align else None, source=str(log),
+            on_scan=lambda stage, _index: (tick.begin(f"{stage} {log.name}"), tick.scan()),
+        )  # fmt: skip
     seconds = time.perf_counter() - started
     table = Table(title=f"line map of {log.name}: {score.poses}", show_header=False)
     table.add_column("what", style="bold")

@@ -148,6 +148,7 @@ def evaluate_map(
     align: AlignSettings | None = None,
     track: TrackSettings | None = None,
     source: str | None = None,
+    on_scan: Callable[[str, int], None] | None = None,
 ) -> tuple[MapScore, MapBuild]:
     """Build the map from all scans but every ``every``-th, then score it on those.
 
@@ -156,20 +157,24 @@ def evaluate_map(
     its first ``limit`` scans, or those a slice of scan indices selects; ``source``: the
     log's name, for error messages; ``align`` or ``track``: how the map is built
     (:func:`~scanlines.map.build.build_map`), the held-out scans then also localised the
-    same way.
+    same way; ``on_scan(stage, index)``: called for each scan read, ``stage``
+    ``"mapping"`` on the first pass and ``"scoring"`` on the second.
     """
     from scanlines.reader_options import select_scans
 
     selection = limit if isinstance(limit, slice) else slice(limit)
 
-    def indexed(reader):
-        return select_scans(reader.enumerate(), selection)
+    def indexed(reader, stage: str):
+        for index, scan in select_scans(reader.enumerate(), selection):
+            if on_scan is not None:
+                on_scan(stage, index)
+            yield index, scan
 
     with open_indexed() as reader:
         build = build_map(
-            indexed(reader), extractor, poses=poses, settings=settings,
+            indexed(reader, "mapping"), extractor, poses=poses, settings=settings,
             hold_out=lambda index: index % every == 0, align=align, track=track, source=source,
         )  # fmt: skip
     with open_indexed() as reader:
-        score = score_held_out(indexed(reader), build, sigma_at)
+        score = score_held_out(indexed(reader, "scoring"), build, sigma_at)
     return score, build

@@ -119,6 +119,14 @@ class Localisation:
         return sum(1 for t in self.tracked if t.status == "did not fit")
 
 
+def _reporting(indexed: Iterable[tuple[int, Scan]], on_scan: Callable[[int], None] | None):
+    """``indexed``, calling ``on_scan(index)`` as each pair is read."""
+    for index, scan in indexed:
+        if on_scan is not None:
+            on_scan(index)
+        yield index, scan
+
+
 def _from_start(indexed: Iterable[tuple[int, Scan]], t0: float, run: Localisation):
     """``indexed`` from the scan of time ``t0`` on (module docstring), counting the scans
     skipped before it in ``run``."""
@@ -150,16 +158,18 @@ def localize(
     poses: Callable[[int, Scan], Pose | None] | None = None,
     settings: FilterSettings | None = None,
     initial_sigma: tuple[float, float] = INITIAL_SIGMA,
+    on_scan: Callable[[int], None] | None = None,
 ) -> Localisation:
     """Track ``indexed`` scans on ``lines`` (local ``frame``) from ``initial``: a time
     and a world pose (standard deviations ``initial_sigma``: metres, radians). ``poses``:
-    each scan's odometry (default: the pose it carries)."""
+    each scan's odometry (default: the pose it carries); ``on_scan(index)``: called for
+    each scan read, skipped ones too."""
     t0, start = initial
     run = Localisation(frame)
     tracker = LineMapFilter(lines, settings)
     odometry_of = poses or (lambda index, scan: scan.pose)
     last_odometry: Pose | None = None
-    for index, scan in _from_start(indexed, t0, run):
+    for index, scan in _from_start(_reporting(indexed, on_scan), t0, run):
         odometry = odometry_of(index, scan)
         if odometry is None:
             run.without_pose += 1
