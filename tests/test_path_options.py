@@ -13,8 +13,7 @@ from pathlib import Path
 import pytest
 import typer
 
-from cli_helpers import scanlines
-from scanlines.cli import app
+from cli_helpers import all_commands, scanlines
 from scanlines.cli.common import OUTPUT_PARAMETERS, os_error_line
 from scanlines.data import sample
 
@@ -29,7 +28,7 @@ def _is_path(annotation) -> bool:
 
 
 def commands() -> dict:
-    return typer.main.get_command(app).commands
+    return all_commands()
 
 
 def path_parameters(command) -> list[str]:
@@ -51,7 +50,7 @@ def input_options() -> list[tuple[str, str]]:
 def invocation(command_name: str, missing_parameter: str, missing: Path, tmp: Path) -> list:
     """The command with every required parameter given (files that exist, outputs in
     ``tmp``) and ``missing_parameter`` naming ``missing``."""
-    words: list = [command_name]
+    words: list = command_name.split()
     for parameter in commands()[command_name].params:
         given = parameter.name == missing_parameter
         if not (given or parameter.required):
@@ -75,8 +74,10 @@ def test_the_walk_finds_the_inputs_of_every_kind() -> None:
         ("localize", "map_file"),
         ("localize", "initial_pose_from"),
         ("map", "poses"),
-        ("eval", "trajectory"),
-        ("eval", "reference"),
+        ("eval trajectory", "estimate"),
+        ("eval trajectory", "reference"),
+        ("eval real", "logs"),
+        ("eval map", "poses"),
         ("run", "logs"),
         ("extract", "sensor_profile"),
         ("view", "config"),

@@ -7,12 +7,10 @@ from __future__ import annotations
 import json
 
 import pytest
-import typer
 from hypothesis import given
 from hypothesis import strategies as st
 
-from cli_helpers import scanlines
-from scanlines.cli import app
+from cli_helpers import all_commands, scanlines
 from scanlines.data import sample
 from scanlines.errors import ParameterError
 from scanlines.reader_options import SCANS_HELP, parse_scans, select_scans
@@ -56,14 +54,14 @@ def test_what_selects_nothing_or_is_not_the_grammar_is_refused(text) -> None:
 def test_every_command_that_takes_scans_says_the_one_grammar() -> None:
     """Walked from the application: each ``--scans`` is a text parsed by the one parser,
     its help the one sentence."""
-    commands = typer.main.get_command(app).commands
+    commands = all_commands()
     taking = {
         name: option
         for name, command in commands.items()
         for option in command.params
         if "--scans" in option.opts
     }
-    assert {"run", "plot", "calibrate", "ros2", "map", "eval"} <= set(taking)
+    assert {"run", "plot", "calibrate", "ros2", "map", "eval real", "eval map"} <= set(taking)
     for name, option in taking.items():
         assert SCANS_HELP in option.help, name
 
