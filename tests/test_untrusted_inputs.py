@@ -22,7 +22,8 @@ from scanlines.config import load_config
 from scanlines.data import sample
 from scanlines.errors import ParameterError
 from scanlines.ros2.ros_args import parse_ros_args
-from scanlines.sensor.profile import MAX_PROFILE_BYTES, ProfileError, SensorProfile, read_profile
+from scanlines.sensor.profile import ProfileError, SensorProfile, read_profile
+from scanlines.sensor.profile_file import MAX_PROFILE_BYTES
 from scanlines.untrusted import QUOTED, UntrustedInput, json_depth, load_json, load_yaml, quote
 
 #: The longest error line a refused input may give (its value quoted in 80 characters).

@@ -37,10 +37,14 @@ from typing import Any
 
 import numpy as np
 
-from scanlines.errors import NO_SUCH_FILE, ScanlinesError
-from scanlines.errors import describe as describe_error
 from scanlines.scan import Scan
 from scanlines.sensor.mounting import estimate_mounting
+from scanlines.sensor.profile_file import (
+    PROFILE_FORMAT,
+    ProfileError,
+    checked_fields,
+    read_values,
+)
 from scanlines.steps.noise import (
     MIN_NOISE_SIGMA,
     NoiseLine,
@@ -49,7 +53,6 @@ from scanlines.steps.noise import (
     scan_noise,
 )
 from scanlines.steps.returns import beam_gaps, valid_returns
-from scanlines.untrusted import UntrustedInput, clip, load_json, quote, read_regular_file
 
 __all__ = [
     "PROFILE_FORMAT",
@@ -62,8 +65,6 @@ __all__ = [
     "scan_noise_line",
 ]
 
-PROFILE_FORMAT = "scanlines-sensor-profile/1"
-
 DEFAULT_SCANS = 500
 """Scans a profile is measured from by default (the first of the log)."""
 
@@ -73,10 +74,6 @@ BOOTSTRAP_ROUNDS = 50
 SPIKE_SIGMAS = 6.0
 JUMP = 0.3
 """Range step (m) that counts as a depth jump for the mixed-pixel rate."""
-
-
-class ProfileError(ScanlinesError, ValueError):
-    """A sensor profile file is missing, malformed or unusable."""
 
 
 @dataclass(frozen=True)
@@ -180,121 +177,17 @@ class SensorProfile:
     @classmethod
     def from_dict(cls, values: dict[str, Any], where: str = "profile") -> SensorProfile:
         """A profile from :meth:`to_dict`'s values; :class:`ProfileError` names what is
-        wrong (numbers are numbers, not booleans; the noise line finite, not negative and
-        at most :data:`MAX_NOISE_SIGMA0` + :data:`MAX_NOISE_PER_METRE` x range)."""
-        if not isinstance(values, dict) or values.get("format") != PROFILE_FORMAT:
-            raise ProfileError(f"{where}: not a sensor profile (format {PROFILE_FORMAT!r})")
-        known = set(cls.__dataclass_fields__)
-        unknown = sorted(map(str, set(values) - known - {"format"}))
-        if unknown:
-            raise ProfileError(f"{where}: unknown field(s) {clip(', '.join(unknown))}")
-        kwargs = {k: v for k, v in values.items() if k in known}
-        for key in ("noise_sigma0", "noise_per_metre"):
-            if key not in kwargs:
-                raise ProfileError(f"{where}: field {key!r} is missing")
-        for key, value in list(kwargs.items()):
-            if key not in _NOT_NUMBERS:
-                kwargs[key] = _number(value, f"{where}: field {key!r}")
-        _check_noise_line(kwargs["noise_sigma0"], kwargs["noise_per_metre"], where)
-        for key in ("beams", "scans"):
-            if not _is_count(kwargs.get(key, 0)):
-                got = quote(kwargs[key])
-                raise ProfileError(f"{where}: field {key!r} must be a count, got {got}")
-        if not isinstance(kwargs.get("source", ""), str):
-            raise ProfileError(f"{where}: field 'source' must be a string")
-        kwargs["noise_bins"] = _noise_bins_of(kwargs.get("noise_bins", []), where)
-        kwargs["mounting"] = _mounting_of(kwargs.get("mounting"), where)
-        codes = kwargs.get("no_return_codes", {})
-        if not isinstance(codes, dict):
-            raise ProfileError(f"{where}: field 'no_return_codes' must map codes to shares")
-        kwargs["no_return_codes"] = {
-            clip(str(k)): _number(v, f"{where}: no_return_codes") for k, v in codes.items()
-        }
+        wrong (:func:`~scanlines.sensor.profile_file.checked_fields`)."""
+        kwargs = checked_fields(values, where, tuple(cls.__dataclass_fields__))
+        kwargs["noise_bins"] = tuple(NoiseBin(*b) for b in kwargs.get("noise_bins", ()))
         return cls(**kwargs)
-
-
-#: The largest noise line a profile file may hold: 1 m + 100 % of the range. A scanner
-#: noisier than that measures nothing; past it the covariances of every feature overflow.
-MAX_NOISE_SIGMA0 = 1.0
-MAX_NOISE_PER_METRE = 1.0
-#: Largest sensor profile file read (one is about 2 KB).
-MAX_PROFILE_BYTES = 1 << 20
-_NOT_NUMBERS = ("noise_bins", "no_return_codes", "mounting", "source", "beams", "scans")
-
-
-def _number(value: Any, what: str) -> float:
-    """``value`` as a float (``"nan"``, ``"inf"`` as written by :meth:`SensorProfile.to_dict`),
-    a boolean or anything else not a number refused."""
-    if isinstance(value, bool) or not isinstance(value, int | float | str):
-        raise ProfileError(f"{what} must be a number, got {quote(value)}")
-    try:
-        return float(value)
-    except (TypeError, ValueError, OverflowError):
-        raise ProfileError(f"{what} must be a number, got {quote(value)}") from None
-
-
-def _is_count(value: Any) -> bool:
-    return isinstance(value, int) and not isinstance(value, bool) and 0 <= value <= 1 << 40
-
-
-def _check_noise_line(sigma0: float, per_metre: float, where: str) -> None:
-    if not (0.0 <= sigma0 <= MAX_NOISE_SIGMA0 and 0.0 <= per_metre <= MAX_NOISE_PER_METRE):
-        raise ProfileError(
-            f"{where}: the noise line {quote(sigma0)} m + {quote(per_metre)} x range must be "
-            f"finite, not negative and at most {MAX_NOISE_SIGMA0:g} m + "
-            f"{100 * MAX_NOISE_PER_METRE:g} % of range"
-        )
-
-
-def _noise_bins_of(bins: Any, where: str) -> tuple[NoiseBin, ...]:
-    if not isinstance(bins, list) or not all(isinstance(b, dict) for b in bins):
-        raise ProfileError(f"{where}: field 'noise_bins' must be a list of bins")
-    out = []
-    for k, values in enumerate(bins):
-        if set(values) != {"range", "sigma", "error", "samples"}:
-            fields = clip(", ".join(map(str, values)))
-            raise ProfileError(
-                f"{where}: noise bin {k}: fields range, sigma, error, samples, got {fields}"
-            )
-        numbers = {name: _number(values[name], f"{where}: noise bin {k}: {name}")
-                   for name in ("range", "sigma", "error")}  # fmt: skip
-        if not _is_count(values["samples"]):
-            raise ProfileError(f"{where}: noise bin {k}: samples must be a count")
-        out.append(NoiseBin(**numbers, samples=values["samples"]))
-    return tuple(out)
-
-
-def _mounting_of(mounting: Any, where: str) -> tuple[float, float, float] | None:
-    if mounting is None:
-        return None
-    if not isinstance(mounting, list) or len(mounting) != 3:
-        raise ProfileError(f"{where}: field 'mounting' must be [x, y, theta] or null")
-    x, y, theta = (_number(v, f"{where}: field 'mounting'") for v in mounting)
-    return (x, y, theta)
 
 
 def read_profile(path: str | Path) -> SensorProfile:
     """The profile saved at ``path`` (:meth:`SensorProfile.save`): a regular JSON file of
-    at most :data:`MAX_PROFILE_BYTES`, nested at most a few levels deep."""
-    path = Path(path)
-    try:
-        values = load_json(read_regular_file(path, MAX_PROFILE_BYTES))
-    except FileNotFoundError:
-        raise ProfileError(f"{path}: {NO_SUCH_FILE}") from None
-    except OSError as error:
-        reason = error.strerror or describe_error(error)
-        raise ProfileError(f"{path}: cannot read the sensor profile: {reason}") from None
-    except UntrustedInput as error:
-        raise ProfileError(f"{path}: not a sensor profile: {error}") from None
-    except UnicodeDecodeError as error:
-        raise ProfileError(f"{path}: not a sensor profile: not UTF-8 ({error.reason})") from None
-    except json.JSONDecodeError as error:
-        raise ProfileError(
-            f"{path}: not a sensor profile: not JSON ({error.msg}, line {error.lineno})"
-        ) from None
-    except ValueError as error:  # an integer too long for Python to convert
-        raise ProfileError(f"{path}: not a sensor profile: {describe_error(error)}") from None
-    return SensorProfile.from_dict(values, where=str(path))
+    at most :data:`~scanlines.sensor.profile_file.MAX_PROFILE_BYTES`, nested at most a few
+    levels deep (:func:`~scanlines.sensor.profile_file.read_values`)."""
+    return SensorProfile.from_dict(read_values(path), where=str(path))
 
 
 def as_profile(profile: SensorProfile | str | Path | None) -> SensorProfile | None:
