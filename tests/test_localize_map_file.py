@@ -79,11 +79,15 @@ def test_the_room_map_reads(room, tmp_path):
         ("covariance", [[1.0, 0.5], [0.0, 1.0]], "not symmetric"),
         ("covariance", [[1.0, False], [False, 1.0]], "not a 2 x 2 matrix of numbers"),
         ("covariance", [[1.0, 0.0], [0.0, "nan"]], "not a 2 x 2 matrix of numbers"),
+        ("covariance", [[10**400, 0], [0, 1]], "not finite"),
+        ("rho", 10**400, "field rho: not finite"),
+        ("start", [10**400, 0], "field start: not finite"),
     ],
     ids=[
         "ends at 1e308", "end far out", "boolean start", "three numbers", "boolean rho",
         "rho 1e308", "alpha off", "3x3 covariance", "negative covariance",
         "asymmetric covariance", "boolean covariance", "string covariance",
+        "covariance beyond a double", "rho beyond a double", "start beyond a double",
     ],
 )  # fmt: skip
 def test_a_bad_line_is_named_in_one_line(room, tmp_path, name, value, words):

@@ -191,7 +191,10 @@ def _check_covariance(value: Any, where: str) -> None:
         raise MapFileError(f"{where}: not a 2 x 2 matrix, got {quote(value)}")
     if not all(_is_number(v) for row in value for v in row):
         raise MapFileError(f"{where}: not a 2 x 2 matrix of numbers, got {quote(value)}")
-    matrix = np.array(value, dtype=np.float64)
+    try:
+        matrix = np.array(value, dtype=np.float64)
+    except OverflowError:  # an integer beyond a double
+        raise MapFileError(f"{where}: not finite") from None
     if not np.isfinite(matrix).all():
         raise MapFileError(f"{where}: not finite")
     scale = float(np.abs(matrix).max())
