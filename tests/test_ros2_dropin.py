@@ -83,12 +83,14 @@ def intel_profile(tmp_path_factory):
     return path
 
 
-def test_a_ros_users_command_line_moves_and_configures_the_node(store, intel_profile, tmp_path):
+def test_a_ros_users_command_line_moves_and_configures_the_node(
+    store, intel_profile, tmp_path, dds_domain
+):
     """``-r scan:=/front/scan -r __ns:=/robot1 --params-file P -p merge:=false``: the scans
     come from /front/scan (absolute: not under the namespace), the outputs go under
     /robot1 with laser_line_extraction's types, the file's entry for /robot1/scanlines and
     the -p set the extraction, and the start-up line says all of it."""
-    domain = 71
+    domain = dds_domain
     params = tmp_path / "params.yaml"
     params.write_text(
         "scanlines:\n  ros__parameters:\n    method: iepf\n"  # the root namespace's node
@@ -128,7 +130,7 @@ def test_a_ros_users_command_line_moves_and_configures_the_node(store, intel_pro
     assert node.returncode == 0, err
     start = err.splitlines()[0]
     assert start.startswith(
-        "scanlines ros2: node /robot1/scanlines (domain 71) listening on /front/scan "
+        f"scanlines ros2: node /robot1/scanlines (domain {domain}) listening on /front/scan "
         "(LaserScan); method adaptive, merge=False, min_points=4; noise from sensor profile "
         f"{intel_profile} (sigma(r) = "
     ), start
@@ -169,8 +171,8 @@ def play(domain, log, *ros_args):
     )  # fmt: skip
 
 
-def test_play_publishes_the_logs_poses_on_tf_stamped_as_their_scans(store):
-    domain = 72
+def test_play_publishes_the_logs_poses_on_tf_stamped_as_their_scans(store, dds_domain):
+    domain = dds_domain
     tf = Subscriber(domain, "/tf", msg.TFMessage, "tf2_msgs/msg/TFMessage", store)
     laser = Subscriber(domain, "/robot1/scan", msg.LaserScan, "sensor_msgs/msg/LaserScan", store)
     player = play(domain, "intel", "--ros-args", "-r", "__ns:=/robot1")
@@ -203,8 +205,8 @@ def test_play_publishes_the_logs_poses_on_tf_stamped_as_their_scans(store):
         assert 2 * np.arctan2(turn.z, turn.w) == pytest.approx(theta)
 
 
-def test_play_of_a_log_without_poses_says_why_there_is_no_tf(store):
-    domain = 73
+def test_play_of_a_log_without_poses_says_why_there_is_no_tf(store, dds_domain):
+    domain = dds_domain
     tf = Subscriber(domain, "/tf", msg.TFMessage, "tf2_msgs/msg/TFMessage", store)
     laser = Subscriber(domain, "/scan", msg.LaserScan, "sensor_msgs/msg/LaserScan", store)
     player = play(domain, "urg")

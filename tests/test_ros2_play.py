@@ -29,9 +29,9 @@ def play(log, domain, *args):
     return done.returncode, done.stderr.strip().splitlines()
 
 
-def test_a_timestamp_no_ros2_time_can_hold_names_the_log_scan_and_field(tmp_path):
+def test_a_timestamp_no_ros2_time_can_hold_names_the_log_scan_and_field(tmp_path, dds_domain):
     log = stamped_log(tmp_path / "stamps.csv")
-    code, lines = play(log, 67)
+    code, lines = play(log, dds_domain)
     assert code == 2, lines
     assert lines[-1] == (
         f"scanlines: error: {log}, scan index 1, field timestamp: -5.0 s is not a ROS 2 "
@@ -40,9 +40,9 @@ def test_a_timestamp_no_ros2_time_can_hold_names_the_log_scan_and_field(tmp_path
     assert not any("Traceback" in line for line in lines)
 
 
-def test_on_error_skip_publishes_the_others_and_counts_the_skipped(tmp_path):
+def test_on_error_skip_publishes_the_others_and_counts_the_skipped(tmp_path, dds_domain):
     log = stamped_log(tmp_path / "stamps.csv")
-    code, lines = play(log, 68, "--on-error", "skip")
+    code, lines = play(log, dds_domain, "--on-error", "skip")
     assert code == 0, lines
     assert lines[-1] == (
         "scanlines ros2: published 3 scans of stamps.csv on /scan; "

@@ -292,6 +292,11 @@ def _dds_cases(make, count, workdir, sample, seed=0, **options: Any) -> list[Cas
     from .dds_target import DEFAULT_DOMAIN, run_dds
 
     domain = options.get("domain", DEFAULT_DOMAIN)
+    if domain is None:  # a domain no other process on this machine uses
+        sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+        from dds_domains import free_domain
+
+        domain = free_domain()
     progress, watch = options.get("progress", False), options.get("watch")
     cases = run_dds(
         make, count, workdir=workdir, seed=sample, domain=domain, progress=progress, watch=watch
@@ -454,7 +459,12 @@ def main(argv: list[str] | None = None) -> int:
         "profiles), linemaps (the line maps localize reads), dds (a ROS 2 node: started "
         "only when named); space separated or repeated (logs maps params profiles linemaps)",
     )
-    parser.add_argument("--domain-id", type=int, default=97, help="dds: the DDS domain (97)")
+    parser.add_argument(
+        "--domain-id",
+        type=int,
+        default=None,
+        help="dds: the DDS domain (default: one no other process on this machine uses)",
+    )
     args = parser.parse_args(argv)
     options: dict[str, Any] = {
         "jobs": args.jobs,

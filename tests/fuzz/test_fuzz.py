@@ -18,6 +18,8 @@ from pathlib import Path
 
 import pytest
 
+from dds_domains import free_domain
+
 from .make_corpus import build_generated, corpus_inputs
 from .run import Case, fuzz, replay, report
 
@@ -27,7 +29,6 @@ SHORT_RUN = 300
 MAP_RUN = 45
 SETTINGS_RUN = 90
 DDS_SHORT_RUN = 200
-DDS_DOMAIN = 98  # not the campaign's 97: a campaign may run meanwhile
 LONG_RUN = 5000
 SEED = 1
 JOBS = max(1, min(2, len(os.sched_getaffinity(0))))
@@ -111,7 +112,7 @@ def test_dds_corpus_samples_are_handled_cleanly() -> None:
     """Samples that once failed the node (``corpus_dds/README.md``), sent to a running one."""
     samples = sorted(DDS_CORPUS.glob("*.cdr"))
     assert len(samples) >= 2
-    cases = replay(samples, domain=DDS_DOMAIN + 1)
+    cases = replay(samples, domain=free_domain())
     assert len(cases) == len(samples)
     fail_on_defects(cases)
 
@@ -121,7 +122,8 @@ def test_dds_short_run(tmp_path: Path) -> None:
     each (a good scan is still published after), and exits on SIGTERM with its summary.
     Reproduce with ``python -m tests.fuzz.run --count 200 --seed 1 --targets dds``."""
     failures = tmp_path / "failures"
-    cases = fuzz(DDS_SHORT_RUN, SEED, targets=("dds",), save_failures=failures, domain=DDS_DOMAIN)
+    domain = free_domain()  # one no other process (a campaign, another clone) uses
+    cases = fuzz(DDS_SHORT_RUN, SEED, targets=("dds",), save_failures=failures, domain=domain)
     assert len(cases) == DDS_SHORT_RUN
     fail_on_defects(cases)
     outcomes = [outcome for case in cases for outcome in case.outcomes]
