@@ -204,12 +204,12 @@ def _yaml_value(name: str, text: str) -> Any:
         return load_yaml(text)
     except UntrustedInput as error:
         raise ParameterError(
-            f"--ros-args: -p {clip(name)}:={quote(text)}: refused: {error}"
+            f"--ros-args: -p {clip(name)}:={clip(text)}: refused: {error}"
         ) from None
     except yaml.YAMLError as error:
         reason = clip(" ".join(str(error).split()), 160)
         raise ParameterError(
-            f"--ros-args: -p {clip(name)}:={quote(text)}: not a YAML value: {reason}"
+            f"--ros-args: -p {clip(name)}:={clip(text)}: not a YAML value: {reason}"
         ) from None
 
 
