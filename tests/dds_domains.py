@@ -19,7 +19,8 @@ from typing import IO
 
 #: The domains a test may take (ROS 2 allows 0 to 232; 0 is everyone's default).
 DOMAINS = range(1, 233)
-LOCKS = Path(tempfile.gettempdir()) / "scanlines-test-dds-domains"
+#: One folder of locks per user (another user's sessions are kept off by the port check).
+LOCKS = Path(tempfile.gettempdir()) / f"scanlines-test-dds-domains-{os.getuid()}"
 _held: dict[int, IO[bytes]] = {}
 
 
@@ -50,7 +51,10 @@ def free_domain() -> int:
         domain = DOMAINS[(start + k) % len(DOMAINS)]
         if domain in _held:
             continue
-        handle = (LOCKS / f"{domain}.lock").open("ab")
+        try:
+            handle = (LOCKS / f"{domain}.lock").open("ab")
+        except OSError:
+            continue
         try:
             fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:
