@@ -107,6 +107,17 @@ def node_ports(pid: int) -> list[int]:
                    for m in re.findall(r":(\d+)\s", line.split("users:")[0])[:1]})  # fmt: skip
 
 
+def wait_for_ports(pid: int, count: int, timeout: float = 60.0) -> list[int]:
+    """The node's ports once it holds ``count`` (Cyclone's three: discovery, data, sending)."""
+    deadline = time.monotonic() + timeout
+    ports = node_ports(pid)
+    while len(ports) < count and time.monotonic() < deadline:
+        time.sleep(0.5)
+        ports = node_ports(pid)
+    time.sleep(2.0)  # the node subscribes once its participant is up
+    return node_ports(pid)
+
+
 def published(stderr: str) -> int:
     found = re.search(r"(\d+) scans published", stderr)
     return int(found.group(1)) if found else -1
@@ -136,9 +147,8 @@ def main() -> None:
 
 def probe(domain: str, log: str, remote: int) -> dict:
     inside = ("nsenter", "-t", str(remote), "-n")
-    node = scanlines("ros2", "--loopback", "--domain-id", domain, "--duration", "40")
-    time.sleep(8)
-    ports = node_ports(node.pid)
+    node = scanlines("ros2", "--loopback", "--domain-id", domain, "--duration", "90")
+    ports = wait_for_ports(node.pid, 3)
     # 1. a local player: discovery and data on loopback
     local = scanlines("ros2", "--play", log, "--loopback", "--domain-id", domain, "--wait", "15",
                       "--rate", "50", "--scans", ":20")  # fmt: skip
