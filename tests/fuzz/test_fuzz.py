@@ -20,7 +20,7 @@ import pytest
 
 from dds_domains import free_domain
 
-from .make_corpus import build_generated, corpus_inputs
+from .make_corpus import GENERATED, build_generated, corpus_inputs
 from .run import Case, fuzz, replay, report
 
 pytestmark = pytest.mark.slow  # thousands of damaged inputs
@@ -48,7 +48,7 @@ def corpus_cases(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Case]:
     return {case.path.name: case for case in cases}
 
 
-CORPUS_NAMES = [p.name for p in corpus_inputs()] + ["carmen_flaser_256mb_line.log.gz"]
+CORPUS_NAMES = [p.name for p in corpus_inputs()] + list(GENERATED)
 
 
 @pytest.mark.parametrize("name", CORPUS_NAMES)
