@@ -15,7 +15,7 @@ pytest.importorskip("yaml")
 
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
-from dds_domains import free_domain
+from dds_domains import domain_held
 from scanlines.data import sample
 from scanlines.extractor import Extractor
 from scanlines.io import open_log
@@ -84,12 +84,14 @@ def intel_profile(tmp_path_factory):
     return path
 
 
-def test_a_ros_users_command_line_moves_and_configures_the_node(store, intel_profile, tmp_path):
+def test_a_ros_users_command_line_moves_and_configures_the_node(
+    store, intel_profile, tmp_path, dds_domain
+):
     """``-r scan:=/front/scan -r __ns:=/robot1 --params-file P -p merge:=false``: the scans
     come from /front/scan (absolute: not under the namespace), the outputs go under
     /robot1 with laser_line_extraction's types, the file's entry for /robot1/scanlines and
     the -p set the extraction, and the start-up line says all of it."""
-    domain = 71
+    domain = dds_domain
     params = tmp_path / "params.yaml"
     params.write_text(
         "scanlines:\n  ros__parameters:\n    method: iepf\n"  # the root namespace's node
@@ -129,7 +131,7 @@ def test_a_ros_users_command_line_moves_and_configures_the_node(store, intel_pro
     assert node.returncode == 0, err
     start = err.splitlines()[0]
     assert start.startswith(
-        "scanlines ros2: node /robot1/scanlines (domain 71) listening on /front/scan "
+        f"scanlines ros2: node /robot1/scanlines (domain {domain}) listening on /front/scan "
         "(LaserScan); method adaptive, merge=False, min_points=4; noise from sensor profile "
         f"{intel_profile} (sigma(r) = "
     ), start
@@ -170,13 +172,15 @@ def play(domain, log, *ros_args):
     )  # fmt: skip
 
 
-def test_play_publishes_the_logs_odometry_on_odom_and_tf_and_the_mounting_on_tf_static(store):
+def test_play_publishes_the_logs_odometry_on_odom_and_tf_and_the_mounting_on_tf_static(
+    store, dds_domain
+):
     """The log's odometry (the scan's laser pose less the mounting) on /odom and as odom ->
     base_link on /tf, stamped as the scans; the mounting once on /tf_static (transient
     local: a subscriber that comes later gets it), base_link -> laser."""
     from scanlines.geometry.poses import compose
 
-    domain = 72
+    domain = dds_domain
     tf = Subscriber(domain, "/tf", msg.TFMessage, "tf2_msgs/msg/TFMessage", store)
     odom = Subscriber(domain, "/robot1/odom", msg.Odometry, "nav_msgs/msg/Odometry", store)
     laser = Subscriber(domain, "/robot1/scan", msg.LaserScan, "sensor_msgs/msg/LaserScan", store)
@@ -220,7 +224,7 @@ def test_play_publishes_the_logs_odometry_on_odom_and_tf_and_the_mounting_on_tf_
 
 
 def test_play_publishes_the_mounting_on_tf_static_for_later_subscribers(store):
-    with free_domain() as domain:
+    with domain_held() as domain:
         got, err, code = _late_static(store, domain)
     assert code == 0, err
     (data,) = got
@@ -250,8 +254,8 @@ def _late_static(store, domain):
     return got, err, player.returncode
 
 
-def test_play_of_a_log_without_poses_says_why_there_is_no_tf(store):
-    domain = 73
+def test_play_of_a_log_without_poses_says_why_there_is_no_tf(store, dds_domain):
+    domain = dds_domain
     tf = Subscriber(domain, "/tf", msg.TFMessage, "tf2_msgs/msg/TFMessage", store)
     laser = Subscriber(domain, "/scan", msg.LaserScan, "sensor_msgs/msg/LaserScan", store)
     player = play(domain, "urg")

@@ -15,7 +15,7 @@ pytest.importorskip("cyclonedds")
 
 from rosbags.typesys import Stores, get_typestore
 
-from dds_domains import free_domain
+from dds_domains import domain_held
 from scanlines.data import sample
 from scanlines.geometry.poses import compose, invert
 from scanlines.io import open_log
@@ -167,7 +167,7 @@ def test_the_node_localises_each_scan_as_localize_does_and_says_so_as_amcl(store
     scans, mounting = intel
     count = min(len(scans), 600)
     lines, frame = read_line_map(intel_map)
-    with free_domain() as domain:
+    with domain_held() as domain:
         got, moved, maps, arrays, err, played = run_live(
             domain, intel_map, scans, mounting, count, INITIAL_SIGMA
         )
@@ -224,7 +224,7 @@ def test_odometry_from_tf_and_rvizs_covariance(store, intel_map, intel):
     count = 200
     sigma = (0.5, math.radians(15.0))
     lines, frame = read_line_map(intel_map)
-    with free_domain() as domain:
+    with domain_held() as domain:
         got, *_, err, _ = run_live(domain, intel_map, scans, mounting, count, sigma,
                                    "--odometry", "tf")  # fmt: skip
     assert len(got) == count, err

@@ -29,9 +29,9 @@ def play(log, domain, *args):
     return done.returncode, done.stderr.strip().splitlines()
 
 
-def test_a_timestamp_no_ros2_time_can_hold_names_the_log_scan_and_field(tmp_path):
+def test_a_timestamp_no_ros2_time_can_hold_names_the_log_scan_and_field(tmp_path, dds_domain):
     log = stamped_log(tmp_path / "stamps.csv")
-    code, lines = play(log, 67)
+    code, lines = play(log, dds_domain)
     assert code == 2, lines
     assert lines[-1] == (
         f"scanlines: error: {log}, scan index 1, field timestamp: -5.0 s is not a ROS 2 "
@@ -40,9 +40,9 @@ def test_a_timestamp_no_ros2_time_can_hold_names_the_log_scan_and_field(tmp_path
     assert not any("Traceback" in line for line in lines)
 
 
-def test_on_error_skip_publishes_the_others_and_counts_the_skipped(tmp_path):
+def test_on_error_skip_publishes_the_others_and_counts_the_skipped(tmp_path, dds_domain):
     log = stamped_log(tmp_path / "stamps.csv")
-    code, lines = play(log, 68, "--on-error", "skip")
+    code, lines = play(log, dds_domain, "--on-error", "skip")
     assert code == 0, lines
     assert lines[-1] == (
         "scanlines ros2: published 3 scans of stamps.csv on /scan; "
@@ -57,7 +57,7 @@ def test_stamps_that_step_back_are_reported_once_and_restamp_makes_them_go_forwa
     from cyclonedds.sub import DataReader
     from cyclonedds.topic import Topic
 
-    from dds_domains import free_domain
+    from dds_domains import domain_held
     from scanlines.ros2 import messages as msg
     from scanlines.ros2.dds import default_qos, participant, ros_topic
 
@@ -66,7 +66,7 @@ def test_stamps_that_step_back_are_reported_once_and_restamp_makes_them_go_forwa
     log = tmp_path / "back.csv"
     log.write_text("\n".join(rows) + "\n")
     published = {}
-    with free_domain() as domain:
+    with domain_held() as domain:
         dp = participant(domain, loopback=True)
         scans = DataReader(dp, Topic(dp, ros_topic("/scan"), msg.LaserScan), default_qos(100))
         for restamp in ((), ("--restamp",)):

@@ -155,7 +155,11 @@ def ros2_command(
     ] = _domain_default(),
     loopback: Annotated[
         bool,
-        typer.Option("--loopback/--network", help="DDS on 127.0.0.1 only, or as configured."),
+        typer.Option(
+            "--loopback/--network",
+            help="DDS sent over 127.0.0.1 only (Cyclone still listens on every interface: "
+            "see the README), or as configured.",
+        ),
     ] = False,
     wait: Annotated[
         float, typer.Option(help="--play: seconds to wait for a subscriber first.", min=0)

@@ -30,7 +30,9 @@ RECEIVE_BUFFER = "8MB"
 def loopback_config(receive_buffer: str | None = RECEIVE_BUFFER) -> str:
     """Cyclone DDS confined to the loopback interface: unicast discovery to 127.0.0.1
     (``lo`` has no multicast), so nothing leaves the machine; asking for a socket receive
-    buffer of ``receive_buffer`` (``None``: Cyclone's default)."""
+    buffer of ``receive_buffer`` (``None``: Cyclone's default). Cyclone still binds its
+    discovery and data receive sockets to every interface (eclipse-cyclonedds #1923): a
+    remote host's datagrams reach them, though it cannot complete discovery (README)."""
     internal = (
         ""
         if receive_buffer is None

@@ -18,6 +18,7 @@ from typing import Any
 from scanlines.errors import ParameterError
 from scanlines.ros2.names import expand
 from scanlines.ros2.ros_args import Parameter
+from scanlines.untrusted import clip, quote
 
 __all__ = ["NODE_PARAMETERS", "OPTIONAL_TOPICS", "TOPICS", "NodeOptions", "apply_parameters"]
 
@@ -71,7 +72,8 @@ def apply_parameters(options: NodeOptions, values: dict[str, Parameter]) -> Node
     from scanlines.methods import method_class
 
     def fail(name: str, reason: str) -> ParameterError:
-        return ParameterError(f"--ros-args: parameter {name} ({values[name].origin}): {reason}")
+        origin = values[name].origin
+        return ParameterError(f"--ros-args: parameter {clip(name)} ({origin}): {reason}")
 
     def text(name: str) -> str | None:
         """A string parameter's value (``None``: not set)."""
@@ -79,7 +81,7 @@ def apply_parameters(options: NodeOptions, values: dict[str, Parameter]) -> Node
             return None
         value = values[name].value
         if not isinstance(value, str):
-            raise fail(name, f"a string, got {value!r}")
+            raise fail(name, f"a string, got {quote(value)}")
         return value
 
     method = text("method")
@@ -101,7 +103,7 @@ def apply_parameters(options: NodeOptions, values: dict[str, Parameter]) -> Node
             raise fail(name, _unknown(name, method, spec))
         method_params[name] = parameter.value
     if "use_sim_time" in values and not isinstance(values["use_sim_time"].value, bool):
-        raise fail("use_sim_time", f"true or false, got {values['use_sim_time'].value!r}")
+        raise fail("use_sim_time", f"true or false, got {quote(values['use_sim_time'].value)}")
     checked = _checked(method, preset, method_params, values, fail)
     profile = text("sensor_profile")
     if profile is not None:
