@@ -108,29 +108,8 @@ def apply_parameters(options: NodeOptions, values: dict[str, Parameter]) -> Node
     profile = text("sensor_profile")
     if profile is not None:
         options = replace(options, sensor_profile=Path(profile) if profile else None)
-    topics = dict(options.topics)
-    for name in TOPICS:
-        given = text(name)
-        if given is None:
-            continue
-        if not given and name not in OPTIONAL_TOPICS:
-            raise fail(name, "a topic name, got an empty string")
-        try:
-            if given:
-                expand(given, "node", "/")
-        except ParameterError as error:
-            raise fail(name, str(error)) from None
-        topics[name] = given or None
-    live = dict(options.live)
-    for name in LIVE:
-        given = text(name)
-        if given is None:
-            continue
-        if name == "odometry" and given not in ("odom", "tf"):
-            raise fail(name, f"odom or tf, got {given!r}")
-        if not given and name != "map":
-            raise fail(name, "a frame's name, got an empty string")
-        live[name] = given or None
+    topics = _topics(options.topics, text, fail)
+    live = _live(options.live, text, fail)
     return replace(
         options,
         method=method,
@@ -144,6 +123,39 @@ def apply_parameters(options: NodeOptions, values: dict[str, Parameter]) -> Node
         topics=topics,
         live=live,
     )
+
+
+def _topics(topics: dict[str, str | None], text, fail) -> dict[str, str | None]:
+    """The node's topics with those set by parameters (``text(name)``), each checked."""
+    topics = dict(topics)
+    for name in TOPICS:
+        given = text(name)
+        if given is None:
+            continue
+        if not given and name not in OPTIONAL_TOPICS:
+            raise fail(name, "a topic name, got an empty string")
+        try:
+            if given:
+                expand(given, "node", "/")
+        except ParameterError as error:
+            raise fail(name, str(error)) from None
+        topics[name] = given or None
+    return topics
+
+
+def _live(live: dict[str, str | None], text, fail) -> dict[str, str | None]:
+    """The live localisation's frames and odometry source with those set by parameters."""
+    live = dict(live)
+    for name in LIVE:
+        given = text(name)
+        if given is None:
+            continue
+        if name == "odometry" and given not in ("odom", "tf"):
+            raise fail(name, f"odom or tf, got {quote(given)}")
+        if not given and name != "map":
+            raise fail(name, "a frame's name, got an empty string")
+        live[name] = given or None
+    return live
 
 
 def _checked(method, preset, params, values, fail) -> dict[str, Any]:
