@@ -40,7 +40,7 @@ from typing import Any, ClassVar
 
 from scanlines._core import surfaces_stack
 from scanlines.methods.penalised import OBJECTIVE, PenalisedMethod
-from scanlines.params import MAX_METRES, Param, Settings, auto_or, number
+from scanlines.params import MAX_METRES, Param, Settings, auto_or, choice, number
 from scanlines.steps.assemble import output_settings
 
 __all__ = ["Surfaces"]
@@ -65,6 +65,11 @@ class Surfaces(PenalisedMethod):
                 0.05,
                 number(low=0.0, high=MAX_METRES),
                 "wall length of one independent observation (m); 0: every return is one",
+            ),
+            "two_stage": Param(
+                False,
+                choice(True, False),
+                "search the optimum in two stages (blocks first, then around their boundaries)",
             ),
         },
         output=output_settings(3),
