@@ -170,3 +170,30 @@ def test_threads_sharing_a_bare_extractor_each_learn_from_their_own_scans():
     # the learning shows: each scan alone (its own noise estimate) gives other lines
     alone = [Extractor("surfaces")(scan).lines.tobytes() for scan in shares[0]]
     assert alone != expected[0]
+
+
+def _same_partition(a, b) -> bool:
+    return all(
+        np.array_equal(getattr(a, name), getattr(b, name)) for name in ("first", "last", "outliers")
+    )
+
+
+@pytest.mark.parametrize("log", ["intel", "freiburg", "urg"])
+def test_the_two_stage_search_finds_the_full_searchs_partition_on_the_shipped_scans(log):
+    scans = list(open_log(sample(log)))
+    full, two_stage = Extractor("surfaces"), Extractor("surfaces", two_stage=True)
+    same = sum(_same_partition(full(scan), two_stage(scan)) for scan in scans)
+    assert same >= 0.99 * len(scans)  # 299, 299 and 150 of 300, 300 and 150 on 2026-12-07
+
+
+def test_the_two_stage_search_keeps_a_dense_room_four_walls():
+    beams = 20_000
+    step = 2.0 * math.pi / beams
+    bearings = -math.pi + step * np.arange(beams)
+    facing = np.round(bearings / (math.pi / 2)) * (math.pi / 2)
+    ranges = 5.0 / np.cos(bearings - facing)
+    ranges += np.random.default_rng(3).normal(0.0, 0.01, beams)
+    scan = Scan(ranges, -math.pi, step, range_max=30.0)
+    result = extract(scan, "surfaces", two_stage=True)
+    assert len(result) == 4
+    assert result.corners.size == 4

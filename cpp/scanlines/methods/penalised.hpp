@@ -27,6 +27,8 @@ struct Objective : ObjectiveSettings {
     // A return left out (a lone spike, a mixed pixel) does not cut the surface its
     // neighbours share: it opens no new cluster, and a run may span it.
     bool bridge_left_out;
+    // The optimum searched in two stages (two_stage_runs) instead of over every start.
+    bool two_stage = false;
 };
 
 // Prefix sums (rows 0..n) of w, wx, wy, wxx, wxy, wyy about (x0, y0), the held count and
@@ -75,7 +77,10 @@ bool continuous(const Returns& ret, Index p, Index q, Index beams, double step,
                 const Reals& sigma, double sigmas);
 
 // The optimal runs [a, b]: the dynamic programme with PELT pruning.
-Runs optimal_runs(const Sums& sums, const Flags& opens, const Objective& objective);
+// `at`: the return position of each row of `sums` (empty: row p is return p); `allowed`:
+// the starts a segment longer than a few returns may have (empty: every start).
+Runs optimal_runs(const Sums& sums, const Flags& opens, const Objective& objective,
+                  const Ints& at = {}, const Flags& allowed = {});
 
 struct Partition {
     Runs runs;

@@ -139,7 +139,8 @@ ScanResult surfaces_scan(View<double> ranges, View<bool> valid, const Stack& sen
     const Index n_beams = ranges.size;
     ScanReturns scan = scan_returns(ranges, valid, sensor, s.noise_sigma);
     if (scan.ret.size() == 0) return empty_result({}, {});
-    const Objective objective{s.segments, s.output.min_points, Residual::ALONG_BEAM, true};
+    const Objective objective{s.segments, s.output.min_points, Residual::ALONG_BEAM, true,
+                              s.segments.two_stage};
     Reals weights = footprint_weights(scan.ret, sensor.step, s.segments.footprint);
     Partition part = ring_partition(scan, weights, n_beams, sensor.step, objective);
     Ints in_fit;  // events between held returns: a return left out inside a surface is none
