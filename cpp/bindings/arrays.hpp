@@ -261,10 +261,13 @@ inline nb::dict group(const nb::dict& record, const char* name) {
 // The clustering rule's fields (the shared clustering settings, RuleSpec in
 // scanlines/steps/breakpoints.py), by name.
 inline RuleSpec rule_spec_of(const nb::dict& clustering) {
-    return {setting_in(clustering, "breakpoints", NO_RULE, FIXED), setting<double>(clustering, "k"),
-            setting<double>(clustering, "noise_k"),    setting<double>(clustering, "line_k"),
-            setting<double>(clustering, "abd_lambda"), setting<double>(clustering, "pdbs_c0"),
-            setting<double>(clustering, "jump_distance")};
+    return {setting_in(clustering, "breakpoints", NO_RULE, FIXED),
+            number_setting(clustering, "k"),
+            number_setting(clustering, "noise_k"),
+            number_setting(clustering, "line_k"),
+            setting<double>(clustering, "abd_lambda"),  // NaN: "auto" (the adaptive method's)
+            number_setting(clustering, "pdbs_c0"),
+            number_setting(clustering, "jump_distance")};
 }
 
 // The output settings every method has (output_settings in scanlines/steps/assemble.py).

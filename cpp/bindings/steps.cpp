@@ -330,10 +330,7 @@ void bind_select(nb::module_& m) {
 void bind_denoise(nb::module_& m) {
     m.def(
         "literal_noise",
-        [](const InReals& d) {
-            expect_at_least("the number of distances", static_cast<Index>(d.shape(0)), 1);
-            return flags_to_numpy(literal_noise(vector_of(d)));
-        },
+        [](const InReals& d) { return flags_to_numpy(literal_noise(vector_of(d))); },
         "Step 2 as written, on neighbour distances d (length n - 1): a mask of n points.");
     m.def(
         "isolated_noise",

@@ -222,7 +222,7 @@ CLUSTERS: dict[str, Param] = {
         "auto",
         auto_or(CLUSTERING["abd_lambda"].check),
         "ABD: worst incidence angle, degrees, or auto: 10, more on scans coarser than 0.67 deg",
-        (radians(), flag("auto")),
+        (radians(), flag("auto_abd_lambda", "auto")),
     ),
     "denoise": Param(
         "isolated",
