@@ -19,11 +19,11 @@ TrackParams params_of(const InReals& values) {
     if (values.shape(0) != PARAMS) throw nb::value_error("the filter takes 23 settings");
     const double* v = values.data();
     // A count from the settings' floats: a whole number in 0 .. MAX_SETTING_COUNT.
-    auto count = [&](std::size_t i) {
+    auto count = [&](std::size_t i, const char* name) {
         double x = v[i];
         if (!(x >= 0.0 && x <= static_cast<double>(MAX_SETTING_COUNT)) || x != std::floor(x))
-            value_error("the filter's setting " + std::to_string(i) +
-                        " must be a whole number in 0 .. " + text(MAX_SETTING_COUNT));
+            value_error(std::string("the filter's ") + name + " must be a whole number in 0 .. " +
+                        text(MAX_SETTING_COUNT) + ", got " + std::to_string(x));
         return static_cast<Index>(x);
     };
     TrackParams p{};
@@ -34,7 +34,7 @@ TrackParams params_of(const InReals& values) {
     p.turn_per_metre = v[4];
     p.drift_walk = v[5];
     p.scale_walk = v[6];
-    p.normal_window = count(7);
+    p.normal_window = count(7, "normal_window");
     p.neighbour_gap = v[8];
     p.flatness = v[9];
     p.normal_cosine = v[10];
@@ -42,13 +42,13 @@ TrackParams params_of(const InReals& values) {
     p.gate_sigmas = v[12];
     p.gate_min = v[13];
     p.gate_max = v[14];
-    p.line_returns = count(15);
+    p.line_returns = count(15, "line_returns");
     p.return_sigma = v[16];
     p.line_sigma = v[17];
     p.huber = v[18];
-    p.iterations = count(19);
+    p.iterations = count(19, "iterations");
     p.tolerance = v[20];
-    p.min_pairs = count(21);
+    p.min_pairs = count(21, "min_pairs");
     p.max_chi_square = v[22];
     p.max_points = 0;
     return p;
