@@ -74,8 +74,17 @@ PosesOutOption = Annotated[
     Path | None,
     typer.Option(
         "--poses-out",
-        help="With --align: write the tracked poses (TUM, world frame, readable by evo) and "
-        "their covariances beside it (NAME.cov.json).",
+        help="With --align: write the poses, optimised when the loops are closed (TUM, world "
+        "frame, readable by evo), and the tracker's covariances beside it (NAME.cov.json).",
+    ),
+]
+LoopsOption = Annotated[
+    bool,
+    typer.Option(
+        "--loops/--no-loops",
+        help="With --align: close the loops (a pose graph of the tracked poses and the "
+        "verified loop closures, optimised; the map fused again from the optimised poses). "
+        "On by default.",
     ),
 ]
 FirstScansOption = Annotated[
@@ -111,6 +120,7 @@ def map_command(
     topic: TopicOption = None,
     align: TrackOption = False,
     poses_out: PosesOutOption = None,
+    loops: LoopsOption = True,
 ) -> None:
     from scanlines.cli.common import writable
     from scanlines.errors import ParameterError
@@ -127,20 +137,34 @@ def map_command(
     options = reader_options(topic=topic, on_error=on_error, max_beams=max_beams)
     prepared = prepare(log, options, poses, min_scans, method, preset, param, config,
                        sensor_profile, scans)  # fmt: skip
+    closed = None
     if align:
         from scanlines.map.tracking import TrackSettings
 
         prepared["track"] = TrackSettings()
-    build = run_build(log, options, prepared, scans)
+    if align and loops:
+        from scanlines.cli.loops import run_closed_build
+
+        build, closed = run_closed_build(log, options, prepared, scans)
+    else:
+        build = run_build(log, options, prepared, scans)
     lines = build.line_map.lines()
     meta = map_meta(log, build, prepared)
+    if closed is not None:
+        from scanlines.map.loopmap import loop_summary
+
+        meta["loops"] = loop_summary(build, closed)
     write_map(lines, out, meta=meta, overwrite=overwrite)
     if plot is not None:
+        from scanlines.cli.loops import plot_closed
         from scanlines.viz.figures import save
         from scanlines.viz.maps import plot_map
 
         with naming_output(plot, "the figure"):
-            save(plot_map(lines, title=f"line map of {log.name}"), plot)
+            if closed is None:
+                save(plot_map(lines, title=f"line map of {log.name}"), plot)
+            else:
+                save(plot_closed(lines, build, closed, f"line map of {log.name}"), plot)
         typer.echo(f"figure: {plot}")
     typer.echo(
         f"{len(lines)} map lines from {build.segments} segments of {build.scans} scans "
@@ -151,10 +175,14 @@ def map_command(
     if build.without_pose:
         typer.echo(f"{build.without_pose} scans had no pose and were not mapped", err=True)
     if build.track is not None:
-        _report_tracking(build, meta["tracking"], poses_out)
+        _report_tracking(build, meta["tracking"], poses_out, closed)
+    if closed is not None:
+        from scanlines.cli.loops import report_loops
+
+        report_loops(meta["loops"])
 
 
-def _report_tracking(build, summary: dict[str, Any], poses_out: Path | None) -> None:
+def _report_tracking(build, summary: dict[str, Any], poses_out: Path | None, closed) -> None:
     """The summary of a tracked map: how far alignment moved the poses, the scans that did
     not fit (on stderr), and the poses written."""
     from scanlines.map.export import naming_output
@@ -185,8 +213,13 @@ def _report_tracking(build, summary: dict[str, Any], poses_out: Path | None) -> 
             err=True,
         )
     if poses_out is not None:
+        records = build.tracked
+        if closed is not None:
+            from scanlines.map.loopmap import closed_records
+
+            records = closed_records(build, closed)
         with naming_output(poses_out, "the poses"):
-            path, sidecar, untimed = write_tracked(build.tracked, build.frame, poses_out)
+            path, sidecar, untimed = write_tracked(records, build.frame, poses_out)
         typer.echo(f"wrote {path} and {sidecar}")
         if untimed:
             typer.echo(f"{untimed} scans had no timestamp and were left out of {path}", err=True)
