@@ -56,8 +56,8 @@ AlignOption = Annotated[
     typer.Option(
         "--align",
         help="With --map: track each scan on the map so far before fusing it (as `scanlines "
-        "map --align`); the held-out scans are then scored at their predicted poses and also "
-        "localised (aligned to the finished map).",
+        "map --align`, the loops closed); the held-out scans are then scored at their "
+        "predicted poses (moved with the optimised ones) and also localised on the finished map.",
     ),
 ]
 TrackOption = Annotated[
@@ -142,7 +142,7 @@ def map_command(
         from scanlines.map.tracking import TrackSettings
 
         prepared["track"] = TrackSettings()
-    if align and loops:
+    if align and loops and loops_available():
         from scanlines.cli.loops import run_closed_build
 
         build, closed = run_closed_build(log, options, prepared, scans)
@@ -180,6 +180,20 @@ def map_command(
         from scanlines.cli.loops import report_loops
 
         report_loops(meta["loops"])
+
+
+def loops_available() -> bool:
+    """Whether scipy (the ``[map]`` extra) is there to close loops; else one line says so."""
+    from importlib.util import find_spec
+
+    if find_spec("scipy") is not None:
+        return True
+    typer.echo(
+        "loops not closed: closing them needs scipy (pip install 'scanlines[map]'); "
+        "the map is built from the tracked poses",
+        err=True,
+    )
+    return False
 
 
 def _report_tracking(build, summary: dict[str, Any], poses_out: Path | None, closed) -> None:
@@ -325,10 +339,15 @@ def evaluate_map_command(
     if profile is None:
         raise ParameterError(f"{log}: no sensor profile could be measured; give --sensor-profile")
     started = time.perf_counter()
+    loops = None
+    if align and loops_available():
+        from scanlines.map.loops import LoopSettings
+
+        loops = LoopSettings()
     score, build = evaluate_map(
         lambda: open_log(log), prepared["extractor"], profile.sigma_at,
         poses=prepared["poses"], settings=prepared["settings"], limit=scans,
-        track=TrackSettings() if align else None, source=str(log),
+        track=TrackSettings() if align else None, source=str(log), loops=loops,
     )  # fmt: skip
     seconds = time.perf_counter() - started
     table = Table(title=f"line map of {log.name}: {score.poses}", show_header=False)

@@ -148,6 +148,7 @@ def evaluate_map(
     align: AlignSettings | None = None,
     track: TrackSettings | None = None,
     source: str | None = None,
+    loops=None,
 ) -> tuple[MapScore, MapBuild]:
     """Build the map from all scans but every ``every``-th, then score it on those.
 
@@ -155,7 +156,10 @@ def evaluate_map(
     ``enumerate()``); the log is read twice, one scan in memory at a time; ``limit``: only
     its first scans; ``source``: the log's name, for error messages; ``align`` or
     ``track``: how the map is built (:func:`~scanlines.map.build.build_map`), the held-out
-    scans then also localised the same way.
+    scans then also localised the same way; ``loops`` (a
+    :class:`~scanlines.map.loops.LoopSettings`, with ``track``): the loops closed
+    (:func:`~scanlines.map.loopmap.build_closed_map`), the held-out scans' poses moved
+    with the optimised ones.
     """
     from itertools import islice
 
@@ -163,10 +167,19 @@ def evaluate_map(
         return reader.enumerate() if limit is None else islice(reader.enumerate(), limit)
 
     with open_indexed() as reader:
-        build = build_map(
-            indexed(reader), extractor, poses=poses, settings=settings,
-            hold_out=lambda index: index % every == 0, align=align, track=track, source=source,
-        )  # fmt: skip
+        if loops is not None and track is not None:
+            from scanlines.map.loopmap import build_closed_map
+
+            build, _ = build_closed_map(
+                indexed(reader), extractor, poses=poses, settings=settings, track=track,
+                loops=loops, hold_out=lambda index: index % every == 0, source=source,
+            )  # fmt: skip
+        else:
+            build = build_map(
+                indexed(reader), extractor, poses=poses, settings=settings,
+                hold_out=lambda index: index % every == 0, align=align, track=track,
+                source=source,
+            )  # fmt: skip
     with open_indexed() as reader:
         score = score_held_out(indexed(reader), build, sigma_at)
     return score, build

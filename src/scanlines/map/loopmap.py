@@ -89,4 +89,3 @@ def loop_summary(build: MapBuild, result: LoopResult) -> dict[str, Any]:
             for c in result.closures
         ],
     }  # fmt: skip
-

@@ -11,8 +11,8 @@ the scans at least ``min_travel`` metres of path before it whose estimated pose 
 ``radius``; the nearest is the candidate. The query's returns are aligned
 (:func:`~scanlines.geometry.registration.icp`) to a *submap* of the old scan and its
 ``window`` neighbours either side, from the estimated relative pose and, if that fails,
-from the old scan's pose (the query back where the old scan was). A candidate is accepted when it passes,
-in turn:
+from the old scan's pose (the query back where the old scan was). A candidate is accepted
+when it passes, in turn:
 
 * alignment quality: the inlier share at least ``min_inliers``, the inliers' RMS at most
   ``max_rms``, every direction pinned by the inliers (the smallest eigenvalue of their
@@ -70,6 +70,9 @@ class LoopSettings:
     edge_turn_floor: float = math.radians(0.1)
     rounds: int = 2
     max_points: int = 200
+    local: int = 3
+    local_sigma: float = 0.01
+    local_inflation: float = 10.0
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -152,6 +155,7 @@ class LoopCloser:
         self._poses: list[Pose] = []
         self._covariances: list[np.ndarray] = []
         self._nodes: list[_Node] = []
+        self._local: list[tuple[Pose, np.ndarray]] | None = None
 
     def __len__(self) -> int:
         return len(self._poses)
@@ -173,11 +177,35 @@ class LoopCloser:
 
     def graph(self) -> PoseGraph:
         """The graph of the tracking edges alone, at the tracked poses."""
+        if self._local is None:
+            self._local = [self._local_edge(k) for k in range(1, len(self._poses))]
         graph = PoseGraph(np.array(self._poses, dtype=np.float64).reshape(-1, 3))
-        for k in range(1, len(self._poses)):
-            z = relative_pose(self._poses[k - 1], self._poses[k])
-            graph.add(Edge(k - 1, k, z, np.linalg.inv(self._covariances[k])))
+        for k, (z, information) in enumerate(self._local, start=1):
+            graph.add(Edge(k - 1, k, z, information))
         return graph
+
+    def _local_edge(self, k: int) -> tuple[Pose, np.ndarray]:
+        """The edge from scan ``k - 1`` to ``k``: scan ``k`` aligned to the scans before it
+        (``local`` of them, from their tracked relative pose), else the tracked one."""
+        s = self.settings
+        tracked = relative_pose(self._poses[k - 1], self._poses[k])
+        fallback = (tracked, np.linalg.inv(self._covariances[k]))
+        if not s.local or self._nodes[k].points is None:
+            return fallback
+        poses = np.array(self._poses[max(0, k - s.local) : k], dtype=np.float64)
+        nodes = self._nodes[max(0, k - s.local) : k]
+        target = _submap(len(nodes) - 1, poses, nodes, s.local)
+        if len(target.points) < 3:
+            return fallback
+        from scipy.spatial import cKDTree
+
+        fit = _icp(self._nodes[k].points, target, cKDTree(target.points), tracked)
+        if fit.inlier_fraction < s.min_inliers or fit.least < s.least:
+            return fallback
+        s2 = max(fit.rms, s.local_sigma) ** 2
+        information = fit.normal / s2 / s.local_inflation
+        cov = _floored(np.linalg.inv(information), s.edge_floor, s.edge_turn_floor)
+        return fit.pose, np.linalg.inv(cov)
 
     def close(self, progress: Callable[[int, int], None] | None = None) -> LoopResult:
         """Find, verify and optimise the closures; ``progress(done, total)`` per query."""
@@ -325,6 +353,7 @@ class _Fit(NamedTuple):
     rms: float
     inlier_fraction: float
     least: float
+    normal: np.ndarray
 
 
 def _register(points, target: LineTarget, old: np.ndarray, query: np.ndarray):
@@ -368,12 +397,12 @@ def _icp(points: np.ndarray, target: LineTarget, tree, initial: Pose) -> _Fit:
     inlier = np.abs(e) <= s.inlier_residual
     n_in = int(np.count_nonzero(inlier))
     if n_in < 3:
-        return _Fit(pose, math.inf, n_in / len(points), 0.0)
+        return _Fit(pose, math.inf, n_in / len(points), 0.0, np.eye(3))
     p, n = moved[ok][inlier], target.normals[index[ok]][inlier]
     h = point_to_line_system(p - np.array(pose[:2]), n, e[inlier], s.huber).normal
     least = float(np.linalg.eigvalsh(h)[0]) / n_in
     rms = float(np.sqrt(np.mean(e[inlier] ** 2)))
-    return _Fit(pose, rms, n_in / len(points), least)
+    return _Fit(pose, rms, n_in / len(points), least, h)
 
 
 def _chain_covariance(o: int, q: int, poses: np.ndarray, covariances: np.ndarray):

@@ -148,7 +148,8 @@ def optimise(graph: PoseGraph, iterations: int = 20, tolerance: float = 1e-6) ->
     residual, jac = _system(poses, a)
     initial = cost = float(residual @ residual)
     done = 0
-    for done in range(1, iterations + 1):
+    while done < iterations:
+        done += 1
         normal = (jac.T @ jac).tocsc()
         normal = normal + identity(normal.shape[0], format="csc") * 1e-9
         step = -splu(normal).solve(jac.T @ residual)
