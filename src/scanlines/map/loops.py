@@ -4,7 +4,10 @@
 and the pose's covariance, from whatever tracker made them, and the scan, or ``None`` for a
 scan that gives no evidence, a held-out one). The graph (:mod:`scanlines.map.posegraph`)
 has one pose per scan and a *tracking edge* between consecutive scans: their tracked
-relative pose, with the later scan's covariance.
+relative pose, with the later scan's covariance, floored at ``edge_floor`` metres and
+``edge_turn_floor`` radians: a tracker's covariance is the fit's alone, and tracking each
+lap of a loop on the same map makes their errors agree (measured on the Intel log,
+``docs/decisions/pose-graph.md``).
 
 Closures (:meth:`LoopCloser.close`): every ``every``-th scan (the *query*) is compared with
 the scans at least ``min_travel`` metres of path before it whose estimated pose lies within
@@ -55,8 +58,8 @@ __all__ = ["Closure", "LoopCloser", "LoopResult", "LoopSettings", "Refusal"]
 class LoopSettings:
     """The constants of loop closure (metres, radians; see the module's note)."""
 
-    every: int = 5
-    min_travel: float = 5.0
+    every: int = 3
+    min_travel: float = 2.0
     radius: float = 1.5
     window: int = 5
     min_inliers: float = 0.7
@@ -66,13 +69,10 @@ class LoopSettings:
     consistency: float = 11.34
     closure_sigma: float = 0.02
     closure_turn_sigma: float = math.radians(0.5)
-    edge_floor: float = 0.002
-    edge_turn_floor: float = math.radians(0.1)
+    edge_floor: float = 0.02
+    edge_turn_floor: float = 0.01
     rounds: int = 2
     max_points: int = 200
-    local: int = 3
-    local_sigma: float = 0.01
-    local_inflation: float = 10.0
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -155,7 +155,6 @@ class LoopCloser:
         self._poses: list[Pose] = []
         self._covariances: list[np.ndarray] = []
         self._nodes: list[_Node] = []
-        self._local: list[tuple[Pose, np.ndarray]] | None = None
 
     def __len__(self) -> int:
         return len(self._poses)
@@ -177,35 +176,11 @@ class LoopCloser:
 
     def graph(self) -> PoseGraph:
         """The graph of the tracking edges alone, at the tracked poses."""
-        if self._local is None:
-            self._local = [self._local_edge(k) for k in range(1, len(self._poses))]
         graph = PoseGraph(np.array(self._poses, dtype=np.float64).reshape(-1, 3))
-        for k, (z, information) in enumerate(self._local, start=1):
-            graph.add(Edge(k - 1, k, z, information))
+        for k in range(1, len(self._poses)):
+            z = relative_pose(self._poses[k - 1], self._poses[k])
+            graph.add(Edge(k - 1, k, z, np.linalg.inv(self._covariances[k])))
         return graph
-
-    def _local_edge(self, k: int) -> tuple[Pose, np.ndarray]:
-        """The edge from scan ``k - 1`` to ``k``: scan ``k`` aligned to the scans before it
-        (``local`` of them, from their tracked relative pose), else the tracked one."""
-        s = self.settings
-        tracked = relative_pose(self._poses[k - 1], self._poses[k])
-        fallback = (tracked, np.linalg.inv(self._covariances[k]))
-        if not s.local or self._nodes[k].points is None:
-            return fallback
-        poses = np.array(self._poses[max(0, k - s.local) : k], dtype=np.float64)
-        nodes = self._nodes[max(0, k - s.local) : k]
-        target = _submap(len(nodes) - 1, poses, nodes, s.local)
-        if len(target.points) < 3:
-            return fallback
-        from scipy.spatial import cKDTree
-
-        fit = _icp(self._nodes[k].points, target, cKDTree(target.points), tracked)
-        if fit.inlier_fraction < s.min_inliers or fit.least < s.least:
-            return fallback
-        s2 = max(fit.rms, s.local_sigma) ** 2
-        information = fit.normal / s2 / s.local_inflation
-        cov = _floored(np.linalg.inv(information), s.edge_floor, s.edge_turn_floor)
-        return fit.pose, np.linalg.inv(cov)
 
     def close(self, progress: Callable[[int, int], None] | None = None) -> LoopResult:
         """Find, verify and optimise the closures; ``progress(done, total)`` per query."""
