@@ -16,7 +16,7 @@ from scanlines.cli.eval_reports import (
     _print_tables,
     _progress,
 )
-from scanlines.cli.maps import AlignOption, MapLogOption, MapPosesOption
+from scanlines.cli.maps import AlignOption, LoopsOption, MapLogOption, MapPosesOption
 from scanlines.cli.trajectory import ReferenceOption, TrajectoryOption
 
 if TYPE_CHECKING:
@@ -157,6 +157,7 @@ def eval_command(
     map_log: MapLogOption = None,
     poses: MapPosesOption = None,
     align: AlignOption = False,
+    loops: LoopsOption = True,
     trajectory: TrajectoryOption = None,
     reference: ReferenceOption = None,
 ) -> None:
@@ -181,7 +182,9 @@ def eval_command(
             )
         from scanlines.cli.maps import evaluate_map_command
 
-        evaluate_map_command(map_log, specs[0], scans, sensor_profile, poses, out, align)
+        evaluate_map_command(
+            map_log, specs[0], scans, sensor_profile, poses, out, align, loops=loops
+        )
         return
     if poses is not None or align:
         raise ParameterError("--poses and --align go with a --map LOG")

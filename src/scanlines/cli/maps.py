@@ -316,6 +316,8 @@ def evaluate_map_command(
     poses: Path | None,
     out: Path,
     align: bool = False,
+    *,
+    loops: bool = True,
 ) -> None:
     """``scanlines eval --map LOG``: the map of every scan but each 10th, scored on those."""
     import time
@@ -340,7 +342,7 @@ def evaluate_map_command(
         raise ParameterError(f"{log}: no sensor profile could be measured; give --sensor-profile")
     started = time.perf_counter()
     loops = None
-    if align and loops_available():
+    if align and loops and loops_available():
         from scanlines.map.loops import LoopSettings
 
         loops = LoopSettings()
