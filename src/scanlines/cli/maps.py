@@ -341,15 +341,15 @@ def evaluate_map_command(
     if profile is None:
         raise ParameterError(f"{log}: no sensor profile could be measured; give --sensor-profile")
     started = time.perf_counter()
-    loops = None
+    loop_settings = None
     if align and loops and loops_available():
         from scanlines.map.loops import LoopSettings
 
-        loops = LoopSettings()
+        loop_settings = LoopSettings()
     score, build = evaluate_map(
         lambda: open_log(log), prepared["extractor"], profile.sigma_at,
         poses=prepared["poses"], settings=prepared["settings"], limit=scans,
-        track=TrackSettings() if align else None, source=str(log), loops=loops,
+        track=TrackSettings() if align else None, source=str(log), loops=loop_settings,
     )  # fmt: skip
     seconds = time.perf_counter() - started
     table = Table(title=f"line map of {log.name}: {score.poses}", show_header=False)
