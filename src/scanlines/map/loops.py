@@ -115,7 +115,8 @@ class Refusal(NamedTuple):
 
 class LoopResult(NamedTuple):
     """The optimised poses (N x 3, in the order added), the closures accepted, the
-    candidates refused, the candidates tried, the solver's figures and the settings."""
+    candidates refused, the candidates tried (a pair tried in each round counts each time),
+    the solver's figures and the settings."""
 
     poses: np.ndarray
     closures: list[Closure]
