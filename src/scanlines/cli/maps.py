@@ -48,8 +48,8 @@ AlignOption = Annotated[
     typer.Option(
         "--align",
         help="Track each scan on the map so far before fusing it (as `scanlines map "
-        "--align`); the held-out scans are then scored at their predicted poses and also "
-        "localised (aligned to the finished map).",
+        "--align`, the loops closed); the held-out scans are then scored at their predicted "
+        "poses (moved with the optimised ones) and also localised on the finished map.",
     ),
 ]
 TrackOption = Annotated[
@@ -66,8 +66,17 @@ PosesOutOption = Annotated[
     Path | None,
     typer.Option(
         "--poses-out",
-        help="With --align: write the tracked poses (TUM, world frame, readable by evo) and "
-        "their covariances beside it (NAME.cov.json).",
+        help="With --align: write the poses, optimised when the loops are closed (TUM, world "
+        "frame, readable by evo), and the tracker's covariances beside it (NAME.cov.json).",
+    ),
+]
+LoopsOption = Annotated[
+    bool,
+    typer.Option(
+        "--loops/--no-loops",
+        help="With --align: close the loops (a pose graph of the tracked poses and the "
+        "verified loop closures, optimised; the map fused again from the optimised poses). "
+        "On by default.",
     ),
 ]
 
@@ -103,6 +112,7 @@ def eval_map_command(
     sensor_profile: ProfileOption = None,
     poses: MapPosesOption = None,
     align: AlignOption = False,
+    loops: LoopsOption = True,
     out: Annotated[Path, typer.Option(help="Folder for map_eval.json.")] = Path("scanlines-eval"),
     range_max: RangeMaxOption = None,
 ) -> None:
@@ -113,7 +123,7 @@ def eval_map_command(
     if len(specs) > 1:
         raise ParameterError("eval map scores one method: give one --method or one --config")
     evaluate_map_command(
-        log, specs[0], scans, sensor_profile, poses, out, align, range_max=range_max
+        log, specs[0], scans, sensor_profile, poses, out, align, range_max=range_max, loops=loops
     )
 
 
@@ -138,6 +148,7 @@ def map_command(
     topic: TopicOption = None,
     align: TrackOption = False,
     poses_out: PosesOutOption = None,
+    loops: LoopsOption = True,
 ) -> None:
     from scanlines.cli.common import writable
     from scanlines.errors import ParameterError
@@ -156,20 +167,34 @@ def map_command(
     )
     prepared = prepare(log, options, poses, min_scans, method, preset, param, config,
                        sensor_profile, scans)  # fmt: skip
+    closed = None
     if align:
         from scanlines.map.tracking import TrackSettings
 
         prepared["track"] = TrackSettings()
-    build = run_build(log, options, prepared, scans)
+    if align and loops and loops_available():
+        from scanlines.cli.loops import run_closed_build
+
+        build, closed = run_closed_build(log, options, prepared, scans)
+    else:
+        build = run_build(log, options, prepared, scans)
     lines = build.line_map.lines()
     meta = map_meta(log, build, prepared)
+    if closed is not None:
+        from scanlines.map.loopmap import loop_summary
+
+        meta["loops"] = loop_summary(build, closed)
     write_map(lines, out, meta=meta, overwrite=overwrite)
     if plot is not None:
+        from scanlines.cli.loops import plot_closed
         from scanlines.viz.figures import save
         from scanlines.viz.maps import plot_map
 
         with naming_output(plot, "the figure"):
-            save(plot_map(lines, title=f"line map of {log.name}"), plot)
+            if closed is None:
+                save(plot_map(lines, title=f"line map of {log.name}"), plot)
+            else:
+                save(plot_closed(lines, build, closed, f"line map of {log.name}"), plot)
         typer.echo(f"figure: {plot}")
     typer.echo(
         f"{len(lines)} map lines from {build.segments} segments of {build.scans} scans "
@@ -180,10 +205,28 @@ def map_command(
     if build.without_pose:
         typer.echo(f"{build.without_pose} scans had no pose and were not mapped", err=True)
     if build.track is not None:
-        _report_tracking(build, meta["tracking"], poses_out)
+        _report_tracking(build, meta["tracking"], poses_out, closed)
+    if closed is not None:
+        from scanlines.cli.loops import report_loops
+
+        report_loops(meta["loops"])
 
 
-def _report_tracking(build, summary: dict[str, Any], poses_out: Path | None) -> None:
+def loops_available() -> bool:
+    """Whether scipy (the ``[map]`` extra) is there to close loops; else one line says so."""
+    from importlib.util import find_spec
+
+    if find_spec("scipy") is not None:
+        return True
+    typer.echo(
+        "loops not closed: closing them needs scipy (pip install 'scanlines[map]'); "
+        "the map is built from the tracked poses",
+        err=True,
+    )
+    return False
+
+
+def _report_tracking(build, summary: dict[str, Any], poses_out: Path | None, closed) -> None:
     """The summary of a tracked map: how far alignment moved the poses, the scans that did
     not fit (on stderr), and the poses written."""
     from scanlines.map.export import naming_output
@@ -214,8 +257,13 @@ def _report_tracking(build, summary: dict[str, Any], poses_out: Path | None) -> 
             err=True,
         )
     if poses_out is not None:
+        records = build.tracked
+        if closed is not None:
+            from scanlines.map.loopmap import closed_records
+
+            records = closed_records(build, closed)
         with naming_output(poses_out, "the poses"):
-            path, sidecar, untimed = write_tracked(build.tracked, build.frame, poses_out)
+            path, sidecar, untimed = write_tracked(records, build.frame, poses_out)
         typer.echo(f"wrote {path} and {sidecar}")
         if untimed:
             typer.echo(f"{untimed} scans had no timestamp and were left out of {path}", err=True)
@@ -307,6 +355,7 @@ def evaluate_map_command(
     align: bool = False,
     *,
     range_max: float | None = None,
+    loops: bool = True,
 ) -> None:
     """``scanlines eval map LOG``: the map of every scan but each 10th, scored on those."""
     import time
@@ -333,11 +382,16 @@ def evaluate_map_command(
     if profile is None:
         raise ParameterError(f"{log}: no sensor profile could be measured; give --sensor-profile")
     started = time.perf_counter()
+    loop_settings = None
+    if align and loops and loops_available():
+        from scanlines.map.loops import LoopSettings
+
+        loop_settings = LoopSettings()
     with progress(f"mapping {log.name}") as tick:
         score, build = evaluate_map(
             lambda: open_log(log, options=options), prepared["extractor"], profile.sigma_at,
             poses=prepared["poses"], settings=prepared["settings"], limit=parse_scans(scans),
-            track=TrackSettings() if align else None, source=str(log),
+            track=TrackSettings() if align else None, source=str(log), loops=loop_settings,
             on_scan=lambda stage, _index: (tick.begin(f"{stage} {log.name}"), tick.scan()),
         )  # fmt: skip
     seconds = time.perf_counter() - started

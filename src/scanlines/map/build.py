@@ -8,6 +8,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from scanlines.extraction import Extraction
 from scanlines.extractor import Extractor
 from scanlines.geometry.poses import Pose
 from scanlines.geometry.transform import to_world
@@ -84,6 +85,7 @@ def build_map(
     align: AlignSettings | None = None,
     track: TrackSettings | None = None,
     source: str | None = None,
+    on_tracked: Callable[[TrackedPose, Scan, Extraction | None], None] | None = None,
 ) -> MapBuild:
     """The line map of ``(index, scan)`` pairs, streamed (one scan in memory at a time).
 
@@ -111,6 +113,10 @@ def build_map(
         in ``not_aligned``). Every pose is kept in ``tracked``. Excludes ``align``.
     source:
         The log's name, for error messages.
+    on_tracked:
+        With ``track``: called with each tracked scan's record, the scan and its features
+        in the sensor frame (``None`` when it is not mapped), for a pose graph
+        (:mod:`scanlines.map.loopmap`).
 
     The map is built in a local frame (:mod:`scanlines.map.frame`): the world less the
     first pose's position rounded to the metre (``build.frame``).
@@ -161,6 +167,8 @@ def build_map(
             if held:
                 build.held_out[index] = fit.pose
             if not build.tracked[-1].mapped:
+                if on_tracked is not None:
+                    on_tracked(build.tracked[-1], scan, None)
                 continue
             pose = fit.pose
         elif held:
@@ -170,8 +178,11 @@ def build_map(
             fit = align_scan(scan, pose, LineSet(*line_map.settled(align.support)), align)
             pose = fit.pose
             build.aligned += fit.used
+        extracted = extractor(scan)
+        if on_tracked is not None and tracker is not None:
+            on_tracked(build.tracked[-1], scan, extracted)
         try:
-            line_map.add(to_world(extractor(scan), pose), index, pose)
+            line_map.add(to_world(extracted, pose), index, pose)
         except MapError as error:
             raise MapError(f"{source}: {error}" if source else str(error)) from None
         build.scans += 1

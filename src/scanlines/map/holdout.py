@@ -149,6 +149,7 @@ def evaluate_map(
     track: TrackSettings | None = None,
     source: str | None = None,
     on_scan: Callable[[str, int], None] | None = None,
+    loops=None,
 ) -> tuple[MapScore, MapBuild]:
     """Build the map from all scans but every ``every``-th, then score it on those.
 
@@ -157,8 +158,10 @@ def evaluate_map(
     its first ``limit`` scans, or those a slice of scan indices selects; ``source``: the
     log's name, for error messages; ``align`` or ``track``: how the map is built
     (:func:`~scanlines.map.build.build_map`), the held-out scans then also localised the
-    same way; ``on_scan(stage, index)``: called for each scan read, ``stage``
-    ``"mapping"`` on the first pass and ``"scoring"`` on the second.
+    same way; ``loops`` (a :class:`~scanlines.map.loops.LoopSettings`, with ``track``): the
+    loops closed (:func:`~scanlines.map.loopmap.build_closed_map`), the held-out scans' poses
+    moved with the optimised ones; ``on_scan(stage, index)``: called for each scan read,
+    ``stage`` ``"mapping"`` on the first pass and ``"scoring"`` on the second.
     """
     from scanlines.reader_options import select_scans
 
@@ -171,10 +174,20 @@ def evaluate_map(
             yield index, scan
 
     with open_indexed() as reader:
-        build = build_map(
-            indexed(reader, "mapping"), extractor, poses=poses, settings=settings,
-            hold_out=lambda index: index % every == 0, align=align, track=track, source=source,
-        )  # fmt: skip
+        if loops is not None and track is not None:
+            from scanlines.map.loopmap import build_closed_map
+
+            build, _ = build_closed_map(
+                indexed(reader, "mapping"), extractor, poses=poses, settings=settings,
+                track=track, loops=loops, hold_out=lambda index: index % every == 0,
+                source=source,
+            )  # fmt: skip
+        else:
+            build = build_map(
+                indexed(reader, "mapping"), extractor, poses=poses, settings=settings,
+                hold_out=lambda index: index % every == 0, align=align, track=track,
+                source=source,
+            )  # fmt: skip
     with open_indexed() as reader:
         score = score_held_out(indexed(reader, "scoring"), build, sigma_at)
     return score, build
