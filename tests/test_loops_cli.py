@@ -53,7 +53,7 @@ def test_without_scipy_one_line_says_so(tmp_path):
 
 def test_eval_map_align_closes_the_loops(tmp_path):
     ran = scanlines(
-        "eval", "--map", sample("intel"), "--align", "--scans", "120", "--out", tmp_path
+        "eval", "map", sample("intel"), "--align", "--scans", "120", "--out", tmp_path
     )  # fmt: skip
     assert ran.returncode == 0, ran.stderr
     payload = json.loads((tmp_path / "map_eval.json").read_text())

@@ -1,10 +1,10 @@
 """The map channels: a map input (``log.clf``, and ``poses.tum`` where there is one) run
-through ``scanlines map`` and ``scanlines eval --map``, in-process, and classified.
+through ``scanlines map`` and ``scanlines eval map``, in-process, and classified.
 
 ``map``
     ``scanlines map LOG --out DIR/map.geojson [--poses TUM]``.
 ``eval map``
-    ``scanlines eval --map LOG --out DIR/eval [--poses TUM]``.
+    ``scanlines eval map LOG --out DIR/eval [--poses TUM]``.
 
 Success is exit code 0 with an output that a strict JSON parser reads (no ``NaN`` or
 ``Infinity``) and whose coordinates are finite numbers. A clean error and the defects are
@@ -74,7 +74,7 @@ def map_channel(channel: str, path: Path, workdir: Path):
         args = ["map", str(log), "--out", str(out)]
     else:
         out = workdir / "eval"
-        args = ["eval", "--map", str(log), "--out", str(out)]
+        args = ["eval", "map", str(log), "--out", str(out)]
     if poses.exists():
         args += ["--poses", str(poses)]
     result = CliRunner().invoke(app, args)

@@ -9,7 +9,7 @@ Usage, from the repository root::
 Six targets. ``logs``: every log format (``seeds.py``), mutated by the plans of
 ``plans.py``, read through every channel of ``channels.py`` (the library, ``info``,
 ``run``). ``maps``: a CARMEN log's poses and a TUM file of them (``map_target.py``),
-mutated by ``mutate_maps.py``, through ``map`` and ``eval --map`` (``map_channels.py``).
+mutated by ``mutate_maps.py``, through ``map`` and ``eval map`` (``map_channels.py``).
 ``params``, ``profiles``, ``linemaps``: a parameters file and a configuration, a sensor
 profile, the line map ``localize`` reads (``file_target.py``), mutated by
 ``mutate_files.py``, read and run through ``file_channels.py``.
@@ -213,7 +213,7 @@ def fuzz(
     **options: Any,
 ) -> list[Case]:
     """Generate ``count`` inputs from ``seed``, shared round robin between ``targets``
-    (``logs``: read through every channel; ``maps``: through ``map`` and ``eval --map``;
+    (``logs``: read through every channel; ``maps``: through ``map`` and ``eval map``;
     ``dds``: sent to a ROS 2 node, on ``options["domain"]``).
 
     ``options`` are those of :func:`run_cases` (``jobs``, ``save_failures``, ...).

@@ -70,7 +70,7 @@ def test_short_mutation_run(request: pytest.FixtureRequest, tmp_path: Path) -> N
 def test_short_map_run(tmp_path: Path) -> None:
     """The map target alone, bounded: 45 inputs (15 of each map seed: shifted, damaged and
     jumping poses, TUM files with duplicates, huge or non-finite fields) through ``map``
-    and ``eval --map``. Reproduce with ``python -m tests.fuzz.run --count 45 --seed 1
+    and ``eval map``. Reproduce with ``python -m tests.fuzz.run --count 45 --seed 1
     --targets maps``."""
     cases = fuzz(MAP_RUN, SEED, targets=("maps",), jobs=JOBS, save_failures=tmp_path / "failures")
     assert len(cases) == MAP_RUN
