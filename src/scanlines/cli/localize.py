@@ -43,15 +43,16 @@ def localize_command(
     map_file: Annotated[
         Path, typer.Option("--map", help="The line map: the .json `scanlines map` writes.")
     ],
+    out: Annotated[Path, typer.Option(help="The poses (TUM); covariances in NAME.cov.json.")],
     initial_pose: Annotated[
-        str,
+        str | None,
         typer.Option(
             "--initial-pose",
             help="T,X,Y,YAW: where the robot stands (map frame, metres, heading in radians) "
-            "at time T (seconds of the log's clock); earlier scans are skipped.",
+            "at time T (seconds of the log's clock); earlier scans are skipped. Without it "
+            "the pose is searched for on the map (global localisation) from the first scan.",
         ),
-    ],
-    out: Annotated[Path, typer.Option(help="The poses (TUM); covariances in NAME.cov.json.")],
+    ] = None,
     overwrite: OverwriteOption = False,
 ) -> None:
     import time
@@ -60,9 +61,9 @@ def localize_command(
     from scanlines.io import open_log
     from scanlines.map.export import naming_output
     from scanlines.map.localize import localize, read_line_map
-    from scanlines.map.tracking import write_tracked
+    from scanlines.map.tracked import write_tracked
 
-    initial = parse_initial_pose(initial_pose)
+    initial = None if initial_pose is None else parse_initial_pose(initial_pose)
     writable(out, overwrite)
     writable(out.with_name(out.stem + ".cov.json"), overwrite)
     lines, frame = read_line_map(map_file)
@@ -73,14 +74,16 @@ def localize_command(
     if not run.tracked:
         from scanlines.errors import ParameterError
 
-        raise ParameterError(f"{log}: no scan with a pose at or after time {initial[0]!r}")
+        when = "" if initial is None else f" at or after time {initial[0]!r}"
+        raise ParameterError(f"{log}: no scan with a pose{when}")
     with naming_output(out, "the poses"):
         path, sidecar, _ = write_tracked(run.tracked, frame, out)
     read = len(run.tracked) + run.skipped + run.without_pose
     aligned = sum(1 for t in run.tracked if t.aligned)
     typer.echo(
         f"{len(run.tracked)} scans localised on {len(lines.rho)} map lines ({aligned} aligned), "
-        f"{run.skipped} before time {initial[0]:g} skipped; {read / seconds:.0f} scans/s; "
+        + ("" if initial is None else f"{run.skipped} before time {initial[0]:g} skipped; ")
+        + f"{read / seconds:.0f} scans/s; "
         f"wrote {path} and {sidecar}"
     )
     typer.echo(
@@ -94,5 +97,32 @@ def localize_command(
             "status 'did not fit' in the covariances)",
             err=True,
         )
+    _report_lost(run)
     if run.without_pose:
         typer.echo(f"{run.without_pose} scans carry no odometry pose and were left out", err=True)
+
+
+def _report_lost(run) -> None:
+    """Where the filter was lost and found again (stderr), and its state at the end."""
+    lost = sum(1 for t in run.tracked if t.status == "lost")
+    if not lost and not run.lost_at:
+        return
+    pairs = ", ".join(
+        f"lost at scan {a}" + (f", found at {b}" if b is not None else ", not found")
+        for a, b in _episodes(run.lost_at, run.found_at)
+    )
+    end = "lost" if run.tracked[-1].status == "lost" else "found"
+    typer.echo(
+        f"{lost} scans lost (status 'lost' in the covariances){': ' + pairs if pairs else ''}"
+        f"; {end} at the end",
+        err=True,
+    )
+
+
+def _episodes(lost_at: list[int], found_at: list[int]) -> list[tuple[int, int | None]]:
+    """Each scan the filter declared itself lost with the next scan it was found at."""
+    out = []
+    for a in lost_at:
+        after = [b for b in found_at if b > a]
+        out.append((a, after[0] if after else None))
+    return out

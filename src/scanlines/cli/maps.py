@@ -128,9 +128,9 @@ def map_command(
     prepared = prepare(log, options, poses, min_scans, method, preset, param, config,
                        sensor_profile, scans)  # fmt: skip
     if align:
-        from scanlines.map.tracking import TrackSettings
+        from scanlines.map.filter import FilterSettings
 
-        prepared["track"] = TrackSettings()
+        prepared["track"] = FilterSettings()
     build = run_build(log, options, prepared, scans)
     lines = build.line_map.lines()
     meta = map_meta(log, build, prepared)
@@ -158,7 +158,7 @@ def _report_tracking(build, summary: dict[str, Any], poses_out: Path | None) -> 
     """The summary of a tracked map: how far alignment moved the poses, the scans that did
     not fit (on stderr), and the poses written."""
     from scanlines.map.export import naming_output
-    from scanlines.map.tracking import write_tracked
+    from scanlines.map.tracked import write_tracked
 
     def mm(spread: dict[str, float | None]) -> str:
         m, top = spread["median"], spread["max"]
@@ -245,7 +245,7 @@ def map_meta(log: Path, build, prepared: dict[str, Any]) -> dict[str, Any]:
     extractor = prepared["extractor"]
     tracking = {}
     if build.track is not None:
-        from scanlines.map.tracking import tracking_summary
+        from scanlines.map.tracked import tracking_summary
 
         summary = tracking_summary(build.tracked, build.frame)
         tracking = {"tracking": {**summary, "settings": build.track.to_dict()}}
@@ -280,7 +280,7 @@ def evaluate_map_command(
     from scanlines.io import open_log
     from scanlines.map.export import dumps, naming_output
     from scanlines.map.holdout import evaluate_map
-    from scanlines.map.tracking import TrackSettings
+    from scanlines.map.filter import FilterSettings
     from scanlines.outputs import write_text_atomically
 
     if spec.is_truth:
@@ -295,7 +295,7 @@ def evaluate_map_command(
     score, build = evaluate_map(
         lambda: open_log(log), prepared["extractor"], profile.sigma_at,
         poses=prepared["poses"], settings=prepared["settings"], limit=scans,
-        track=TrackSettings() if align else None, source=str(log),
+        track=FilterSettings() if align else None, source=str(log),
     )  # fmt: skip
     seconds = time.perf_counter() - started
     table = Table(title=f"line map of {log.name}: {score.poses}", show_header=False)

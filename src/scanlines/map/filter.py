@@ -55,6 +55,7 @@ import numpy as np
 
 from scanlines.geometry.poses import Pose
 from scanlines.map.align import LineSet
+from scanlines.map.fusion import BOTH
 
 __all__ = ["FilterSettings", "FilterStep", "LineGrid", "LineMapFilter", "line_grid"]
 
@@ -223,12 +224,22 @@ class LineMapFilter:
 
     def __init__(self, lines: LineSet, settings: FilterSettings | None = None) -> None:
         self.settings = settings or FilterSettings()
-        self.lines = LineSet(*(np.ascontiguousarray(a, dtype=np.float64) for a in lines))
-        self.grid = line_grid(self.lines, self.settings.gate_max)
+        self.use_lines(lines)
         self._values = self.settings.kernel_values()
         self.state: np.ndarray | None = None
         self.covariance: np.ndarray | None = None
         self._first = True
+
+    def use_lines(self, lines: LineSet) -> None:
+        """Match the next scans to ``lines`` (a map that grows: ``scanlines map --align``);
+        lines without ``sides`` are taken as seen from both sides."""
+        sides = np.full(len(lines.rho), BOTH) if lines.sides is None else lines.sides
+        self.lines = LineSet(
+            *(np.ascontiguousarray(a, dtype=np.float64).reshape(-1, *np.shape(a)[1:])
+              for a in lines[:4]),
+            np.ascontiguousarray(sides, dtype=np.int64),
+        )  # fmt: skip
+        self.grid = line_grid(self.lines, self.settings.gate_max)
 
     def start(self, pose: Pose, sigma: tuple[float, float] = INITIAL_SIGMA) -> None:
         """Start (or restart) at the local ``pose`` with standard deviations ``sigma``
@@ -255,7 +266,7 @@ class LineMapFilter:
         state, covariance, predicted, pairs, matched, chi2, status = _core.track_scan(
             self.state, self.covariance, move, self._first or increment is None,
             np.ascontiguousarray(points[:, 0]), np.ascontiguousarray(points[:, 1]),
-            lines.rho, lines.alpha, lines.start, lines.end,
+            lines.rho, lines.alpha, lines.start, lines.end, lines.sides,
             grid.shape, grid.cell_start, grid.cell_lines, self._values,
             self.settings.max_points,
         )  # fmt: skip

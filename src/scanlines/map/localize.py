@@ -45,7 +45,10 @@ from scanlines.geometry.poses import Pose, relative_pose
 from scanlines.map.align import LineSet
 from scanlines.map.build import TrackedPose
 from scanlines.map.filter import INITIAL_SIGMA, FilterSettings, LineMapFilter
+from scanlines.map.export import SIDE_NAMES
 from scanlines.map.frame import LocalFrame
+from scanlines.map.relocalise import GlobalSearch, SearchSettings
+from scanlines.map.fusion import BOTH
 from scanlines.scan import Scan
 
 __all__ = ["Localisation", "MapFileError", "localize", "read_line_map"]
@@ -80,7 +83,9 @@ def read_line_map(path: str | Path) -> tuple[LineSet, LocalFrame]:
     if not isinstance(records, list):
         raise MapFileError(f"{path}: field lines: not a list")
     values = np.zeros((len(records), 6))
+    sides = np.full(len(records), BOTH, dtype=np.int8)
     for k, record in enumerate(records):
+        sides[k] = _seen_from(record, path, k)
         for j, name in enumerate(("start", "end", "rho", "alpha")):
             try:
                 value = record[name]
@@ -95,8 +100,25 @@ def read_line_map(path: str | Path) -> tuple[LineSet, LocalFrame]:
                 raise MapFileError(f"{path}: line {k}: field {name}: not finite")
             values[k, [0, 1] if j == 0 else [2, 3] if j == 1 else [j + 2]] = numbers
     offset = np.array(frame.origin)
-    lines = LineSet(values[:, 4], values[:, 5], values[:, 0:2] - offset, values[:, 2:4] - offset)
+    lines = LineSet(
+        values[:, 4], values[:, 5], values[:, 0:2] - offset, values[:, 2:4] - offset, sides
+    )
     return lines, frame
+
+
+def _seen_from(record, path: Path, k: int) -> int:
+    """The sides map line ``k`` was seen from (field ``seen_from``; a map written before
+    sides were kept has none: both)."""
+    if not isinstance(record, dict):
+        raise MapFileError(f"{path}: line {k}: not an object")
+    name = record.get("seen_from", SIDE_NAMES[BOTH])
+    for side, known in SIDE_NAMES.items():
+        if name == known:
+            return side
+    raise MapFileError(
+        f"{path}: line {k}: field seen_from: {name!r} is not one of "
+        + ", ".join(repr(v) for v in SIDE_NAMES.values())
+    )
 
 
 @dataclass
@@ -113,6 +135,9 @@ class Localisation:
     drift: float = 0.0
     scale: float = 0.0
     lever: tuple[float, float] = (0.0, 0.0)
+    #: The scans at which the filter declared itself lost, and was found again.
+    lost_at: list[int] = field(default_factory=list)
+    found_at: list[int] = field(default_factory=list)
 
     @property
     def not_fit(self) -> int:
@@ -145,38 +170,121 @@ def localize(
     indexed: Iterable[tuple[int, Scan]],
     lines: LineSet,
     frame: LocalFrame,
-    initial: tuple[float, Pose],
+    initial: tuple[float, Pose] | None,
     *,
     poses: Callable[[int, Scan], Pose | None] | None = None,
     settings: FilterSettings | None = None,
     initial_sigma: tuple[float, float] = INITIAL_SIGMA,
+    search: SearchSettings | None = None,
 ) -> Localisation:
     """Track ``indexed`` scans on ``lines`` (local ``frame``) from ``initial``: a time
-    and a world pose (standard deviations ``initial_sigma``: metres, radians). ``poses``:
+    and a world pose (standard deviations ``initial_sigma``: metres, radians), or ``None``:
+    lost from the first scan, found by global localisation (:mod:`scanlines.map.relocalise`,
+    ``search`` its settings), as when the filter judges itself lost on the way. ``poses``:
     each scan's odometry (default: the pose it carries)."""
-    t0, start = initial
     run = Localisation(frame)
     tracker = LineMapFilter(lines, settings)
+    state = _SearchState(GlobalSearch(tracker, search), lost=initial is None)
     odometry_of = poses or (lambda index, scan: scan.pose)
     last_odometry: Pose | None = None
-    for index, scan in _from_start(indexed, t0, run):
+    scans = indexed if initial is None else _from_start(indexed, initial[0], run)
+    for index, scan in scans:
         odometry = odometry_of(index, scan)
         if odometry is None:
             run.without_pose += 1
             continue
-        if last_odometry is None:
-            tracker.start(frame.pose(start), initial_sigma)
-            increment = None
-        else:
-            increment = relative_pose(last_odometry, odometry)
-        step = tracker.step(scan.points[scan.valid], increment)
+        if last_odometry is None and initial is not None:
+            tracker.start(frame.pose(initial[1]), initial_sigma)
+        increment = None if last_odometry is None else relative_pose(last_odometry, odometry)
+        points = scan.points[scan.valid].astype(np.float64)
+        predicted, pose, covariance, status = state.step(scan, points, increment)
         last_odometry = odometry
-        status = "aligned" if step.aligned else "did not fit"
+        if status in ("lost", "found"):
+            (run.lost_at if status == "lost" else run.found_at).append(index)
         run.tracked.append(
-            TrackedPose(index, scan.timestamp, frame.pose(odometry), step.predicted, step.pose,
-                        step.covariance, status)
+            TrackedPose(index, scan.timestamp, frame.pose(odometry), predicted, pose,
+                        covariance, state.status_of(status))
         )  # fmt: skip
     if tracker.state is not None:
         run.drift, run.scale = float(tracker.state[3]), float(tracker.state[4])
         run.lever = (float(tracker.state[5]), float(tracker.state[6]))
     return run
+
+
+#: The covariance reported for a scan localised nowhere yet (no initial pose, none found).
+UNKNOWN = np.diag([1e6, 1e6, math.pi**2])
+
+
+class _SearchState:
+    """The filter with its global search: whether it is lost, the scans of low share."""
+
+    def __init__(self, search: GlobalSearch, lost: bool) -> None:
+        self.search = search
+        self.tracker = search.tracker
+        self.lost = lost
+        self.low = 0
+        self.shares: list[float] = []
+        self.since_proposal = 0
+
+    def status_of(self, status: str) -> str:
+        """The record's status: ``lost`` on every scan while lost."""
+        return "lost" if self.lost and status != "found" else status
+
+    def step(self, scan: Scan, points: np.ndarray, increment: Pose | None):
+        """The scan through the filter and, while lost, the search: predicted pose, pose,
+        covariance, status (``aligned``, ``did not fit``, ``lost`` the first scan lost,
+        ``found``)."""
+        settings = self.search.settings
+        tracker = self.tracker
+        started = tracker.state is not None
+        was_lost = self.lost
+        if started:
+            step = tracker.step(points, increment)
+            share = self.search.explained(points, step.pose)
+            predicted, pose, covariance = step.predicted, step.pose, step.covariance
+            status = "aligned" if step.aligned else "did not fit"
+        else:
+            share, status = 0.0, "lost"
+            predicted = pose = (0.0, 0.0, 0.0)
+            covariance = UNKNOWN
+        self.shares = [*self.shares[-(settings.agree - 1) :], share]
+        self.low = self.low + 1 if share < settings.lost_share else 0
+        if not self.lost and self.low >= settings.lost_after:
+            self.lost, self.since_proposal = True, settings.propose_every
+            return predicted, pose, covariance, "lost"
+        if not self.lost:
+            return predicted, pose, covariance, status
+        found = self._search(scan, points, increment, started)
+        if found is not None:
+            return predicted, found.pose, found.tracker.covariance[:3, :3].copy(), "found"
+        if not started and self.search.hypotheses:
+            best = max(self.search.hypotheses, key=lambda h: h.recent(settings.agree))
+            pose = best.pose
+        return predicted, pose, covariance, "lost" if not was_lost else status
+
+    def _search(self, scan: Scan, points: np.ndarray, increment, started: bool):
+        """One scan of the search while lost: the hypotheses stepped, new ones proposed every
+        few scans; the winner (if any) becomes the filter's state."""
+        search, settings = self.search, self.search.settings
+        search.step(points, increment)
+        own = float(np.mean(self.shares)) if started else 0.0
+        if started and len(self.shares) >= settings.agree and own >= settings.found_share:
+            self.lost, self.low = False, 0  # the filter caught the map again by itself
+            search.clear()
+            return None
+        self.since_proposal += 1
+        if self.since_proposal >= settings.propose_every:
+            self.since_proposal = 0
+            errors = None if not started else self.tracker.state[3:]
+            errors_cov = None if not started else self.tracker.covariance[3:, 3:]
+            search.propose(scan, errors, errors_cov)
+        winner = search.winner(own)
+        if winner is None:
+            return None
+        self.tracker.state = winner.tracker.state.copy()
+        self.tracker.covariance = winner.tracker.covariance.copy()
+        self.tracker._first = False
+        self.lost, self.low = False, 0
+        self.shares = list(winner.shares[-settings.agree :])
+        search.clear()
+        return winner
