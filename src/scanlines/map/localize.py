@@ -37,6 +37,7 @@ import math
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -211,6 +212,13 @@ def localize(
     return run
 
 
+class _Recovered(NamedTuple):
+    """The filter found again by itself (a winner of its own)."""
+
+    pose: Pose
+    tracker: LineMapFilter
+
+
 #: The covariance reported for a scan localised nowhere yet (no initial pose, none found).
 UNKNOWN = np.diag([1e6, 1e6, math.pi**2])
 
@@ -224,7 +232,8 @@ class _SearchState:
         self.lost = lost
         self.low = 0
         self.shares: list[float] = []
-        self.since_proposal = 0
+        self.since_proposal = search.settings.propose_every - 1  # the first scan proposes
+        self.lost_for = 0
 
     def status_of(self, status: str) -> str:
         """The record's status: ``lost`` on every scan while lost."""
@@ -250,7 +259,7 @@ class _SearchState:
         self.shares = [*self.shares[-(settings.agree - 1) :], share]
         self.low = self.low + 1 if share < settings.lost_share else 0
         if not self.lost and self.low >= settings.lost_after:
-            self.lost, self.since_proposal = True, settings.propose_every
+            self.lost, self.since_proposal, self.lost_for = True, settings.propose_every, 0
             return predicted, pose, covariance, "lost"
         if not self.lost:
             return predicted, pose, covariance, status
@@ -262,6 +271,23 @@ class _SearchState:
             pose = best.pose
         return predicted, pose, covariance, "lost" if not was_lost else status
 
+    def _near(self) -> Callable[[Pose], bool]:
+        """Whether a pose is within the filter's own uncertainty of its pose."""
+        s = self.search.settings
+        state, covariance = self.tracker.state, self.tracker.covariance
+        assert state is not None and covariance is not None
+        sigma = math.sqrt(max(np.linalg.eigvalsh(covariance[:2, :2]).max(), 0.0))
+        reach = max(s.near_distance, s.near_sigmas * sigma)
+        turn = max(s.near_angle, s.near_sigmas * math.sqrt(covariance[2, 2]))
+        x, y, theta = (float(v) for v in state[:3])
+
+        def near(pose: Pose) -> bool:
+            return math.hypot(pose[0] - x, pose[1] - y) <= reach and abs(
+                math.remainder(pose[2] - theta, 2 * math.pi)
+            ) <= turn
+
+        return near
+
     def _search(self, scan: Scan, points: np.ndarray, increment, started: bool):
         """One scan of the search while lost: the hypotheses stepped, new ones proposed every
         few scans; the winner (if any) becomes the filter's state."""
@@ -271,16 +297,23 @@ class _SearchState:
         if started and len(self.shares) >= settings.agree and own >= settings.found_share:
             self.lost, self.low = False, 0  # the filter caught the map again by itself
             search.clear()
-            return None
+            return _Recovered(tuple(float(v) for v in self.tracker.state[:3]), self.tracker)
         self.since_proposal += 1
-        if self.since_proposal >= settings.propose_every:
+        self.lost_for += 1
+        # every few scans at first, then seldom: a long search is an unmapped place
+        every = settings.propose_every
+        if started and self.lost_for > settings.patient:
+            every = settings.propose_later
+        if self.since_proposal >= every:
             self.since_proposal = 0
-            errors = None if not started else self.tracker.state[3:]
-            errors_cov = None if not started else self.tracker.covariance[3:, 3:]
-            search.propose(scan, errors, errors_cov)
-        winner = search.winner(own)
+            errors = None
+            if started:
+                errors = (self.tracker.state[3:].copy(), self.tracker.covariance[3:, 3:].copy())
+            search.propose(scan, points, errors)
+        winner = search.winner(points, own, self._near() if started else None)
         if winner is None:
             return None
+        search.settle(winner)
         self.tracker.state = winner.tracker.state.copy()
         self.tracker.covariance = winner.tracker.covariance.copy()
         self.tracker._first = False

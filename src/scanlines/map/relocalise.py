@@ -30,9 +30,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from scanlines.geometry.poses import Pose
+from scanlines.geometry.poses import Pose, compose
 
-__all__ = ["ExplainedGrid", "GlobalSearch", "Hypothesis", "SearchSettings", "pose_candidates"]
+__all__ = [
+    "ExplainedGrid",
+    "GlobalSearch",
+    "Hypothesis",
+    "LinePairs",
+    "SearchSettings",
+    "pose_candidates",
+]
 
 
 @dataclass(frozen=True)
@@ -42,11 +49,13 @@ class SearchSettings:
     near: float = 0.05
     cell: float = 0.025
     score_points: int = 60
-    segments: int = 6
+    segments: int = 4
+    max_pair_distance: float = 8.0
+    refine_every: int = 10
     min_segment: float = 0.6
     min_line: float = 0.5
     min_crossing: float = math.radians(30.0)
-    angle_tolerance: float = math.radians(4.0)
+    angle_tolerance: float = math.radians(3.0)
     overlap_slack: float = 0.3
     candidates: int = 20
     distinct_distance: float = 0.5
@@ -55,10 +64,21 @@ class SearchSettings:
     drop_share: float = 0.3
     agree: int = 10
     found_share: float = 0.6
+    agree_far: int = 30
+    found_share_far: float = 0.5
+    near_distance: float = 1.0
+    near_angle: float = math.radians(15.0)
+    near_sigmas: float = 3.0
+    clearance: float = 0.3
+    reach: float = 10.0
+    max_crossed: float = 0.2
+    checks: int = 3
     margin: float = 0.1
     lost_share: float = 0.25
     lost_after: int = 10
     propose_every: int = 5
+    propose_later: int = 50
+    patient: int = 30
     sigma_xy: float = 0.1
     sigma_theta: float = math.radians(3.0)
 
@@ -90,6 +110,30 @@ class ExplainedGrid:
             j = np.clip((cells[:, 1:2] + dj).ravel(), 0, ny - 1)
             self.bits[i, j] = True
 
+    def _hits(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        i = np.floor((x - self.origin[0]) / self.cell).astype(np.int64)
+        j = np.floor((y - self.origin[1]) / self.cell).astype(np.int64)
+        nx, ny = self.bits.shape
+        inside = (i >= 0) & (i < nx) & (j >= 0) & (j < ny)
+        hit = np.zeros(i.shape, dtype=bool)
+        hit[inside] = self.bits[i[inside], j[inside]]
+        return hit
+
+    def crossed(self, points: np.ndarray, pose, clearance: float, reach: float) -> float:
+        """The share of sensor-frame ``points`` whose beam, from the sensor at ``pose`` to
+        ``clearance`` short of the return (at most ``reach`` metres), passes near a map
+        line: a return seen through a wall, which a right pose does not have."""
+        if not len(points):
+            return 0.0
+        r = np.hypot(points[:, 0], points[:, 1])
+        t = np.arange(self.cell, reach, self.cell)  # distances along each beam
+        along = t[None, :] <= (r - clearance)[:, None]  # K x T
+        c, s = math.cos(pose[2]), math.sin(pose[2])
+        ux, uy = points[:, 0] / np.maximum(r, 1e-9), points[:, 1] / np.maximum(r, 1e-9)
+        wx = pose[0] + (c * ux - s * uy)[:, None] * t[None, :]
+        wy = pose[1] + (s * ux + c * uy)[:, None] * t[None, :]
+        return float(np.mean((self._hits(wx, wy) & along).any(axis=1)))
+
     def shares(self, points: np.ndarray, poses: np.ndarray) -> np.ndarray:
         """The share of sensor-frame ``points`` (K x 2) explained at each of ``poses``
         (H x 3)."""
@@ -99,13 +143,7 @@ class ExplainedGrid:
         c, s = np.cos(poses[:, 2:3]), np.sin(poses[:, 2:3])
         x = poses[:, 0:1] + c * points[:, 0] - s * points[:, 1]
         y = poses[:, 1:2] + s * points[:, 0] + c * points[:, 1]
-        i = np.floor((x - self.origin[0]) / self.cell).astype(np.int64)
-        j = np.floor((y - self.origin[1]) / self.cell).astype(np.int64)
-        nx, ny = self.bits.shape
-        inside = (i >= 0) & (i < nx) & (j >= 0) & (j < ny)
-        hit = np.zeros(i.shape, dtype=bool)
-        hit[inside] = self.bits[i[inside], j[inside]]
-        return hit.mean(axis=1)
+        return self._hits(x, y).mean(axis=1)
 
 
 def _wrap(angle):
@@ -120,36 +158,71 @@ def _segments(segments: np.ndarray, settings: SearchSettings) -> np.ndarray:
     return segments[keep]
 
 
-def pose_candidates(segments: np.ndarray, lines, settings: SearchSettings) -> np.ndarray:
+class LinePairs:
+    """The pairs ``(a, b)`` of map lines (both orders) that could fix a pose: each at least
+    ``min_line`` long, crossing at ``min_crossing`` or more, within ``max_pair_distance`` of
+    each other; sorted by the angle from ``a`` to ``b`` (mod pi, in [-pi/2, pi/2))."""
+
+    def __init__(self, lines, settings: SearchSettings) -> None:
+        start, end = np.asarray(lines.start), np.asarray(lines.end)
+        alpha = np.asarray(lines.alpha)
+        usable = np.flatnonzero(np.hypot(*(end - start).T) >= settings.min_line)
+        lo = np.minimum(start, end)[usable]
+        hi = np.maximum(start, end)[usable]
+        pairs_a, pairs_b = [], []
+        for k, line in enumerate(usable):  # one row at a time: memory follows the pairs kept
+            gap = np.maximum(0.0, np.maximum(lo - hi[k], lo[k] - hi))
+            near = np.hypot(gap[:, 0], gap[:, 1]) <= settings.max_pair_distance
+            between = _half_turn(alpha[usable] - alpha[line])
+            keep = near & (np.abs(between) >= settings.min_crossing)
+            pairs_a.append(np.full(int(keep.sum()), line, dtype=np.int32))
+            pairs_b.append(usable[keep].astype(np.int32))
+        a = np.concatenate(pairs_a) if pairs_a else np.zeros(0, np.int32)
+        b = np.concatenate(pairs_b) if pairs_b else np.zeros(0, np.int32)
+        between = _half_turn(alpha[b] - alpha[a]).astype(np.float32)
+        order = np.argsort(between, kind="stable")
+        self.a, self.b, self.between = a[order], b[order], between[order]
+
+    def matching(self, crossing: float, tolerance: float) -> tuple[np.ndarray, np.ndarray]:
+        """The pairs whose angle is within ``tolerance`` of ``crossing`` (mod pi)."""
+        picks = []
+        for centre in (crossing - math.pi, crossing, crossing + math.pi):
+            lo = np.searchsorted(self.between, centre - tolerance, side="left")
+            hi = np.searchsorted(self.between, centre + tolerance, side="right")
+            if hi > lo:
+                picks.append(np.arange(lo, hi))
+        if not picks:
+            return self.a[:0], self.b[:0]
+        k = np.concatenate(picks)
+        return self.a[k].astype(np.intp), self.b[k].astype(np.intp)
+
+
+def _half_turn(angle):
+    """An angle between two lines (mod pi), in [-pi/2, pi/2)."""
+    return np.mod(np.asarray(angle) + math.pi / 2, math.pi) - math.pi / 2
+
+
+def pose_candidates(segments: np.ndarray, lines, pairs: LinePairs, settings: SearchSettings):
     """Poses (H x 3) that put two non-parallel ``segments`` (sensor frame; rows rho,
-    alpha, start x, y, end x, y) on two map ``lines`` (a LineSet, with ``sides``), each
-    segment overlapping its line and the sensor on a side each line was seen from."""
+    alpha, start x, y, end x, y) on two map ``lines`` (a LineSet, with ``sides``) of
+    ``pairs``, each segment overlapping its line and the sensor on a side each line was
+    seen from."""
     rho, alpha = np.asarray(lines.rho), np.asarray(lines.alpha)
-    start, end = np.asarray(lines.start), np.asarray(lines.end)
     sides = np.full(len(rho), 3) if lines.sides is None else np.asarray(lines.sides)
-    length = np.hypot(*(end - start).T)
-    usable = np.flatnonzero(length >= settings.min_line)
     out = []
     segments = _segments(segments, settings)
     for i in range(len(segments)):
-        for j in range(len(segments)):
-            if i == j:
-                continue
-            crossing = _wrap(2.0 * (segments[j, 1] - segments[i, 1])) / 2.0
+        for j in range(i + 1, len(segments)):
+            crossing = float(_half_turn(segments[j, 1] - segments[i, 1]))
             if abs(crossing) < settings.min_crossing:
                 continue
-            # map pairs (a, b) whose angle (mod pi) matches: turn from a, position from both
-            a, b = np.meshgrid(usable, usable, indexing="ij")
-            a, b = a.ravel(), b.ravel()
-            between = _wrap(2.0 * (alpha[b] - alpha[a])) / 2.0
-            ok = np.abs(_wrap(2.0 * (between - crossing)) / 2.0) <= settings.angle_tolerance
-            a, b = a[ok], b[ok]
+            a, b = pairs.matching(crossing, settings.angle_tolerance)
             for flip in (0.0, math.pi):
                 theta = _wrap(alpha[a] - segments[i, 1] + flip)
                 poses = _solve(segments[i], segments[j], theta, a, b, rho, alpha)
                 good = _fits(segments[i], poses, a, lines, sides, settings)
-                good &= _fits(segments[j], poses, b, lines, sides, settings)
-                out.append(poses[good])
+                poses, on = poses[good], b[good]
+                out.append(poses[_fits(segments[j], poses, on, lines, sides, settings)])
     return np.concatenate(out) if out else np.zeros((0, 3))
 
 
@@ -179,6 +252,8 @@ def _fits(segment, poses, line_ids, lines, sides, settings: SearchSettings) -> n
     offset = np.cos(alpha) * x + np.sin(alpha) * y - rho
     side = np.where(offset > 0, 1, 2)
     ok = np.isfinite(x) & ((sides[line_ids] & side) != 0)
+    if not ok.any():
+        return ok
     tangent = np.stack((-np.sin(alpha), np.cos(alpha)), axis=-1)
     ends = []
     for px, py in (segment[2:4], segment[4:6]):
@@ -213,15 +288,29 @@ def _same(p, q, settings: SearchSettings) -> bool:
 
 
 class Hypothesis:
-    """A pose hypothesis: a copy of the filter and the shares of returns it explained."""
+    """A pose hypothesis: a copy of the filter, the odometry's move since its last step
+    (it is stepped every ``refine_every`` scans, dead-reckoned between), and the shares
+    of returns it explained, scan by scan."""
 
     def __init__(self, tracker) -> None:
         self.tracker = tracker
+        self.pending: Pose = (0.0, 0.0, 0.0)
         self.shares: list[float] = []
+        self.crossed: list[float] = []  # shares of beams through a map line, when checked
+        self.pose: Pose = self._pose()
 
-    @property
-    def pose(self) -> Pose:
-        return tuple(float(v) for v in self.tracker.state[:3])  # type: ignore[return-value]
+    def _pose(self) -> Pose:
+        return compose(tuple(float(v) for v in self.tracker.state[:3]), self.pending)
+
+    def move(self, increment: Pose | None, points: np.ndarray | None) -> None:
+        """Moved by the odometry ``increment``; stepped through the filter on ``points``
+        (sensor-frame returns) when given."""
+        if increment is not None:
+            self.pending = compose(self.pending, increment)
+        if points is not None:
+            self.tracker.step(points, None if self.pending == (0.0, 0.0, 0.0) else self.pending)
+            self.pending = (0.0, 0.0, 0.0)
+        self.pose = self._pose()
 
     def recent(self, count: int) -> float:
         last = self.shares[-count:]
@@ -233,14 +322,21 @@ class GlobalSearch:
     LineMapFilter`, whose lines and settings the hypotheses share)."""
 
     def __init__(self, tracker, settings: SearchSettings | None = None, extractor=None) -> None:
-        from scanlines.extractor import Extractor
-
         self.settings = settings or SearchSettings()
         self.tracker = tracker
-        self.extractor = extractor or Extractor()
+        self._extractor = extractor
         lines = tracker.lines
         self.grid = ExplainedGrid(lines.start, lines.end, self.settings.near, self.settings.cell)
+        self._pairs: LinePairs | None = None
         self.hypotheses: list[Hypothesis] = []
+        self._scans = 0
+
+    @property
+    def pairs(self) -> LinePairs:
+        """The map's line pairs, made the first time a pose is searched for."""
+        if self._pairs is None:
+            self._pairs = LinePairs(self.tracker.lines, self.settings)
+        return self._pairs
 
     def sample(self, points: np.ndarray) -> np.ndarray:
         """The returns scored (evenly subsampled)."""
@@ -253,49 +349,58 @@ class GlobalSearch:
         """The share of the scan's returns within ``near`` of a map line at ``pose``."""
         return float(self.grid.shares(self.sample(points), np.asarray(pose))[0])
 
-    def propose(self, scan, errors: np.ndarray | None, errors_cov: np.ndarray | None) -> int:
-        """New hypotheses from ``scan``'s segments (``errors``: the odometry's errors and
-        their covariance to start them with, state[3:] of the filter); how many."""
+    def propose(self, scan, points: np.ndarray, errors=None) -> int:
+        """New hypotheses from ``scan``'s segments (``points``: its valid returns, sensor
+        frame; ``errors``: the odometry's errors and their covariance to start them with,
+        ``state[3:]`` of the filter and its block); how many."""
+        from scanlines.extractor import Extractor
+
         s = self.settings
-        extraction = self.extractor(scan)
-        rows = np.asarray(extraction.lines)[:, :6]
-        poses = pose_candidates(rows, self.tracker.lines, s)
+        if self._extractor is None:
+            self._extractor = Extractor()
+        rows = np.asarray(self._extractor(scan).lines)[:, :6]
+        poses = pose_candidates(rows, self.tracker.lines, self.pairs, s)
         if not len(poses):
             return 0
-        points = self.sample(scan.points[scan.valid].astype(np.float64))
-        scores = self.grid.shares(points, poses)
+        sample = self.sample(points)
+        scores = self.grid.shares(sample, poses)
         added = 0
         for k in _distinct(poses, scores, s, s.candidates):
             if scores[k] < s.drop_share:
                 break
             if any(_same(poses[k], h.pose, s) for h in self.hypotheses):
                 continue
-            hypothesis = self._hypothesis(poses[k], errors, errors_cov)
-            all_points = scan.points[scan.valid].astype(np.float64)
-            hypothesis.tracker.step(all_points, None)  # aligned on the scan it came from
-            hypothesis.shares.append(float(self.grid.shares(points, hypothesis.pose)[0]))
+            hypothesis = self._hypothesis(poses[k], errors)
+            hypothesis.move(None, points)  # aligned on the scan it came from
+            hypothesis.shares.append(float(self.grid.shares(sample, hypothesis.pose)[0]))
             self.hypotheses.append(hypothesis)
             added += 1
         self._trim()
         return added
 
-    def _hypothesis(self, pose, errors, errors_cov) -> Hypothesis:
+    def _hypothesis(self, pose, errors) -> Hypothesis:
         s = self.settings
         tracker = copy.copy(self.tracker)
         tracker.start(tuple(float(v) for v in pose), (s.sigma_xy, s.sigma_theta))
-        if errors is not None and errors_cov is not None:
-            tracker.state[3:] = errors
-            tracker.covariance[3:, 3:] = errors_cov
+        if errors is not None:
+            tracker.state[3:] = errors[0]
+            tracker.covariance[3:, 3:] = errors[1]
         return Hypothesis(tracker)
 
     def step(self, points: np.ndarray, increment: Pose | None) -> None:
-        """Each hypothesis stepped on the scan (sensor-frame returns) and scored; the poor
+        """Each hypothesis moved by the odometry (stepped through its filter every
+        ``refine_every`` scans) and scored on the scan (sensor-frame returns); the poor
         and the duplicates dropped."""
         s = self.settings
-        sample = self.sample(points)
+        self._scans += 1
+        refine = self._scans % s.refine_every == 0
         for h in self.hypotheses:
-            h.tracker.step(points, increment)
-            h.shares.append(float(self.grid.shares(sample, np.asarray(h.pose))[0]))
+            h.move(increment, points if refine else None)
+        if self.hypotheses:
+            poses = np.array([h.pose for h in self.hypotheses])
+            shares = self.grid.shares(self.sample(points), poses)
+            for h, share in zip(self.hypotheses, shares, strict=True):
+                h.shares.append(float(share))
         kept: list[Hypothesis] = []
         for h in sorted(self.hypotheses, key=lambda h: -len(h.shares)):
             if len(h.shares) >= 3 and h.recent(3) < s.drop_share:
@@ -311,23 +416,40 @@ class GlobalSearch:
             self.hypotheses.sort(key=lambda h: -h.recent(s.agree))
             del self.hypotheses[s.max_hypotheses :]
 
-    def winner(self, rival: float = 0.0) -> Hypothesis | None:
-        """The hypothesis the last ``agree`` scans agree on: it explained ``found_share``
-        of the returns over them, and neither another distinct hypothesis nor ``rival``
-        (the filter's own share over them) came within ``margin``."""
+    def winner(self, points: np.ndarray, rival: float = 0.0, near=None) -> Hypothesis | None:
+        """The hypothesis the last scans agree on: one ``near`` the filter's own pose
+        (``near(pose)``; none: no pose yet) after ``agree`` scans explaining
+        ``found_share`` of the returns, one farther after ``agree_far`` scans explaining
+        ``found_share_far``; neither another distinct hypothesis nor ``rival`` (the
+        filter's own share over the same scans) came within ``margin`` of it; and at most
+        ``max_crossed`` of the scan's returns (``points``) were seen through a map line
+        from it (else it is dropped)."""
         s = self.settings
-        ready = [h for h in self.hypotheses if len(h.shares) >= s.agree]
-        if not ready:
-            return None
-        best = max(ready, key=lambda h: h.recent(s.agree))
-        score = best.recent(s.agree)
-        if score < s.found_share or score < rival + s.margin:
+        best, best_score = None, -1.0
+        for h in self.hypotheses:
+            close = near is not None and near(h.pose)
+            count, floor = (s.agree, s.found_share) if close else (s.agree_far, s.found_share_far)
+            if len(h.shares) < count:
+                continue
+            score = h.recent(count)
+            if score >= floor and score >= rival + s.margin and score > best_score:
+                best, best_score = h, score
+        if best is None:
             return None
         for h in self.hypotheses:
             if h is not best and not _same(h.pose, best.pose, s):
-                if h.recent(s.agree) > score - s.margin:
+                if h.recent(s.agree) > best.recent(s.agree) - s.margin:
                     return None
+        best.crossed.append(self.grid.crossed(self.sample(points), best.pose, s.clearance, s.reach))
+        if len(best.crossed) < s.checks or np.mean(best.crossed[-s.checks :]) > s.max_crossed:
+            return None
         return best
+
+    def settle(self, winner: Hypothesis) -> None:
+        """The winner's pending move applied through its filter (no returns matched)."""
+        if winner.pending != (0.0, 0.0, 0.0):
+            winner.move(None, np.zeros((0, 2)))
 
     def clear(self) -> None:
         self.hypotheses = []
+        self._scans = 0
