@@ -206,13 +206,6 @@ class _MapTracker:
         is predicted only, and the tracker does not move on from it."""
         increment = None if self.odometry is None else relative_pose(self.odometry, odometry)
         lines = LineSet(*line_map.settled(SUPPORT))
-        if self.filter is None and not held and not len(lines.rho):
-            # the first scans: nothing to align to yet, mapped where the odometry says
-            predicted = odometry if self.pose is None else compose(self.pose, increment)
-            self.odometry, self.pose = odometry, predicted
-            first = np.diag([self.settings.odometry_floor**2] * 2 + [self.settings.turn_floor**2])
-            return TrackedPose(index, scan.timestamp, odometry, predicted, predicted, first,
-                               "first")  # fmt: skip
         if self.filter is None:
             self.filter = LineMapFilter(lines, self.settings)
             self.filter.start(odometry if self.pose is None else compose(self.pose, increment))
@@ -220,6 +213,12 @@ class _MapTracker:
         points = scan.points[scan.valid].astype(np.float64)
         if held:
             return self._predict(index, scan, odometry, increment)
+        if not len(lines.rho):
+            # the first scans: nothing to align to yet, mapped where the odometry says
+            step = self.filter.step(np.zeros((0, 2)), increment)
+            self.odometry, self.pose = odometry, step.pose
+            return TrackedPose(index, scan.timestamp, odometry, step.predicted, step.pose,
+                               step.covariance, "first")  # fmt: skip
         last = self.filter.state
         assert last is not None
         if len(points):
