@@ -292,7 +292,7 @@ class _SearchState:
         """One scan of the search while lost: the hypotheses stepped, new ones proposed every
         few scans; the winner (if any) becomes the filter's state."""
         search, settings = self.search, self.search.settings
-        search.step(points, increment)
+        search.step(points, increment, tracked=started)
         own = float(np.mean(self.shares)) if started else 0.0
         if started and len(self.shares) >= settings.agree and own >= settings.found_share:
             self.lost, self.low = False, 0  # the filter caught the map again by itself
@@ -301,7 +301,7 @@ class _SearchState:
         self.since_proposal += 1
         self.lost_for += 1
         # every few scans at first, then seldom: a long search is an unmapped place
-        every = settings.propose_every
+        every = settings.propose_every_tracked if started else settings.propose_every
         if started and self.lost_for > settings.patient:
             every = settings.propose_later
         if self.since_proposal >= every:
@@ -310,7 +310,7 @@ class _SearchState:
             if started:
                 errors = (self.tracker.state[3:].copy(), self.tracker.covariance[3:, 3:].copy())
             search.propose(scan, points, errors)
-        winner = search.winner(points, own, self._near() if started else None)
+        winner = search.winner(points, own, self._near if started else None)
         if winner is None:
             return None
         search.settle(winner)

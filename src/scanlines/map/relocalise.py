@@ -51,7 +51,8 @@ class SearchSettings:
     score_points: int = 60
     segments: int = 4
     max_pair_distance: float = 8.0
-    refine_every: int = 10
+    refine_every: int = 2
+    refine_every_tracked: int = 10
     min_segment: float = 0.6
     min_line: float = 0.5
     min_crossing: float = math.radians(30.0)
@@ -61,11 +62,12 @@ class SearchSettings:
     distinct_distance: float = 0.5
     distinct_angle: float = math.radians(10.0)
     max_hypotheses: int = 40
-    drop_share: float = 0.3
+    drop_share: float = 0.25
+    drop_after: int = 5
     agree: int = 10
     found_share: float = 0.6
-    agree_far: int = 30
-    found_share_far: float = 0.5
+    agree_far: int = 20
+    found_share_far: float = 0.6
     near_distance: float = 1.0
     near_angle: float = math.radians(15.0)
     near_sigmas: float = 3.0
@@ -77,6 +79,7 @@ class SearchSettings:
     lost_share: float = 0.25
     lost_after: int = 10
     propose_every: int = 5
+    propose_every_tracked: int = 10
     propose_later: int = 50
     patient: int = 30
     sigma_xy: float = 0.1
@@ -169,22 +172,31 @@ class LinePairs:
         usable = np.flatnonzero(np.hypot(*(end - start).T) >= settings.min_line)
         lo = np.minimum(start, end)[usable]
         hi = np.maximum(start, end)[usable]
-        pairs_a, pairs_b = [], []
+        pairs_a, pairs_b, gaps = [], [], []
         for k, line in enumerate(usable):  # one row at a time: memory follows the pairs kept
             gap = np.maximum(0.0, np.maximum(lo - hi[k], lo[k] - hi))
-            near = np.hypot(gap[:, 0], gap[:, 1]) <= settings.max_pair_distance
+            distance = np.hypot(gap[:, 0], gap[:, 1])
             between = _half_turn(alpha[usable] - alpha[line])
-            keep = near & (np.abs(between) >= settings.min_crossing)
+            keep = (distance <= settings.max_pair_distance) & (
+                np.abs(between) >= settings.min_crossing
+            )
             pairs_a.append(np.full(int(keep.sum()), line, dtype=np.int32))
             pairs_b.append(usable[keep].astype(np.int32))
+            gaps.append(distance[keep].astype(np.float32))
         a = np.concatenate(pairs_a) if pairs_a else np.zeros(0, np.int32)
         b = np.concatenate(pairs_b) if pairs_b else np.zeros(0, np.int32)
+        gap = np.concatenate(gaps) if gaps else np.zeros(0, np.float32)
         between = _half_turn(alpha[b] - alpha[a]).astype(np.float32)
         order = np.argsort(between, kind="stable")
-        self.a, self.b, self.between = a[order], b[order], between[order]
+        self.a, self.b, self.between, self.gap = a[order], b[order], between[order], gap[order]
+        self.length = np.hypot(*(end - start).T).astype(np.float32)
 
-    def matching(self, crossing: float, tolerance: float) -> tuple[np.ndarray, np.ndarray]:
-        """The pairs whose angle is within ``tolerance`` of ``crossing`` (mod pi)."""
+    def matching(
+        self, crossing: float, tolerance: float, gap: float, lengths: tuple[float, float]
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The pairs whose angle is within ``tolerance`` of ``crossing`` (mod pi), whose
+        boxes lie at most ``gap`` apart (two segments' lines are no farther apart than
+        the segments) and whose lines are at least ``lengths`` long."""
         picks = []
         for centre in (crossing - math.pi, crossing, crossing + math.pi):
             lo = np.searchsorted(self.between, centre - tolerance, side="left")
@@ -194,7 +206,9 @@ class LinePairs:
         if not picks:
             return self.a[:0], self.b[:0]
         k = np.concatenate(picks)
-        return self.a[k].astype(np.intp), self.b[k].astype(np.intp)
+        a, b = self.a[k], self.b[k]
+        keep = (self.gap[k] <= gap) & (self.length[a] >= lengths[0]) & (self.length[b] >= lengths[1])
+        return a[keep].astype(np.intp), b[keep].astype(np.intp)
 
 
 def _half_turn(angle):
@@ -216,7 +230,11 @@ def pose_candidates(segments: np.ndarray, lines, pairs: LinePairs, settings: Sea
             crossing = float(_half_turn(segments[j, 1] - segments[i, 1]))
             if abs(crossing) < settings.min_crossing:
                 continue
-            a, b = pairs.matching(crossing, settings.angle_tolerance)
+            a, b = pairs.matching(
+                crossing, settings.angle_tolerance, _apart(segments[i], segments[j]) + 0.5,
+                (_length(segments[i]) - 2 * settings.overlap_slack,
+                 _length(segments[j]) - 2 * settings.overlap_slack),
+            )  # fmt: skip
             for flip in (0.0, math.pi):
                 theta = _wrap(alpha[a] - segments[i, 1] + flip)
                 poses = _solve(segments[i], segments[j], theta, a, b, rho, alpha)
@@ -224,6 +242,18 @@ def pose_candidates(segments: np.ndarray, lines, pairs: LinePairs, settings: Sea
                 poses, on = poses[good], b[good]
                 out.append(poses[_fits(segments[j], poses, on, lines, sides, settings)])
     return np.concatenate(out) if out else np.zeros((0, 3))
+
+
+def _length(segment) -> float:
+    return math.hypot(segment[4] - segment[2], segment[5] - segment[3])
+
+
+def _apart(p, q) -> float:
+    """The distance between two segments' boxes (rows: rho, alpha, start, end)."""
+    lo_p, hi_p = np.minimum(p[2:4], p[4:6]), np.maximum(p[2:4], p[4:6])
+    lo_q, hi_q = np.minimum(q[2:4], q[4:6]), np.maximum(q[2:4], q[4:6])
+    gap = np.maximum(0.0, np.maximum(lo_q - hi_p, lo_p - hi_q))
+    return float(np.hypot(*gap))
 
 
 def _solve(seg_i, seg_j, theta, a, b, rho, alpha) -> np.ndarray:
@@ -314,7 +344,7 @@ class Hypothesis:
 
     def recent(self, count: int) -> float:
         last = self.shares[-count:]
-        return float(np.mean(last)) if last else 0.0
+        return sum(last) / len(last) if last else 0.0
 
 
 class GlobalSearch:
@@ -330,6 +360,7 @@ class GlobalSearch:
         self._pairs: LinePairs | None = None
         self.hypotheses: list[Hypothesis] = []
         self._scans = 0
+        self._picks: dict[int, np.ndarray] = {}  # the returns scored, by the scan's size
 
     @property
     def pairs(self) -> LinePairs:
@@ -343,7 +374,11 @@ class GlobalSearch:
         count = self.settings.score_points
         if len(points) <= count:
             return points
-        return points[np.linspace(0, len(points) - 1, count).round().astype(np.intp)]
+        picks = self._picks.get(len(points))
+        if picks is None:
+            picks = np.linspace(0, len(points) - 1, count).round().astype(np.intp)
+            self._picks[len(points)] = picks
+        return points[picks]
 
     def explained(self, points: np.ndarray, pose: Pose) -> float:
         """The share of the scan's returns within ``near`` of a map line at ``pose``."""
@@ -387,13 +422,14 @@ class GlobalSearch:
             tracker.covariance[3:, 3:] = errors[1]
         return Hypothesis(tracker)
 
-    def step(self, points: np.ndarray, increment: Pose | None) -> None:
+    def step(self, points: np.ndarray, increment: Pose | None, tracked: bool = False) -> None:
         """Each hypothesis moved by the odometry (stepped through its filter every
-        ``refine_every`` scans) and scored on the scan (sensor-frame returns); the poor
-        and the duplicates dropped."""
+        ``refine_every`` scans, ``refine_every_tracked`` while the filter still has a pose
+        of its own: a long search there is mostly a place the map lacks) and scored on the
+        scan (sensor-frame returns); the poor and the duplicates dropped."""
         s = self.settings
         self._scans += 1
-        refine = self._scans % s.refine_every == 0
+        refine = self._scans % (s.refine_every_tracked if tracked else s.refine_every) == 0
         for h in self.hypotheses:
             h.move(increment, points if refine else None)
         if self.hypotheses:
@@ -403,10 +439,10 @@ class GlobalSearch:
                 h.shares.append(float(share))
         kept: list[Hypothesis] = []
         for h in sorted(self.hypotheses, key=lambda h: -len(h.shares)):
-            if len(h.shares) >= 3 and h.recent(3) < s.drop_share:
+            if len(h.shares) >= s.drop_after and h.recent(s.drop_after) < s.drop_share:
                 continue
-            if any(_same(h.pose, k.pose, s) for k in kept):
-                continue
+            if refine and any(_same(h.pose, k.pose, s) for k in kept):
+                continue  # two that became one (checked when they are refined)
             kept.append(h)
         self.hypotheses = kept
 
@@ -418,7 +454,7 @@ class GlobalSearch:
 
     def winner(self, points: np.ndarray, rival: float = 0.0, near=None) -> Hypothesis | None:
         """The hypothesis the last scans agree on: one ``near`` the filter's own pose
-        (``near(pose)``; none: no pose yet) after ``agree`` scans explaining
+        (``near()`` gives the test of a pose; none: no pose yet) after ``agree`` scans explaining
         ``found_share`` of the returns, one farther after ``agree_far`` scans explaining
         ``found_share_far``; neither another distinct hypothesis nor ``rival`` (the
         filter's own share over the same scans) came within ``margin`` of it; and at most
@@ -426,7 +462,11 @@ class GlobalSearch:
         from it (else it is dropped)."""
         s = self.settings
         best, best_score = None, -1.0
+        if near is not None and any(len(h.shares) >= s.agree for h in self.hypotheses):
+            near = near()  # the filter's uncertainty, worked out when a hypothesis is ready
         for h in self.hypotheses:
+            if len(h.shares) < s.agree:
+                continue
             close = near is not None and near(h.pose)
             count, floor = (s.agree, s.found_share) if close else (s.agree_far, s.found_share_far)
             if len(h.shares) < count:
