@@ -53,6 +53,14 @@ def localize_command(
             "the pose is searched for on the map (global localisation) from the first scan.",
         ),
     ] = None,
+    ignore_sides: Annotated[
+        bool,
+        typer.Option(
+            "--ignore-sides",
+            help="Match returns to map lines whatever side the map saw them from (by default "
+            "a return matches only a wall's face seen from its side).",
+        ),
+    ] = False,
     overwrite: OverwriteOption = False,
 ) -> None:
     import time
@@ -60,6 +68,7 @@ def localize_command(
     from scanlines.cli.common import writable
     from scanlines.io import open_log
     from scanlines.map.export import naming_output
+    from scanlines.map.filter import FilterSettings
     from scanlines.map.localize import localize, read_line_map
     from scanlines.map.tracked import write_tracked
 
@@ -69,7 +78,8 @@ def localize_command(
     lines, frame = read_line_map(map_file)
     started = time.perf_counter()
     with open_log(log) as reader:
-        run = localize(reader.enumerate(), lines, frame, initial)
+        settings = FilterSettings(sides=not ignore_sides)
+        run = localize(reader.enumerate(), lines, frame, initial, settings=settings)
     seconds = time.perf_counter() - started
     if not run.tracked:
         from scanlines.errors import ParameterError

@@ -32,6 +32,9 @@ Matching, made to refuse rather than pull wrongly:
   heading times range), within ``gate_min`` and ``gate_max``; the candidates come from a
   uniform grid of the map's lines (:func:`line_grid`), so a query looks at the few lines of
   one cell, whatever the map's size;
+* a map line is a wall's face seen from one side or both (:mod:`scanlines.map.fusion`): a
+  return matches it only from a side it was seen from (``sides``), so the far face of a
+  thin wall, or a wall the map holds only from behind, does not pull the pose;
 * a map line met by fewer than ``line_returns`` returns is ignored (a door that moved, a
   corner's few returns);
 * each residual's variance is the return's noise plus ``line_sigma`` squared times the
@@ -75,7 +78,8 @@ class FilterSettings:
     ``turn_floor`` + ``turn_per_radian`` x turn + ``turn_per_metre`` x distance for the
     heading), the prior of the heading drift (radians per metre) and of the scale error, and
     their random walks per metre driven. ``max_points``: the returns used (evenly
-    subsampled), 0 for all."""
+    subsampled), 0 for all. ``sides``: a return matches only a face seen from its side
+    (False: the sides a map keeps are ignored)."""
 
     odometry_floor: float = 0.005
     odometry_per_metre: float = 0.05
@@ -104,6 +108,7 @@ class FilterSettings:
     min_pairs: int = 10
     max_chi_square: float = 16.27
     max_points: int = 400
+    sides: bool = True
 
     def __post_init__(self) -> None:
         from scanlines.errors import ParameterError
@@ -233,7 +238,9 @@ class LineMapFilter:
     def use_lines(self, lines: LineSet) -> None:
         """Match the next scans to ``lines`` (a map that grows: ``scanlines map --align``);
         lines without ``sides`` are taken as seen from both sides."""
-        sides = np.full(len(lines.rho), BOTH) if lines.sides is None else lines.sides
+        sides = lines.sides
+        if sides is None or not self.settings.sides:
+            sides = np.full(len(lines.rho), BOTH)
         self.lines = LineSet(
             *(np.ascontiguousarray(a, dtype=np.float64).reshape(-1, *np.shape(a)[1:])
               for a in lines[:4]),
