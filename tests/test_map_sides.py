@@ -93,3 +93,12 @@ def test_a_return_matches_a_face_only_from_a_side_it_was_seen_from(sides, matche
     assert (step.pairs > 0) == matched
     if matched:
         assert step.pose[1] == pytest.approx(0.0, abs=0.005)
+
+
+def test_sides_can_be_ignored():
+    from scanlines.map.filter import FilterSettings
+
+    scan = view(BOARD, (0.0, 0.0, 1.2), seed=1, sigma=0.002)
+    tracker = LineMapFilter(_one_wall(FRONT), FilterSettings(sides=False))
+    tracker.start((0.0, 0.02, 1.2))
+    assert tracker.step(scan.points[scan.valid], None).pairs > 0

@@ -150,7 +150,8 @@ def kidnap(scans, lines, frame, initial, frames, positions, at: int):
         d = np.array([r[1] for r in after])
         print(f"  after found: {len(after)} keyframes, first {after[0][1]:.3f} m "
               f"{after[0][2]:.1f} deg, RMSE {float(np.sqrt(np.mean(d**2))):.3f} m, "
-              f"max {d.max():.3f} m; {len(bad)} keyframes found more than 1 m off")
+              f"max {d.max():.3f} m; {len(bad)} keyframes reported not lost more than 1 m "
+              f"off: {[(positions[r[0]], round(r[1], 2), r[3]) for r in bad]}")
 
 
 def main() -> None:
