@@ -12,9 +12,9 @@ import pytest
 
 from cli_helpers import scanlines
 from scanlines import Scan
-from scanlines.geometry.poses import compose, relative_pose
 from scanlines.data import sample
 from scanlines.evaluation.trajectory import load_trajectory, match_times
+from scanlines.geometry.poses import compose, relative_pose
 from scanlines.map import build_map
 from scanlines.map.export import write_map
 from scanlines.map.localize import localize, read_line_map
@@ -95,11 +95,13 @@ def test_without_an_initial_pose_the_pose_is_found_and_never_reported_wrong(tmp_
     truth = path(120)
     run = localize(enumerate(drifting(truth)), lines, frame, None)
     assert run.tracked[0].status == "lost"
-    assert run.found_at and run.found_at[0] < 60
+    assert run.found_at
+    assert run.found_at[0] < 60
     for record in run.tracked:
         if record.status != "lost":
             distance, turn = _error(run, frame, truth, record)
-            assert distance < 0.1 and turn < math.radians(3.0), record.index
+            assert distance < 0.1, record.index
+            assert turn < math.radians(3.0), record.index
     assert run.tracked[-1].status != "lost"
 
 
@@ -109,12 +111,15 @@ def test_a_kidnapped_robot_is_declared_lost_then_found_again(tmp_path):
     start = (10.0, truth[0])
     run = localize(enumerate(drifting(truth, jump_at=60)), lines, frame, start)
     assert all(record.status != "lost" for record in run.tracked[:60])
-    assert run.lost_at and 60 <= run.lost_at[0] < 80
-    assert run.found_at and run.lost_at[0] < run.found_at[-1] < 160
+    assert run.lost_at
+    assert 60 <= run.lost_at[0] < 80
+    assert run.found_at
+    assert run.lost_at[0] < run.found_at[-1] < 160
     found = run.found_at[-1]
     for record in run.tracked[found:]:
         distance, turn = _error(run, frame, truth, record)
-        assert distance < 0.1 and turn < math.radians(3.0), record.index
+        assert distance < 0.1, record.index
+        assert turn < math.radians(3.0), record.index
 
 
 def test_localize_without_an_initial_pose_says_lost_and_found(tmp_path):
@@ -125,7 +130,8 @@ def test_localize_without_an_initial_pose_says_lost_and_found(tmp_path):
     out = tmp_path / "p.tum"
     ran = scanlines("localize", log, "--map", tmp_path / "m.json", "--out", out)
     assert ran.returncode == 0, ran.stderr
-    assert "scans lost" in ran.stderr and "found at" in ran.stderr
+    assert "scans lost" in ran.stderr
+    assert "found at" in ran.stderr
     document = json.loads(out.with_name("p.cov.json").read_text())
     statuses = [r["status"] for r in document["records"]]
     assert statuses[0] == "lost"

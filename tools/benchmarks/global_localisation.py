@@ -143,15 +143,19 @@ def kidnap(scans, lines, frame, initial, frames, positions, at: int):
     rows = errors(run, frames, positions)
     after = [r for r in rows if found and r[0] >= found[0]]
     bad = [r for r in rows if r[3] != "lost" and r[1] > 1.0 and r[0] >= at]
-    print(f"kidnap at scan {positions[at]}: lost at {lost[:1]}, found at {found[:1]}"
-          + (f" ({found[0] - positions[at]} scans after the jump)" if found else "")
-          + f"; lost before the jump at {[a for a in run.lost_at if a < positions[at]]}")
+    print(
+        f"kidnap at scan {positions[at]}: lost at {lost[:1]}, found at {found[:1]}"
+        + (f" ({found[0] - positions[at]} scans after the jump)" if found else "")
+        + f"; lost before the jump at {[a for a in run.lost_at if a < positions[at]]}"
+    )
     if after:
         d = np.array([r[1] for r in after])
-        print(f"  after found: {len(after)} keyframes, first {after[0][1]:.3f} m "
-              f"{after[0][2]:.1f} deg, RMSE {float(np.sqrt(np.mean(d**2))):.3f} m, "
-              f"max {d.max():.3f} m; {len(bad)} keyframes reported not lost more than 1 m "
-              f"off: {[(positions[r[0]], round(r[1], 2), r[3]) for r in bad]}")
+        print(
+            f"  after found: {len(after)} keyframes, first {after[0][1]:.3f} m "
+            f"{after[0][2]:.1f} deg, RMSE {float(np.sqrt(np.mean(d**2))):.3f} m, "
+            f"max {d.max():.3f} m; {len(bad)} keyframes reported not lost more than 1 m "
+            f"off: {[(positions[r[0]], round(r[1], 2), r[3]) for r in bad]}"
+        )
 
 
 def main() -> None:

@@ -279,8 +279,8 @@ def evaluate_map_command(
     from scanlines.errors import ParameterError
     from scanlines.io import open_log
     from scanlines.map.export import dumps, naming_output
-    from scanlines.map.holdout import evaluate_map
     from scanlines.map.filter import FilterSettings
+    from scanlines.map.holdout import evaluate_map
     from scanlines.outputs import write_text_atomically
 
     if spec.is_truth:

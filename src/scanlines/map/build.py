@@ -10,12 +10,11 @@ import numpy as np
 
 from scanlines.extractor import Extractor
 from scanlines.geometry.poses import Pose, compose, relative_pose
-from scanlines.geometry.transform import to_world
-from scanlines.geometry.transform import points_to_world
+from scanlines.geometry.transform import points_to_world, to_world
 from scanlines.map.align import AlignSettings, LineSet, _near, align_scan
+from scanlines.map.filter import FilterSettings, LineMapFilter
 from scanlines.map.frame import LocalFrame, MapError, check_extent, check_pose, frame_at
 from scanlines.map.fusion import FusionSettings, LineMap
-from scanlines.map.filter import FilterSettings, LineMapFilter
 from scanlines.scan import Scan
 
 __all__ = ["MapBuild", "build_map"]

@@ -10,10 +10,10 @@ from typing import Any
 import numpy as np
 
 from scanlines.geometry.transform import points_to_world
-from scanlines.map.align import AlignSettings, Alignment, LineSet, align_scan, nearest_segments
+from scanlines.map.align import Alignment, AlignSettings, LineSet, align_scan, nearest_segments
 from scanlines.map.build import MapBuild, build_map
-from scanlines.map.fusion import FusionSettings, MapLines
 from scanlines.map.filter import FilterSettings, LineMapFilter
+from scanlines.map.fusion import FusionSettings, MapLines
 from scanlines.scan import Scan
 
 __all__ = ["MapScore", "distances_to_lines", "evaluate_map", "loop_lines", "score_held_out"]

@@ -45,11 +45,11 @@ from scanlines.errors import ScanlinesError
 from scanlines.geometry.poses import Pose, relative_pose
 from scanlines.map.align import LineSet
 from scanlines.map.build import TrackedPose
-from scanlines.map.filter import INITIAL_SIGMA, FilterSettings, LineMapFilter
 from scanlines.map.export import SIDE_NAMES
+from scanlines.map.filter import INITIAL_SIGMA, FilterSettings, LineMapFilter
 from scanlines.map.frame import LocalFrame
-from scanlines.map.relocalise import GlobalSearch, SearchSettings
 from scanlines.map.fusion import BOTH
+from scanlines.map.relocalise import GlobalSearch, SearchSettings
 from scanlines.scan import Scan
 
 __all__ = ["Localisation", "MapFileError", "localize", "read_line_map"]
@@ -275,16 +275,18 @@ class _SearchState:
         """Whether a pose is within the filter's own uncertainty of its pose."""
         s = self.search.settings
         state, covariance = self.tracker.state, self.tracker.covariance
-        assert state is not None and covariance is not None
+        assert state is not None
+        assert covariance is not None
         sigma = math.sqrt(max(np.linalg.eigvalsh(covariance[:2, :2]).max(), 0.0))
         reach = max(s.near_distance, s.near_sigmas * sigma)
         turn = max(s.near_angle, s.near_sigmas * math.sqrt(covariance[2, 2]))
         x, y, theta = (float(v) for v in state[:3])
 
         def near(pose: Pose) -> bool:
-            return math.hypot(pose[0] - x, pose[1] - y) <= reach and abs(
-                math.remainder(pose[2] - theta, 2 * math.pi)
-            ) <= turn
+            return (
+                math.hypot(pose[0] - x, pose[1] - y) <= reach
+                and abs(math.remainder(pose[2] - theta, 2 * math.pi)) <= turn
+            )
 
         return near
 

@@ -101,12 +101,12 @@ class ExplainedGrid:
         top = np.maximum(start, end).max(axis=0) + near + cell
         nx, ny = (int(v) for v in np.ceil((top - self.origin) / cell) + 1)
         self.bits = np.zeros((nx, ny), dtype=bool)
-        reach = int(math.ceil(near / cell))
+        reach = math.ceil(near / cell)
         di, dj = np.meshgrid(np.arange(-reach, reach + 1), np.arange(-reach, reach + 1))
         disk = np.hypot(di, dj) * cell <= near
         di, dj = di[disk], dj[disk]
         for a, b in zip(start, end, strict=True):
-            count = max(2, int(math.ceil(np.hypot(*(b - a)) / (0.5 * cell))) + 1)
+            count = max(2, math.ceil(np.hypot(*(b - a)) / (0.5 * cell)) + 1)
             t = np.linspace(0.0, 1.0, count)[:, None]
             cells = np.floor((a + t * (b - a) - self.origin) / cell).astype(np.int64)
             i = np.clip((cells[:, 0:1] + di).ravel(), 0, nx - 1)
@@ -207,7 +207,9 @@ class LinePairs:
             return self.a[:0], self.b[:0]
         k = np.concatenate(picks)
         a, b = self.a[k], self.b[k]
-        keep = (self.gap[k] <= gap) & (self.length[a] >= lengths[0]) & (self.length[b] >= lengths[1])
+        keep = (
+            (self.gap[k] <= gap) & (self.length[a] >= lengths[0]) & (self.length[b] >= lengths[1])
+        )
         return a[keep].astype(np.intp), b[keep].astype(np.intp)
 
 
@@ -477,9 +479,9 @@ class GlobalSearch:
         if best is None:
             return None
         for h in self.hypotheses:
-            if h is not best and not _same(h.pose, best.pose, s):
-                if h.recent(s.agree) > best.recent(s.agree) - s.margin:
-                    return None
+            distinct = h is not best and not _same(h.pose, best.pose, s)
+            if distinct and h.recent(s.agree) > best.recent(s.agree) - s.margin:
+                return None
         best.crossed.append(self.grid.crossed(self.sample(points), best.pose, s.clearance, s.reach))
         if len(best.crossed) < s.checks or np.mean(best.crossed[-s.checks :]) > s.max_crossed:
             return None
