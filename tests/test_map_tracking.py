@@ -1,6 +1,6 @@
-"""Mapping with tracking (``scanlines map --align``: the filter of scanlines.map.filter on
-the map so far): a simulated log whose odometry drifts is tracked back onto the true path, a scan that does not fit is
-kept out of the map, and the poses are written as TUM with their covariances."""
+"""Mapping with tracking (``scanlines map --align``: the filter on the map so far): a drifting
+simulated log is tracked back onto the true path, a scan that does not fit is kept out of
+the map, and the poses are written as TUM with their covariances."""
 
 from __future__ import annotations
 
