@@ -130,3 +130,14 @@ def test_tracked_poses_score_against_their_truth():
     assert trajectory_error(estimate, reference).ate_rmse < 0.2 * (
         trajectory_error(odometry, reference).ate_rmse
     )
+
+
+def test_eval_map_align_maps_and_localises_the_held_out_scans_with_the_filter(tmp_path):
+    ran = scanlines("eval", "--map", sample("intel"), "--align", "--out", tmp_path)
+    assert ran.returncode == 0, ran.stderr
+    score = json.loads((tmp_path / "map_eval.json").read_text())
+    assert score["mapped_scans"] == 270
+    assert score["held_out_scans"] == 30
+    assert score["localised_scans"] == 30
+    assert score["localised_coverage"] > 0.85
+    assert score["tracking"]["max_chi_square"] > 0  # the filter's settings
