@@ -16,7 +16,7 @@ from scanlines.data import sample
 from scanlines.evaluation.trajectory import Trajectory, load_trajectory, trajectory_error
 from scanlines.geometry.poses import compose, relative_pose
 from scanlines.map import build_map
-from scanlines.map.filter import FilterSettings
+from scanlines.map.build import MAPPING
 from scanlines.map.tracked import tracking_summary
 from test_map import view
 from test_map_align import ROOM
@@ -51,7 +51,7 @@ def _errors(build, truth):
 
 def test_tracking_pulls_drifting_odometry_back_onto_the_true_path():
     scans, truth = drifting_log()
-    build = build_map(enumerate(scans), track=FilterSettings())
+    build = build_map(enumerate(scans), track=MAPPING)
     tracked, odometry = _errors(build, truth)
     assert odometry.max() > 0.3  # the odometry drifts well away
     assert tracked.max() < 0.03
@@ -60,7 +60,7 @@ def test_tracking_pulls_drifting_odometry_back_onto_the_true_path():
     summary = tracking_summary(build.tracked, build.frame)
     assert summary["aligned"] == build.aligned
     assert summary["from_source_m"]["max"] == pytest.approx(odometry.max(), abs=0.03)
-    assert 0 < summary["sigma_m"]["median"] < 0.01
+    assert 0 < summary["sigma_m"]["median"] < 0.02  # MAPPING: the looser odometry noise
 
 
 def test_a_corridor_pins_no_shift_along_it_and_odometry_holds_it():
@@ -69,7 +69,7 @@ def test_a_corridor_pins_no_shift_along_it_and_odometry_holds_it():
     truth = [(0.5 * k, 0.0, 0.0) for k in range(12)]
     scans = [Scan(*_ranges(view(CORRIDOR, pose, seed=k, sigma=0.003)), pose=pose) for k, pose
              in enumerate(truth)]  # fmt: skip
-    build = build_map(enumerate(scans), track=FilterSettings())
+    build = build_map(enumerate(scans), track=MAPPING)
     last = build.tracked[-1]
     assert last.aligned
     assert last.covariance[0, 0] > 10 * last.covariance[1, 1]
@@ -85,7 +85,7 @@ def test_a_scan_that_does_not_fit_is_kept_out_of_the_map():
     elsewhere = [((-1.0, -1.0), (1.0, -1.0)), ((1.0, -1.0), (1.0, 1.0))]  # a box, not the room
     odd = view(elsewhere, (0.0, 0.0, 0.0), seed=99, sigma=0.003)
     scans[30] = Scan(odd.ranges, odd.angle_min, odd.angle_increment, pose=scans[30].pose)
-    build = build_map(enumerate(scans), track=FilterSettings())
+    build = build_map(enumerate(scans), track=MAPPING)
     assert build.not_aligned == 1
     assert build.tracked[30].status == "did not fit"
     assert build.scans == len(scans) - 1
@@ -122,7 +122,7 @@ def test_poses_out_needs_align(tmp_path):
 
 def test_tracked_poses_score_against_their_truth():
     scans, truth = drifting_log()
-    build = build_map(enumerate(scans), track=FilterSettings())
+    build = build_map(enumerate(scans), track=MAPPING)
     times = np.array([t.timestamp for t in build.tracked])
     estimate = Trajectory(times, np.array([t.pose for t in build.tracked]), "tracked")
     odometry = Trajectory(times, np.array([t.odometry for t in build.tracked]), "odometry")

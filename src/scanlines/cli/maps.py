@@ -128,9 +128,9 @@ def map_command(
     prepared = prepare(log, options, poses, min_scans, method, preset, param, config,
                        sensor_profile, scans)  # fmt: skip
     if align:
-        from scanlines.map.filter import FilterSettings
+        from scanlines.map.build import MAPPING
 
-        prepared["track"] = FilterSettings()
+        prepared["track"] = MAPPING
     build = run_build(log, options, prepared, scans)
     lines = build.line_map.lines()
     meta = map_meta(log, build, prepared)
@@ -278,8 +278,8 @@ def evaluate_map_command(
 
     from scanlines.errors import ParameterError
     from scanlines.io import open_log
+    from scanlines.map.build import MAPPING
     from scanlines.map.export import dumps, naming_output
-    from scanlines.map.filter import FilterSettings
     from scanlines.map.holdout import evaluate_map
     from scanlines.outputs import write_text_atomically
 
@@ -295,7 +295,7 @@ def evaluate_map_command(
     score, build = evaluate_map(
         lambda: open_log(log), prepared["extractor"], profile.sigma_at,
         poses=prepared["poses"], settings=prepared["settings"], limit=scans,
-        track=FilterSettings() if align else None, source=str(log),
+        track=MAPPING if align else None, source=str(log),
     )  # fmt: skip
     seconds = time.perf_counter() - started
     table = Table(title=f"line map of {log.name}: {score.poses}", show_header=False)
