@@ -36,8 +36,9 @@ def main() -> None:
     ref = load_trajectory(reference)
     keep = ref.times <= estimate.times[-1]
     score = trajectory_error(estimate, Trajectory(ref.times[keep], ref.poses[keep], reference))
+    seconds = time.perf_counter() - started
     print(f"{settings}: ATE {score.ate_rmse:.4f} m, RPE per metre {score.rpe_rmse:.4f} m, "
-          f"{build.not_aligned} scans did not fit, {time.perf_counter() - started:.0f} s")  # fmt: skip
+          f"{build.not_aligned} scans did not fit, {seconds:.0f} s")  # fmt: skip
 
 
 if __name__ == "__main__":
