@@ -32,3 +32,19 @@ def scanlines(*args: object, cwd: Path | None = None, columns: int | None = None
     if result.exception is not None and not isinstance(result.exception, SystemExit):
         stderr += "".join(traceback.format_exception(result.exception))
     return Ran(result.exit_code, result.stdout, stderr)
+
+
+def all_commands() -> dict:
+    """Every command of the application by the words that run it (a group's subcommands as
+    ``"eval real"``...)."""
+    import typer
+
+    from scanlines.cli import app
+
+    out = {}
+    for name, command in typer.main.get_command(app).commands.items():
+        for sub, subcommand in getattr(command, "commands", {}).items():
+            out[f"{name} {sub}"] = subcommand
+        if command.callback is not None and not hasattr(command, "commands"):
+            out[name] = command
+    return out

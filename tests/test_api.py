@@ -197,7 +197,7 @@ def import_cycles(graph: dict[str, list[str]]) -> list[list[str]]:
 LAYERS = (
     ("scanlines._core", "scanlines.errors", "scanlines.outputs", "scanlines.params",
      "scanlines.truth", "scanlines.builtin_methods", "scanlines.reader_options",
-     "scanlines.report"),
+     "scanlines.report", "scanlines.untrusted"),
     ("scanlines.scan", "scanlines.extraction"),
     ("scanlines.geometry",),
     ("scanlines.steps",),

@@ -395,7 +395,19 @@ def test_extract_takes_a_config(room_npz, tmp_path) -> None:
 def test_eval_takes_configs_as_method_rows(tmp_path) -> None:
     config = ExtractionConfig("adaptive", None, {"min_points": 6, "dkth_range": (0.0, 0.05)})
     (tmp_path / "tuned.toml").write_text(config.to_toml())
-    args = ["eval", "-s", "lms_1deg", "-n", "1", "--no-plots", "-j", "1", "--config", "tuned.toml"]
+    args = [
+        "eval",
+        "sim",
+        "-s",
+        "lms_1deg",
+        "-n",
+        "1",
+        "--no-plots",
+        "-j",
+        "1",
+        "--config",
+        "tuned.toml",
+    ]
     only = cli(*args, "--out", "only", cwd=tmp_path)
     assert only.returncode == 0, only.stderr
     summary = json.loads((tmp_path / "only" / "summary.json").read_text())
@@ -408,4 +420,6 @@ def test_eval_takes_configs_as_method_rows(tmp_path) -> None:
         labels = {row["label"] for row in csv.DictReader(handle)}
     assert labels == {"adaptive", "tuned.toml"}
     (tmp_path / "bad.toml").write_text("[params]\nk = 0\n")
-    one_error_line(cli("eval", "--config", "bad.toml", "--out", "x", cwd=tmp_path), "bad.toml")
+    one_error_line(
+        cli("eval", "sim", "--config", "bad.toml", "--out", "x", cwd=tmp_path), "bad.toml"
+    )

@@ -115,7 +115,20 @@ def test_truth_row_in_workers_and_on_scene_sets():
 
 
 def test_eval_command_with_the_truth_row(tmp_path):
-    args = ["eval", "-m", "adaptive", "-m", "truth", "-s", "lms_1deg", "-n", "2", "--seed", "3"]
+    args = [
+        "eval",
+        "sim",
+        "-m",
+        "adaptive",
+        "-m",
+        "truth",
+        "-s",
+        "lms_1deg",
+        "-n",
+        "2",
+        "--seed",
+        "3",
+    ]
     out = run_command(*args, "--worst", "1", "--out", tmp_path)
     assert out.returncode == 0, out.stderr
     assert (tmp_path / "worst.png").stat().st_size > 0

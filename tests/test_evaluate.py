@@ -262,7 +262,7 @@ def test_import_needs_neither_matplotlib_nor_rich():
 @pytest.fixture(scope="module")
 def eval_run(tmp_path_factory):
     folder = tmp_path_factory.mktemp("eval")
-    args = ["eval", "-m", "adaptive", "-m", "adaptive:paper", "--seed", "2"]
+    args = ["eval", "sim", "-m", "adaptive", "-m", "adaptive:paper", "--seed", "2"]
     args += ["-s", "lms_1deg", "-s", "tim571", "-n", "3", "--tol-beams", "3"]
     out = run(*args, "--out", str(folder / "out"), "--save-scenes", str(folder / "set.npz"))
     return folder, out
@@ -308,7 +308,17 @@ def test_eval_command_writes_everything(eval_run):
 def test_eval_command_on_saved_scenes(eval_run, tmp_path):
     folder, first = eval_run
     assert first.returncode == 0, first.stderr
-    args = ["eval", "-m", "adaptive", "-m", "adaptive:paper", "--tol-beams", "3", "--no-plots"]
+    args = [
+        "eval",
+        "sim",
+        "-m",
+        "adaptive",
+        "-m",
+        "adaptive:paper",
+        "--tol-beams",
+        "3",
+        "--no-plots",
+    ]
     out = run(*args, "--scenes", str(folder / "set.npz"), "--out", str(tmp_path))
     assert out.returncode == 0, out.stderr
     assert not (tmp_path / "worst.png").exists()
@@ -328,12 +338,13 @@ def test_eval_command_on_saved_scenes(eval_run, tmp_path):
         (["--noise", "loud"], "noise must be one of"),
         (["--tol-beams", "-1"], "bad tolerance"),
         (["-n", "0"], "scenes per sensor must be an integer >= 1"),
-        (["--scenes", "missing.npz", "--seed", "1"], "--seed and --noise"),
+        (["--scenes", "there.npz", "--seed", "1"], "--seed and --noise"),
         (["--scenes", "missing.npz"], "missing.npz"),
     ],
 )
 def test_eval_command_bad_input_exits_2(args, message, tmp_path):
-    out = run("eval", "-n", "1", "--out", str(tmp_path), *args, cwd=tmp_path)
+    (tmp_path / "there.npz").write_bytes(b"")  # there: the option check speaks first
+    out = run("eval", "sim", "-n", "1", "--out", str(tmp_path), *args, cwd=tmp_path)
     assert out.returncode == 2, out.stderr
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1

@@ -123,7 +123,8 @@ def test_localize_command_on_the_intel_excerpt(tmp_path):
 
 
 def test_localize_errors_are_one_line(tmp_path):
-    ran = scanlines("localize", sample("intel"), "--map", tmp_path / "none.json",
+    (tmp_path / "some.json").write_text("{}")
+    ran = scanlines("localize", sample("intel"), "--map", tmp_path / "some.json",
                     "--initial-pose", "1,2,3", "--out", tmp_path / "p.tum")  # fmt: skip
     assert ran.returncode == 2
     assert "--initial-pose: '1,2,3' is not T,X,Y,YAW" in ran.stderr

@@ -246,7 +246,7 @@ def test_map_command_writes_each_format_and_refuses_what_it_cannot(tmp_path):
     )
     assert fewer.exit_code == 0, fewer.output
     assert len(json.loads(out.read_text())["features"]) < len(features)
-    unknown = runner.invoke(app, ["map", str(tmp_path / "missing.log"), "--out", "map.txt"])
+    unknown = runner.invoke(app, ["map", str(sample("intel")), "--out", "map.txt"])
     assert unknown.exit_code == 2
     assert "map.txt: a map is written as .geojson" in unknown.output  # before the log is read
 
@@ -276,7 +276,7 @@ def test_map_command_with_a_tum_file(tmp_path):
 
 def test_eval_map_prints_and_writes_the_held_out_score(tmp_path):
     done = CliRunner().invoke(
-        app, ["eval", "--map", str(sample("intel")), "--scans", "200", "--out", str(tmp_path)]
+        app, ["eval", "map", str(sample("intel")), "--scans", "200", "--out", str(tmp_path)]
     )
     assert done.exit_code == 0, done.output
     assert "coverage" in done.output

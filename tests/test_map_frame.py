@@ -81,7 +81,7 @@ def test_eval_map_scores_the_same_at_a_utm_northing(tmp_path):
     for offset in (0.0, 5e6):
         log = shifted_sample("intel", offset, tmp_path)
         out = tmp_path / f"eval-{offset:g}"
-        done = runner.invoke(app, ["eval", "--map", str(log), "--scans", "150", "--out", str(out)])
+        done = runner.invoke(app, ["eval", "map", str(log), "--scans", "150", "--out", str(out)])
         assert done.exit_code == 0, done.output
         scores.append(json.loads((out / "map_eval.json").read_text()))
     for key in ("coverage", "lines", "segments_per_line", "loop_lines"):
@@ -99,7 +99,7 @@ def test_coordinates_beyond_the_limit_are_refused_in_one_line(tmp_path, offset):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         done = runner.invoke(app, ["map", str(log), "--out", str(tmp_path / "map.geojson")])
-        scored = runner.invoke(app, ["eval", "--map", str(log), "--out", str(tmp_path / "e")])
+        scored = runner.invoke(app, ["eval", "map", str(log), "--out", str(tmp_path / "e")])
     for result in (done, scored):
         assert result.exit_code == 2, result.output
         errors = [line for line in result.stderr.splitlines() if "error" in line.lower()]

@@ -39,7 +39,7 @@ def invoke(*args: str):
 
 def test_eval_map_without_align_writes_strict_json(tmp_path):
     """Before: ``"localised_coverage": NaN`` in every map_eval.json without --align."""
-    done = invoke("eval", "--map", sample("intel"), "--scans", "100", "--out", tmp_path)
+    done = invoke("eval", "map", sample("intel"), "--scans", "100", "--out", tmp_path)
     assert done.exit_code == 0, done.output
     score = strict((tmp_path / "map_eval.json").read_text())
     assert score["localised_coverage"] is None
@@ -193,7 +193,7 @@ def test_a_read_only_folder_is_named_in_one_line(tmp_path, read_only_folder, wha
         "plot": ["map", log, "--out", str(read_only_folder.parent / "open" / "m.json"),
                  "--plot", str(target),
                  "--scans", "30"],
-        "eval": ["eval", "--map", log, "--out", str(target), "--scans", "30"],
+        "eval": ["eval", "map", log, "--out", str(target), "--scans", "30"],
     }[what]  # fmt: skip
     warm = invoke("map", log, "--out", tmp_path / "warm.json", "--scans", "5", "--plot",
                   tmp_path / "warm.png")  # fmt: skip
@@ -231,7 +231,7 @@ def test_a_full_disk_is_named_in_one_line(tmp_path, monkeypatch):
         "(OSError: [Errno 28] No space left on device)"
     )
     scores = tmp_path / "scores"
-    done = invoke("eval", "--map", sample("intel"), "--out", scores, "--scans", "30")
+    done = invoke("eval", "map", sample("intel"), "--out", scores, "--scans", "30")
     assert done.exit_code == 2
     assert done.stderr.strip().splitlines()[-1] == (
         f"scanlines: error: {scores / 'map_eval.json'}: cannot write the output "

@@ -42,9 +42,15 @@ CASES = {
     "plot": (["plot", "{missing}/x.clf", "--scan", "0", "-o", "{tmp}/p.png"], "x.clf"),
     "plot --config": (["plot", INTEL, "--scan", "0", "--config", "{missing}/c.toml"], "c.toml"),
     "view": (["view", "{missing}/x.clf", "--no-browser"], "x.clf"),
-    "eval --real": (["eval", "--real", "{missing}/x.clf", "--out", "{tmp}/e"], "x.clf"),
-    "eval --scenes": (["eval", "--scenes", "{missing}/s.npz", "--out", "{tmp}/e"], "s.npz"),
-    "eval --config": (["eval", "--config", "{missing}/c.toml", "--out", "{tmp}/e"], "c.toml"),
+    "eval real": (["eval", "real", "{missing}/x.clf", "--out", "{tmp}/e"], "x.clf"),
+    "eval sim --scenes": (
+        ["eval", "sim", "--scenes", "{missing}/s.npz", "--out", "{tmp}/e"],
+        "s.npz",
+    ),
+    "eval sim --config": (
+        ["eval", "sim", "--config", "{missing}/c.toml", "--out", "{tmp}/e"],
+        "c.toml",
+    ),
     "map": (["map", "{missing}/x.clf", "--out", "{tmp}/m.geojson"], "x.clf"),
     "ros2 --play": (["ros2", "--play", "{missing}/x.clf", "--wait", "30"], "x.clf"),
 }

@@ -108,7 +108,20 @@ def test_scanlines_eval_scores_it(chord_split, tmp_path):
     out = tmp_path / "eval"
     result = CliRunner().invoke(
         app,
-        ["eval", "-m", chord_split, "-m", "iepf", "-s", "lms_1deg", "-n", "3", "--out", str(out)],
+        [
+            "eval",
+            "sim",
+            "-m",
+            chord_split,
+            "-m",
+            "iepf",
+            "-s",
+            "lms_1deg",
+            "-n",
+            "3",
+            "--out",
+            str(out),
+        ],
     )
     assert result.exit_code == 0, result.output
     assert chord_split in result.output

@@ -123,12 +123,14 @@ def test_the_viewer_reads_the_code_as_no_return(one_scan) -> None:
         assert "no range_max key" in session.log()["reader"]["notes"][0]
 
 
-COMMANDS_READING_NPZ = ["extract", "info", "run", "calibrate", "plot", "view", "eval", "ros2"]
+COMMANDS_READING_NPZ = [
+    "extract", "info", "run", "calibrate", "plot", "view", "eval real", "eval map", "ros2"
+]  # fmt: skip
 
 
 @pytest.mark.parametrize("command", [*COMMANDS_READING_NPZ, "map"])
 def test_every_command_reading_npz_says_how_it_reads_no_range_max(command) -> None:
-    out = scanlines(command, "--help", columns=200)
+    out = scanlines(*command.split(), "--help", columns=200)
     assert out.returncode == 0, out.stderr
     text = re.sub(r"[\s│]+", " ", out.stdout)
     assert "without range_max" in text, text

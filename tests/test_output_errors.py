@@ -199,7 +199,9 @@ def test_extract_does_not_replace_a_figure_without_overwrite(one_scan, tmp_path)
 
 def test_extract_checks_the_figure_folder_before_reading(tmp_path) -> None:
     target = tmp_path / "missing" / "scan.png"
-    out = run("extract", tmp_path / "nothing.npz", "--plot", target)
+    scan = tmp_path / "scan.npz"
+    np.savez(scan, ranges=np.full(90, 2.0), angle_min=0.0, angle_increment=0.01)
+    out = run("extract", scan, "--plot", target)
     assert out.returncode == 2
     assert out.stderr.strip().splitlines() == [
         f"scanlines: error: {target}: the folder {target.parent} does not exist (create it first)"

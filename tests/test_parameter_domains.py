@@ -124,3 +124,46 @@ def test_help_of_extract_documents_its_parameters() -> None:
     doc = scanlines.extract.__doc__
     for word in ("method", "preset", "sensor_profile", "method_info", "ParameterError"):
         assert word in doc
+
+
+# -- domains that hold at run time (not only at construction) --------------------------------
+
+
+def test_hough_rho_resolution_is_bounded_so_that_its_grid_fits():
+    """5e-324 m made the number of rho cells infinite: OverflowError at extraction."""
+    from scanlines.data import sample
+    from scanlines.io import open_log
+    from scanlines.methods.hough import MAX_RHO_RESOLUTION, MIN_RHO_RESOLUTION
+
+    for tiny in (5e-324, 1e-300, MIN_RHO_RESOLUTION / 2):
+        with pytest.raises(ParameterError, match="rho_resolution"):
+            Extractor("hough", rho_resolution=tiny)
+    with open_log(sample("intel")) as reader:
+        scan = next(iter(reader))
+    for edge in (MIN_RHO_RESOLUTION, MAX_RHO_RESOLUTION):
+        assert Extractor("hough", rho_resolution=edge)(scan).segments is not None
+
+
+def test_a_profile_noise_beyond_1_m_plus_100_percent_is_refused(tmp_path):
+    from scanlines.sensor.profile import ProfileError, SensorProfile, read_profile
+
+    def written(sigma0: float, per_metre: float):
+        path = tmp_path / "p.json"
+        SensorProfile(sigma0, per_metre, beams=180, scans=10).save(path)
+        return path
+
+    assert read_profile(written(1.0, 1.0)).noise_sigma0 == 1.0
+    for sigma0, per_metre in ((1e300, 0.0), (0.0, 1e300), (1.001, 0.0), (0.0, 1.001)):
+        with pytest.raises(ProfileError, match="at most 1 m \\+ 100 % of range") as caught:
+            read_profile(written(sigma0, per_metre))
+        assert len(str(caught.value).splitlines()) == 1
+
+
+def test_an_angle_increment_that_rounds_to_0_in_float32_is_refused():
+    from scanlines import Scan
+    from scanlines.errors import ScanError
+
+    for tiny in (1e-46, -1e-46, 5e-324):
+        with pytest.raises(ScanError, match=r"angle_increment .* rounds to 0 in float32"):
+            Scan([1.0] * 112, 0.0, tiny)
+    assert Scan([1.0] * 112, 0.0, 1.5e-45).angle_increment == 1.5e-45  # float32's least

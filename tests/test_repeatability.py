@@ -282,17 +282,17 @@ def test_eval_real_command_on_the_shipped_excerpts(tmp_path):
     [
         (["--seed", "0"], "--seed"),
         (["-m", "truth"], "truth"),
-        (["--tol-rho", "0.1", "--tol-beams", "3"], "--tol-beams, --tol-rho do not apply"),
+        (["--tol-rho", "0.1", "--tol-beams", "3"], "--tol-rho"),
     ],
 )
 def test_eval_real_refuses_options_of_simulated_scenes(args, message, tmp_path):
     log = str(DATA / "fr079_excerpt.log.gz")
-    out = run("eval", "--real", log, *args, cwd=tmp_path)
+    out = run("eval", "real", log, *args, cwd=tmp_path)
     assert out.returncode == 2
     assert message in out.stderr
 
 
-def test_scans_needs_real(tmp_path):
-    out = run("eval", "--scans", "5", cwd=tmp_path)
+def test_scans_is_not_an_option_of_simulated_scenes(tmp_path):
+    out = run("eval", "sim", "--scans", "5", cwd=tmp_path)
     assert out.returncode == 2
-    assert "--real" in out.stderr
+    assert "--scans" in out.stderr

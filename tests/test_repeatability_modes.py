@@ -222,7 +222,7 @@ def test_max_pairs_scores_that_many_used_pairs_spread_over_the_log():
 
 
 def test_eval_real_bare_writes_the_mode_and_the_fidelity(tmp_path):
-    args = ["eval", "--real", str(INTEL), "--scans", "30", "--pairs", "6", "-m", "iepf"]
+    args = ["eval", "real", str(INTEL), "--scans", "30", "--pairs", "6", "-m", "iepf"]
     out = scanlines(*args, "--bare", "--out", "out", cwd=tmp_path)
     assert out.returncode == 0, out.stderr
     assert "bare: no profile" in out.stdout
@@ -237,11 +237,12 @@ def test_eval_real_bare_writes_the_mode_and_the_fidelity(tmp_path):
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (["--bare"], "--bare is a mode of --real"),
-        (["--real", str(INTEL), "--bare", "--sensor-profile", "p.json"], "excludes"),
+        (["sim", "--bare"], "--bare"),
+        (["real", str(INTEL), "--bare", "--sensor-profile", "p.json"], "excludes"),
     ],
 )
-def test_bare_needs_real_and_no_profile(args, message, tmp_path):
+def test_bare_is_of_real_and_without_a_profile(args, message, tmp_path):
+    (tmp_path / "p.json").write_text("{}")  # there, so that --bare's own check speaks
     out = scanlines("eval", *args, cwd=tmp_path)
     assert out.returncode == 2
     assert message in out.stderr

@@ -12,6 +12,7 @@ import pytest
 pytest.importorskip("yaml")
 
 from cli_helpers import scanlines
+from scanlines.data import sample
 from scanlines.errors import ParameterError
 from scanlines.ros2.names import Remap, expand, resolve
 from scanlines.ros2.parameters import NodeOptions, apply_parameters
@@ -283,8 +284,13 @@ def test_a_file_that_is_no_parameters_file_is_one_line_naming_it(tmp_path, text,
         node_options(["--params-file", str(path)])
     assert str(raised.value).startswith(str(path) + message)
     assert "\n" not in str(raised.value)
-    with pytest.raises(ParameterError, match="cannot read the parameters file"):
+    with pytest.raises(ParameterError) as missing:
         node_options(["--params-file", str(tmp_path / "missing.yaml")])
+    assert str(missing.value) == f"{tmp_path / 'missing.yaml'}: no such file or directory"
+    folder = tmp_path / "folder.yaml"
+    folder.mkdir()
+    with pytest.raises(ParameterError, match="cannot read the parameters file"):
+        node_options(["--params-file", str(folder)])
 
 
 def test_a_file_without_an_entry_for_the_node_says_so(tmp_path):
@@ -314,7 +320,7 @@ def test_the_command_refuses_a_bad_parameter_with_one_line_and_exit_2(tmp_path):
     assert done.stderr.splitlines() == [
         "scanlines: error: --ros-args: -r __ns:=relative: a namespace is absolute: it starts with /"
     ]
-    done = scanlines("ros2", "--play", str(tmp_path / "x.log"), "--ros-args", "-p", "k:=0")
+    done = scanlines("ros2", "--play", sample("intel"), "--ros-args", "-p", "k:=0")
     assert done.returncode == 2
     assert "parameter k (-p k:=0): k must be" in done.stderr
 
@@ -444,3 +450,23 @@ def test_the_readmes_ros_commands_parse_and_its_start_line_is_the_nodes():
             (example,) = re.findall(r"^scanlines ros2: node .*$", section, flags=re.MULTILINE)
             assert shown == example
     assert "ros2 launch docs/ros2/scanlines.launch.py" in commands
+
+
+def test_amcls_frame_parameters_and_the_map_set_the_live_localisation():
+    given = NodeOptions(
+        "adaptive",
+        live={"map": None, "odometry": "odom", "global_frame_id": "map",
+              "odom_frame_id": "odom", "base_frame_id": "base_link"},
+    )  # fmt: skip
+    chosen = node_options(
+        ["-p", "map:=/maps/lab.json", "-p", "base_frame_id:=base_footprint", "-p",
+         "odometry:=tf"],
+        given,
+    )  # fmt: skip
+    assert chosen.live == {"map": "/maps/lab.json", "odometry": "tf", "global_frame_id": "map",
+                           "odom_frame_id": "odom", "base_frame_id": "base_footprint"}  # fmt: skip
+    assert node_options(["-p", "map:=''"], chosen).live["map"] is None
+    with pytest.raises(ParameterError, match=r"parameter odometry \(-p odometry:=wheels\): "):
+        node_options(["-p", "odometry:=wheels"], given)
+    with pytest.raises(ParameterError, match=r"parameter odom_frame_id .*empty string"):
+        node_options(["-p", "odom_frame_id:=''"], given)

@@ -15,6 +15,7 @@ pytest.importorskip("yaml")
 
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
+from dds_domains import domain_held
 from scanlines.data import sample
 from scanlines.extractor import Extractor
 from scanlines.io import open_log
@@ -83,12 +84,14 @@ def intel_profile(tmp_path_factory):
     return path
 
 
-def test_a_ros_users_command_line_moves_and_configures_the_node(store, intel_profile, tmp_path):
+def test_a_ros_users_command_line_moves_and_configures_the_node(
+    store, intel_profile, tmp_path, dds_domain
+):
     """``-r scan:=/front/scan -r __ns:=/robot1 --params-file P -p merge:=false``: the scans
     come from /front/scan (absolute: not under the namespace), the outputs go under
     /robot1 with laser_line_extraction's types, the file's entry for /robot1/scanlines and
     the -p set the extraction, and the start-up line says all of it."""
-    domain = 71
+    domain = dds_domain
     params = tmp_path / "params.yaml"
     params.write_text(
         "scanlines:\n  ros__parameters:\n    method: iepf\n"  # the root namespace's node
@@ -128,7 +131,7 @@ def test_a_ros_users_command_line_moves_and_configures_the_node(store, intel_pro
     assert node.returncode == 0, err
     start = err.splitlines()[0]
     assert start.startswith(
-        "scanlines ros2: node /robot1/scanlines (domain 71) listening on /front/scan "
+        f"scanlines ros2: node /robot1/scanlines (domain {domain}) listening on /front/scan "
         "(LaserScan); method adaptive, merge=False, min_points=4; noise from sensor profile "
         f"{intel_profile} (sigma(r) = "
     ), start
@@ -169,42 +172,90 @@ def play(domain, log, *ros_args):
     )  # fmt: skip
 
 
-def test_play_publishes_the_logs_poses_on_tf_stamped_as_their_scans(store):
-    domain = 72
+def test_play_publishes_the_logs_odometry_on_odom_and_tf_and_the_mounting_on_tf_static(
+    store, dds_domain
+):
+    """The log's odometry (the scan's laser pose less the mounting) on /odom and as odom ->
+    base_link on /tf, stamped as the scans; the mounting once on /tf_static (transient
+    local: a subscriber that comes later gets it), base_link -> laser."""
+    from scanlines.geometry.poses import compose
+
+    domain = dds_domain
     tf = Subscriber(domain, "/tf", msg.TFMessage, "tf2_msgs/msg/TFMessage", store)
+    odom = Subscriber(domain, "/robot1/odom", msg.Odometry, "nav_msgs/msg/Odometry", store)
     laser = Subscriber(domain, "/robot1/scan", msg.LaserScan, "sensor_msgs/msg/LaserScan", store)
     player = play(domain, "intel", "--ros-args", "-r", "__ns:=/robot1")
     try:
         sent = laser.take(SCANS, 120)
         moved = tf.take(SCANS, 30)
+        odometry = odom.take(SCANS, 30)
         _, err = player.communicate(timeout=60)
     finally:
         player.kill()
     assert player.returncode == 0, err
     lines = err.splitlines()
-    assert lines == [
-        "scanlines ros2: the log's poses on /tf as odom -> laser, stamped as their scans; "
-        "in RViz, set the fixed frame to odom",
+    assert lines[-2:] == [
+        "scanlines ros2: the log's odometry on /robot1/odom and /tf as odom -> base_link, "
+        "stamped as their scans, the mounting on /tf_static as base_link -> laser; in RViz, "
+        "set the fixed frame to odom",
         "scanlines ros2: published 12 scans of intel_excerpt.clf.gz on /robot1/scan and 12 "
-        "transforms odom -> laser on /tf",
+        "odometry poses odom -> base_link on /robot1/odom and /tf",
     ]
-    assert len(sent) == len(moved) == SCANS
-    for scan, message, tf_message in zip(log_scans("intel", SCANS), sent, moved, strict=True):
+    assert len(sent) == len(moved) == len(odometry) == SCANS
+    with open_log(sample("intel")) as reader:
+        next(iter(reader))
+        mounting = reader.recorded_mounting
+    for scan, message, tf_message, odom_message in zip(
+        log_scans("intel", SCANS), sent, moved, odometry, strict=True
+    ):
         (transform,) = tf_message.transforms
-        assert transform.header.frame_id == "odom"
-        assert transform.child_frame_id == message.header.frame_id == "laser"
-        assert transform.header.stamp == message.header.stamp
+        assert transform.header.frame_id == odom_message.header.frame_id == "odom"
+        assert transform.child_frame_id == odom_message.child_frame_id == "base_link"
+        assert message.header.frame_id == "laser"
+        assert transform.header.stamp == message.header.stamp == odom_message.header.stamp
         stamp = message.header.stamp
         assert stamp.sec + stamp.nanosec * 1e-9 == pytest.approx(scan.timestamp, abs=1e-6)
-        x, y, theta = scan.pose
         shift, turn = transform.transform.translation, transform.transform.rotation
-        assert (shift.x, shift.y, shift.z) == (x, y, 0.0)
+        position = odom_message.pose.pose.position
+        assert (position.x, position.y, position.z) == (shift.x, shift.y, 0.0)
         assert (turn.x, turn.y) == (0.0, 0.0)
-        assert 2 * np.arctan2(turn.z, turn.w) == pytest.approx(theta)
+        base = (shift.x, shift.y, 2 * np.arctan2(turn.z, turn.w))
+        assert compose(base, mounting) == pytest.approx(scan.pose, abs=1e-9)
 
 
-def test_play_of_a_log_without_poses_says_why_there_is_no_tf(store):
-    domain = 73
+def test_play_publishes_the_mounting_on_tf_static_for_later_subscribers(store):
+    with domain_held() as domain:
+        got, err, code = _late_static(store, domain)
+    assert code == 0, err
+    (data,) = got
+    (transform,) = store.deserialize_cdr(bytes(data), "tf2_msgs/msg/TFMessage").transforms
+    assert (transform.header.frame_id, transform.child_frame_id) == ("base_link", "laser")
+
+
+def _late_static(store, domain):
+    from cyclonedds.sub import DataReader
+    from cyclonedds.topic import Topic
+
+    from scanlines.ros2.dds import latched_qos
+
+    laser = Subscriber(domain, "/scan", msg.LaserScan, "sensor_msgs/msg/LaserScan", store)
+    player = play(domain, "intel")
+    try:
+        assert len(laser.take(SCANS, 120)) == SCANS
+        dp = participant(domain, loopback=True)  # a subscriber after the mounting was sent
+        late = DataReader(dp, Topic(dp, ros_topic("/tf_static"), msg.TFMessage), latched_qos())
+        got, deadline = [], time.monotonic() + 10
+        while not got and time.monotonic() < deadline:
+            got = [d for d, info in take_serialized(late, 10) if info.valid_data]
+            time.sleep(0.05)
+        _, err = player.communicate(timeout=60)
+    finally:
+        player.kill()
+    return got, err, player.returncode
+
+
+def test_play_of_a_log_without_poses_says_why_there_is_no_tf(store, dds_domain):
+    domain = dds_domain
     tf = Subscriber(domain, "/tf", msg.TFMessage, "tf2_msgs/msg/TFMessage", store)
     laser = Subscriber(domain, "/scan", msg.LaserScan, "sensor_msgs/msg/LaserScan", store)
     player = play(domain, "urg")

@@ -96,8 +96,8 @@ def run_records(intel_profile, tmp_path_factory):
     return [json.loads(line) for line in out.read_text().splitlines()]
 
 
-def test_play_node_subscriber_match_scanlines_run(intel_profile, run_records):
-    domain = 61
+def test_play_node_subscriber_match_scanlines_run(intel_profile, run_records, dds_domain):
+    domain = dds_domain
     segments = reader_of(domain, "/line_segments", msg.LineSegmentList)
     features = reader_of(domain, "/features", msg.ScanFeatures)
     markers = reader_of(domain, "/line_markers", msg.Marker)
@@ -167,11 +167,11 @@ def test_play_node_subscriber_match_scanlines_run(intel_profile, run_records):
         assert [(p.x, p.y) for p in line.points] == [(p.x, p.y) for p in shown.markers[1].points]
 
 
-def test_malformed_scans_are_counted_and_skipped():
+def test_malformed_scans_are_counted_and_skipped(dds_domain):
     from cyclonedds.pub import DataWriter
     from cyclonedds.topic import Topic
 
-    domain = 62
+    domain = dds_domain
     segments = reader_of(domain, "/line_segments", msg.LineSegmentList)
     node = scanlines("ros2", "--loopback", "--domain-id", str(domain), "--max-scans", "3")
     try:
@@ -204,8 +204,8 @@ def test_malformed_scans_are_counted_and_skipped():
     ("sig", "code", "word"),
     [(signal.SIGINT, 130, "interrupted"), (signal.SIGTERM, 143, "terminated")],
 )
-def test_signals_stop_the_node_with_one_line(sig, code, word):
-    domain = 63 if sig == signal.SIGINT else 64
+def test_signals_stop_the_node_with_one_line(sig, code, word, dds_domain):
+    domain = dds_domain
     segments = reader_of(domain, "/line_segments", msg.LineSegmentList)
     node = scanlines("ros2", "--loopback", "--domain-id", str(domain), "--duration", "120")
     try:
@@ -252,16 +252,15 @@ def write_raw(domain, payloads):
     assert done.returncode == 0, done.stderr.decode()
 
 
-def test_a_sample_that_does_not_decode_is_counted_and_the_others_of_its_take_go_on():
+def test_a_sample_that_does_not_decode_is_counted_and_the_others_of_its_take_go_on(dds_domain):
     """A frame_id that is not UTF-8 used to raise out of DataReader.take (a traceback, exit
     1), losing the good scan taken with it; and a malformed scan's line quoted its whole
     frame_id."""
     from scanlines.extractor import Extractor
     from scanlines.ros2 import LineNode
 
-    domain = 65
+    domain = dds_domain
     extractor = Extractor()
-    extractor.warm_up()
     log = io.StringIO()
     node = LineNode(extractor, domain_id=domain, loopback=True, features_topic="/features", log=log)
     features = reader_of(domain, "/features", msg.ScanFeatures)
@@ -289,7 +288,7 @@ def test_a_sample_that_does_not_decode_is_counted_and_the_others_of_its_take_go_
     assert "1 scans published, 1 malformed skipped, 1 undecodable skipped" in stats.summary()
 
 
-def test_million_beam_scans_arrive_over_best_effort_loopback():
+def test_million_beam_scans_arrive_over_best_effort_loopback(dds_domain):
     """A million-beam scan (4 MB, some 3,000 fragments in one burst) overflowed Cyclone's
     default 1 MiB socket receive buffer: 2 of 20 arrived. ``--loopback`` asks for 8 MB, which
     needs ``net.core.rmem_max`` of 4 MiB or more (Linux grants no more than it); 4 of 5 must
@@ -301,7 +300,7 @@ def test_million_beam_scans_arrive_over_best_effort_loopback():
     tool = Path(__file__).parents[1] / "tools" / "benchmarks" / "ros2_sizes.py"
     done = subprocess.run(
         [sys.executable, str(tool), "--beams", "1000000", "--count", "5", "--rate", "5",
-         "--domain-id", "69"],
+         "--domain-id", str(dds_domain)],
         capture_output=True, text=True, timeout=300,
     )  # fmt: skip
     assert done.returncode == 0, done.stderr[-2000:]

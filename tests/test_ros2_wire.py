@@ -109,6 +109,36 @@ def test_published_types_serialise_as_rosbags(store, kind):
     assert_same_wire(message, store)
 
 
+@pytest.mark.parametrize("kind", ["amcl_pose", "grid", "map_markers", "odometry"])
+def test_the_localisations_types_serialise_as_rosbags(store, kind):
+    """What ``--map`` publishes and ``--play`` sends on ``/odom``: CDR bytes as rosbags'."""
+    from scanlines.map.align import LineSet
+    from scanlines.map.frame import LocalFrame
+    from scanlines.ros2.live import amcl_pose
+    from scanlines.ros2.localizer import LivePose
+    from scanlines.ros2.map_topics import map_markers, occupancy_grid
+
+    stamp = convert.stamp_of(12.5)
+    lines = LineSet(np.zeros(2), np.zeros(2), np.array([[0.0, 0.0], [1.0, -1.0]]),
+                    np.array([[2.0, 0.0], [1.0, 1.5]]))  # fmt: skip
+    frame = LocalFrame(3.0, -4.0)
+    covariance = np.array([[0.01, 0.002, 0.0], [0.002, 0.02, 0.001], [0.0, 0.001, 0.003]])
+    live = LivePose(12.5, (1.0, 2.0, 0.5), covariance, (0.1, 0.2, 0.3), (1.0, 2.0, 0.5), "aligned")
+    odometry = msg.Odometry(header=msg.Header(stamp=stamp, frame_id="odom"),
+                            child_frame_id="base_link")  # fmt: skip
+    odometry.pose.pose.position.x = 1.25
+    message = {
+        "amcl_pose": lambda: amcl_pose(live, stamp, "map"),
+        "grid": lambda: occupancy_grid(lines, frame, "map", stamp),
+        "map_markers": lambda: map_markers(lines, frame, "map", stamp),
+        "odometry": lambda: odometry,
+    }[kind]()
+    decoded = assert_same_wire(message, store)
+    if kind == "amcl_pose":
+        cells = np.asarray(decoded.pose.covariance).reshape(6, 6)
+        assert np.array_equal(cells[np.ix_([0, 1, 5], [0, 1, 5])], covariance)
+
+
 def test_the_line_marker_is_laser_line_extractions():
     """One LINE_LIST in namespace line_extraction, id 0, 0.1 m wide, red: the marker
     laser_line_extraction publishes on line_markers, each segment's start and end."""

@@ -75,7 +75,10 @@ def _definitions(source: Path) -> dict[str, str]:
 
 
 def _calls(body: str, name: str) -> bool:
-    return re.search(rf"(?<![\w.>]){re.escape(name)}\s*\(", body) is not None
+    """Whether ``body`` calls ``name``, or passes it as an argument (``each_row(stack, f)``)."""
+    called = rf"(?<![\w.>]){re.escape(name)}\s*\("
+    passed = rf"[(,]\s*{re.escape(name)}\s*[,)]"
+    return re.search(f"{called}|{passed}", body) is not None
 
 
 def _python_users(name: str, twin: str) -> set[str]:

@@ -209,7 +209,8 @@ def test_a_process_pool_maps_an_extractor_over_scans(intel):
         (100, "90:200", 10),
         (100, "::3", 34),
         (None, "5:25:2", 10),
-        (None, "7", 1),
+        (None, "7", 7),  # N: the first N scans, in every command
+        (None, "7:8", 1),
         (100, "150:", 0),
     ],
 )

@@ -207,7 +207,7 @@ def test_copy_as_command_and_save_config_give_the_chosen_configuration(page, tmp
 
 def test_a_value_outside_the_domain_is_marked_and_not_sent(page):
     requested = page.evaluate("window.viewer.state.requested")
-    field = param_input(page, 0, "k")
+    field = param_input(page, 0, "min_length")
     field.fill("-2")
     assert "invalid" in (field.get_attribute("class") or "")
     page.wait_for_timeout(300)
@@ -316,7 +316,8 @@ def test_the_map_layer_draws_the_line_map_under_the_scan(page):
     middles = [map_line_on_screen(page, line, pose) for line in lines]
     in_view = [(x, y) for x, y in middles if within(box, x, y)]
     assert len(in_view) > 3
-    assert sum(pixel_is(page, x, y, colour) for x, y in in_view) > len(in_view) // 2
+    # (thin lines: on the transparent canvas a pixel they cross in part has their colour)
+    assert sum(pixel_is(page, x, y, colour, 64) for x, y in in_view) > len(in_view) // 2
     ARTIFACTS.mkdir(exist_ok=True)
     page.screenshot(path=ARTIFACTS / "viewer-map-layer.png")
     drawn = world_view_of_the_last_300(page)
@@ -352,8 +353,9 @@ def within(box: dict, x: float, y: float, margin: float = 5) -> bool:
     )
 
 
-def pixel_is(page, x: float, y: float, colour: str) -> bool:
-    """Whether the canvas pixel at page position ``(x, y)`` is ``colour`` (``#rrggbb``)."""
+def pixel_is(page, x: float, y: float, colour: str, min_alpha: int = 255) -> bool:
+    """Whether the canvas pixel at page position ``(x, y)`` is ``colour`` (``#rrggbb``),
+    covered at least ``min_alpha`` (a thin line covers the pixels it crosses in part)."""
     box = page.locator("#view-0 canvas").bounding_box()
     rgb = page.evaluate(
         """([x, y]) => {
@@ -365,7 +367,8 @@ def pixel_is(page, x: float, y: float, colour: str) -> bool:
         [x - box["x"], y - box["y"]],
     )
     expected = [int(colour[k : k + 2], 16) for k in (1, 3, 5)]
-    return rgb[3] == 255 and all(abs(a - b) <= 2 for a, b in zip(rgb[:3], expected, strict=True))
+    close = all(abs(a - b) <= 2 for a, b in zip(rgb[:3], expected, strict=True))
+    return rgb[3] >= min_alpha and close
 
 
 def test_the_legend_shows_the_symbol_each_layer_is_drawn_with(page):
@@ -499,3 +502,109 @@ def test_world_view_says_which_poses_it_shows(page):
     assert note.inner_text() == "poses as recorded in the log (may be raw odometry)"
     page.locator('input[name=view][value="scan"]').check()
     assert note.is_hidden()
+
+
+def param_row(page, name: str, panel: int = 0):
+    return page.locator(f'#config-{panel} .param[data-param="{name}"]')
+
+
+def choose(page, name: str, value: object, panel: int = 0) -> None:
+    """Pick ``value`` of the choice parameter ``name`` (its option's value is JSON)."""
+    import json
+
+    param_row(page, name, panel).locator("select").select_option(json.dumps(value))
+
+
+def fits_sideways(page, selector: str) -> bool:
+    return page.locator(selector).evaluate("e => e.scrollWidth <= e.clientWidth")
+
+
+@pytest.mark.parametrize("method", list(method_names()))
+def test_the_form_fits_1400_by_900_and_shows_every_name_and_short_doc(page, method):
+    before = frames(page)
+    page.locator("#config-0 .method").select_option(method)
+    redrawn(page, before)
+    for selector in ("#configs", "#config-0"):
+        assert fits_sideways(page, selector), selector
+    rows = page.locator("#config-0 .params .param")
+    assert rows.count() > 0
+    for k in range(rows.count()):
+        row = rows.nth(k)
+        if not row.is_visible():
+            continue
+        name = row.get_attribute("data-param")
+        label = row.locator(".name")
+        assert label.inner_text() == name
+        assert label.evaluate("e => e.scrollWidth <= e.clientWidth"), name  # not cut
+        doc = row.locator(".doc").inner_text()
+        assert 0 < len(doc) <= 45, (name, doc)
+        assert row.evaluate("e => e.getBoundingClientRect().right") <= page.evaluate(
+            "document.querySelector('#config-0').getBoundingClientRect().right"
+        )
+    if method == "adaptive":
+        ARTIFACTS.mkdir(exist_ok=True)
+        page.screenshot(path=ARTIFACTS / "viewer-1400x900-form.png")
+
+
+def test_parameters_that_do_not_apply_are_hidden(page):
+    rules = {
+        "paper": {"k", "noise_k"},
+        "abd": {"noise_k", "abd_lambda"},
+        "pdbs": {"pdbs_c0"},
+        "fixed": {"jump_distance"},
+    }
+    constants = {"k", "noise_k", "abd_lambda", "pdbs_c0", "jump_distance"}
+    for rule, shown in rules.items():
+        choose(page, "breakpoints", rule)
+        for name in constants:
+            assert param_row(page, name).is_visible() == (name in shown), (rule, name)
+    choose(page, "denoise", "none")
+    assert not param_row(page, "window").is_visible()
+    assert not param_row(page, "min_cluster_points").is_visible()
+    choose(page, "denoise", "paper")
+    assert param_row(page, "window").is_visible()
+    choose(page, "merge", False)  # a step switched off: its option hidden
+    assert not param_row(page, "merge_chi2").is_visible()
+    choose(page, "merge", True)
+    assert param_row(page, "merge_chi2").is_visible()
+    assert not param_row(page, "dkth_step").is_visible()  # dkth_range auto
+    param_row(page, "dkth_range").locator('input[type="checkbox"]').uncheck()
+    assert param_row(page, "dkth_step").is_visible()
+    # another method: the first method's own parameters are gone
+    page.locator("#config-0 .method").select_option("iepf")
+    assert param_row(page, "denoise").count() == 0
+    assert param_row(page, "split_distance").is_visible()
+
+
+def test_the_noise_line_in_use_is_named(page, intel_profile):
+    labels = page.locator("#facts tr td:first-child").all_inner_texts()
+    assert "noise used: sensor profile" in labels
+    assert "noise of this scan (not used)" in labels
+    used = fact(page, "noise-used")
+    assert used.startswith(f"{1000 * intel_profile.noise_sigma0:.1f} mm")
+    assert f"{100 * intel_profile.noise_per_metre:.2f} % r" in used
+    assert fact(page, "noise-scan") != used
+
+
+def test_the_map_lines_lie_under_the_segments_and_are_thinner(page):
+    layer_box(page, "map").check()
+    page.wait_for_function("window.viewer.state.mapState === 'built'", timeout=120_000)
+    page.wait_for_function("window.viewer.stats.drawn.layers.map > 0")
+    drawn = page.evaluate("window.viewer.stats.drawn")
+    assert drawn["order"][:2] == ["map", "segments"]  # the map first: under the segments
+    assert drawn["widths"]["map"] < drawn["widths"]["segments"]
+    legend = page.locator('#legend li[data-layer="map"] line').get_attribute("stroke-width")
+    assert float(legend) == drawn["widths"]["map"]
+
+
+def test_both_configurations_fit_1400_by_900(page):
+    before = frames(page)
+    page.locator("#compare").check()
+    redrawn(page, before)
+    for panel in (0, 1):
+        choose(page, "breakpoints", "paper", panel)  # one more parameter shown
+    for selector in ("#configs", "#config-0", "#config-1"):
+        assert fits_sideways(page, selector), selector
+    assert page.evaluate("document.documentElement.scrollWidth") == 1400
+    ARTIFACTS.mkdir(exist_ok=True)
+    page.screenshot(path=ARTIFACTS / "viewer-1400x900-compare.png")

@@ -41,11 +41,6 @@ AdaptiveSettings adaptive_settings(const nb::dict& record) {
     return s;
 }
 
-// adaptive_stack without the stage timing.
-Table adaptive_table(const Stack& stack, const AdaptiveSettings& s, const Reals& grid) {
-    return adaptive_stack(stack, s, grid);
-}
-
 // The adaptive method's own steps (methods/adaptive.hpp), for the tests.
 void bind_own_steps(nb::module_& m) {
     m.attr("MAX_BRIDGED_SHARE") = std::sin(1.0 * (3.141592653589793 / 180.0)) /
@@ -63,11 +58,10 @@ void bind_own_steps(nb::module_& m) {
         "Extend the sweep until the bic choice is certain: (best level, inserted).");
 }
 
-}  // namespace
-
-void bind_adaptive(nb::module_& m) {
-    m.def("adaptive_stack", &grid_stack_kernel<adaptive_settings, adaptive_table>,
-          "The adaptive method on each row of a stack of scans: one flat table.");
+#ifdef SCANLINES_STAGE_TIMES
+// The time of each stage of the method (a build with -DSCANLINES_STAGE_TIMES=ON, for
+// tools/benchmarks/stage_times.py).
+void bind_stage_times(nb::module_& m) {
     m.def(
         "adaptive_stage_seconds",
         [](const In<double, nb::ndim<2>>& ranges, const In<bool, nb::ndim<2>>& valid,
@@ -78,16 +72,28 @@ void bind_adaptive(nb::module_& m) {
             AdaptiveSettings s = adaptive_settings(settings);
             Reals thresholds = vector_of(grid);
             StageSeconds seconds{};
+            Table table;
             {
                 nb::gil_scoped_release unlocked;
-                adaptive_stack(stack, s, thresholds, &seconds);
+                table = adaptive_stack_timed(stack, s, thresholds, seconds);
             }
             nb::dict out;
             for (int k = 0; k < N_ADAPTIVE_STAGES; ++k) out[ADAPTIVE_STAGE_NAMES[k]] = seconds[k];
-            return out;
+            return nb::make_tuple(out, table_to_numpy(std::move(table)));
         },
         "adaptive_stack's arguments: the seconds each stage of the method took over the stack, "
-        "by name, in order.");
+        "by name, in order, and adaptive_stack's table.");
+}
+#endif
+
+}  // namespace
+
+void bind_adaptive(nb::module_& m) {
+    m.def("adaptive_stack", &grid_stack_kernel<adaptive_settings, adaptive_stack>,
+          "The adaptive method on each row of a stack of scans: one flat table.");
+#ifdef SCANLINES_STAGE_TIMES
+    bind_stage_times(m);
+#endif
     bind_own_steps(m);
 }
 

@@ -138,7 +138,7 @@ nb::object copy_to_numpy(const std::vector<T>& values) {
     return to_numpy(std::vector<T>(values));
 }
 
-inline nb::tuple runs_to_numpy(Runs&& runs) {
+inline nb::tuple runs_to_numpy(GroupedRuns&& runs) {
     return nb::make_tuple(to_numpy(std::move(runs.a)), to_numpy(std::move(runs.b)),
                           to_numpy(std::move(runs.group)));
 }

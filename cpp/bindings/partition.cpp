@@ -26,7 +26,8 @@ PartitionSettings partition_settings(const nb::dict& record) {
 SurfacesSettings surfaces_settings(const nb::dict& record) {
     nb::dict segments = group(record, "segments");
     return {setting<double>(group(record, "noise"), "noise_sigma"),
-            {objective_of(segments), setting<double>(segments, "footprint")},
+            {objective_of(segments), setting<double>(segments, "footprint"),
+             setting<bool>(segments, "two_stage")},
             output_bounds_of(group(record, "output"))};
 }
 

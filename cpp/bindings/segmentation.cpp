@@ -59,7 +59,7 @@ void bind_segmentation(nb::module_& m) {
     m.def("split_at_farthest", [](const InReals& x, const InReals& y, const InTable& table,
                                   double ox, double oy, const InInts& a, const InInts& b,
                                   const InInts& group, double threshold, Index reference) {
-        Runs runs{vector_of(a), vector_of(b), vector_of(group)};
+        GroupedRuns runs{vector_of(a), vector_of(b), vector_of(group)};
         return runs_to_numpy(split_at_farthest(vector_of(x), vector_of(y),
                                                moments_of(table, ox, oy), runs, threshold,
                                                reference));

@@ -47,6 +47,7 @@ import tomli_w
 from scanlines.builtin_methods import DEFAULT_METHOD
 from scanlines.errors import NO_SUCH_FILE, ParameterError, describe, one_line
 from scanlines.params import Check, Choice, Either, Integer, Number, Pair, resolve
+from scanlines.untrusted import quote
 
 __all__ = [
     "CONFIG_KEYS",
@@ -254,6 +255,12 @@ def load_config(path: str | Path) -> ExtractionConfig:
     except tomllib.TOMLDecodeError as error:
         message, line = _toml_error(str(error))
         raise ConfigError(f"not valid TOML: {message}", source=path, line=line) from None
+    except RecursionError:  # tomllib reads nested arrays and tables recursively
+        raise ConfigError(
+            "not a configuration: arrays or tables nested too deep", source=path
+        ) from None
+    except ValueError as error:  # an integer of more digits than Python converts
+        raise ConfigError(f"not a configuration: {describe(error)}", source=path) from None
     return _from_mapping(document, path, text)
 
 
@@ -316,7 +323,7 @@ def _from_mapping(mapping: Any, source: object, text: str | None = None) -> Extr
             raise fail(f"unknown key; valid: {', '.join(CONFIG_KEYS)}", str(key))
     params = mapping.get("params")
     if params is not None and not isinstance(params, Mapping):
-        raise fail(f"params is a table of NAME = VALUE, got {params!r}", "params")
+        raise fail(f"params is a table of NAME = VALUE, got {quote(params)}", "params")
     method, preset = mapping.get("method", DEFAULT_METHOD), mapping.get("preset")
     try:
         return ExtractionConfig._of_checked(*_validated(method, preset, params, typed=True))
@@ -339,17 +346,19 @@ def _validated(
     from scanlines.methods import method_class
 
     if not isinstance(method, str):
-        raise ConfigError(f"the method is a string, got {method!r}", key="method")
+        raise ConfigError(f"the method is a string, got {quote(method)}", key="method")
     try:
         cls = method_class(method)
     except ParameterError as error:
         raise ConfigError(str(error), key="method") from None
     if preset is not None and not isinstance(preset, str):
-        raise ConfigError(f"the preset is a string, got {preset!r}", key="preset")
+        raise ConfigError(f"the preset is a string, got {quote(preset)}", key="preset")
     if params is None:
         params = {}
     if not isinstance(params, Mapping):
-        raise ConfigError(f"params is a mapping of names to values, got {params!r}", key="params")
+        raise ConfigError(
+            f"params is a mapping of names to values, got {quote(params)}", key="params"
+        )
     if typed:
         _check_types(cls.parameters, params)
     try:
@@ -378,7 +387,7 @@ def _check_types(spec: Mapping[str, Any], params: Mapping[str, Any]) -> None:
         check = spec[name].check
         if not _type_fits(check, value):
             raise ConfigError(
-                f"{name} must be {check.describe()}, got {value!r}{_type_hint(check, value)}",
+                f"{name} must be {check.describe()}, got {quote(value)}{_type_hint(check, value)}",
                 key=f"params.{name}",
             )
 

@@ -20,7 +20,7 @@ from scanlines.extraction import Extraction, ExtractionTable
 from scanlines.methods import REGISTRY, method_class
 from scanlines.params import resolve
 from scanlines.scan import Scan, as_array, valid_returns
-from scanlines.sensor.learned_noise import NoiseLearner
+from scanlines.sensor.learned_noise import Geometry, NoiseLearner
 from scanlines.sensor.profile import SensorProfile, as_profile
 
 __all__ = ["Extractor", "MethodInfo", "ParamInfo", "extract", "method_info", "method_names"]
@@ -35,13 +35,15 @@ class ParamInfo(NamedTuple):
     """One parameter of a method: its default, what it does, the values it takes (in
     words, and as ``domain``: ``{"type": "float", "low": 0.0, "high": 90.0, ...}``) and
     its group (:data:`~scanlines.params.GROUPS`; ``""`` for a method declaring flat
-    parameters)."""
+    parameters); ``applies``: the other parameter whose value decides whether it is read
+    (:attr:`scanlines.params.Param.applies`, kept only where the method has that other)."""
 
     default: Any
     doc: str
     allowed: str
     domain: dict[str, Any]
     group: str = ""
+    applies: tuple[str, tuple[Any, ...], bool] | None = None
 
 
 @dataclass(frozen=True)
@@ -98,6 +100,7 @@ def method_info(method: str) -> MethodInfo:
                 p.check.describe(),
                 p.check.domain(),
                 cls.settings.group_of(name) if cls.settings else "",
+                p.applies if p.applies and p.applies[0] in cls.parameters else None,
             )
             for name, p in cls.parameters.items()
         },
@@ -111,7 +114,8 @@ class Extractor:
     Parameters
     ----------
     method:
-        A name from :func:`method_names`; ``"adaptive"`` is the paper's method.
+        A name from :func:`method_names`; ``"paper"`` is the paper's method as printed,
+        ``"adaptive"`` the same steps changed to work on real logs.
     preset:
         A named parameter set of the method (``"paper"``: the paper, literally).
     sensor_profile:
@@ -120,7 +124,9 @@ class Extractor:
         takes. Without one, each scan's noise is measured from that scan alone; a method
         that learns the noise (``surfaces``) takes each scan's noise from the sensor's
         scans before it, up to :data:`~scanlines.sensor.learned_noise.LEARNED_SCANS` of them
-        (:class:`~scanlines.sensor.learned_noise.NoiseLearner`), then keeps that line.
+        (:class:`~scanlines.sensor.learned_noise.NoiseLearner`), then keeps that line; each
+        thread learns from the scans it gave, so results do not depend on scheduling, and
+        :meth:`batch` gives what the calls give.
     **params:
         Overrides of single parameters (see :func:`method_info`).
 
@@ -178,17 +184,18 @@ class Extractor:
         step, angle_min = float32(scan.angle_increment), float32(scan.angle_min)
         valid = valid_returns(ranges, float32(scan.range_min), float32(scan.range_max))
         cos, sin = self._bearings(len(scan), step)
-        extraction = self._method_for(scan).extract(ranges, valid, cos, sin, step, angle_min)
+        geometry = (len(scan), angle_min, step)
+        extraction = self._method_for(geometry).extract(ranges, valid, cos, sin, step, angle_min)
         if self._learner is not None:
-            self._learner.learn(scan)
+            self._learner.learn(geometry, ranges, valid, cos, sin)
         return extraction
 
-    def _method_for(self, scan: Scan) -> Any:
-        """The method to extract ``scan`` with: with the noise learned from the sensor's
-        scans before it, if the extractor learns the noise."""
+    def _method_for(self, geometry: Geometry) -> Any:
+        """The method to extract a scan of sensor ``geometry`` with: with the noise learned
+        from the sensor's scans before it (in this thread), if the extractor learns it."""
         if self._learner is None:
             return self._method
-        line = self._learner.line(NoiseLearner.geometry(scan))
+        line = self._learner.line(geometry)
         if line is None:
             return self._method
         method = self._learned.get(line)
@@ -197,12 +204,6 @@ class Extractor:
                 self._learned.clear()
             method = self._learned[line] = type(self._method)(self.params, line)
         return method
-
-    def warm_up(self) -> None:
-        """Extract a small synthetic scan once, so that the lazy imports are done before the
-        first real scan. The kernels are compiled when the package is installed, so this
-        takes milliseconds; it is kept for code written when they compiled on first use."""
-        self(_warm_up_scan())
 
     def batch(
         self,
@@ -238,20 +239,18 @@ class Extractor:
         if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
             raise ParameterError(f"jobs must be an integer >= 1, got {jobs!r}")
         tables, row = [], 0
-        fields = (sensor.angle_min, sensor.angle_increment, sensor.range_min, sensor.range_max)
+        geometry = (stack.shape[1], angle_min, step)
         learner = self._learner
         while (
-            learner is not None
-            and row < len(stack)
-            and not learner.frozen(NoiseLearner.geometry(sensor))
+            learner is not None and row < len(stack) and not learner.frozen(geometry)
         ):  # the noise still learned: row by row
             rows = slice(row, row + 1)
-            method = self._method_for(sensor)
+            method = self._method_for(geometry)
             tables.append(method.extract_many(stack[rows], valid[rows], cos, sin, step, angle_min))
-            learner.learn(Scan(stack[row], *fields))
+            learner.learn(geometry, stack[row], valid[row], cos, sin)
             row += 1
         if row < len(stack) or not tables:
-            method, rows = self._method_for(sensor), slice(row, None)
+            method, rows = self._method_for(geometry), slice(row, None)
             arrays = (stack[rows], valid[rows], cos, sin, step, angle_min)
             tables.append(_extract_stack(method, arrays, jobs))
         return tables[0] if len(tables) == 1 else ExtractionTable.join(tables)
@@ -283,19 +282,6 @@ def _extract_stack(method: Any, arrays: tuple[Any, ...], jobs: int) -> Extractio
 
     with ThreadPoolExecutor(parts) as pool:
         return ExtractionTable.join(list(pool.map(part, range(parts))))
-
-
-def _warm_up_scan() -> Scan:
-    """A room 6 x 4 m with a box in it, seen at 1 deg over 270 deg, two beams lost."""
-    bearings = np.radians(np.arange(-135.0, 135.5, 1.0))
-    cos, sin = np.cos(bearings), np.sin(bearings)
-    with np.errstate(divide="ignore"):
-        walls = np.stack((np.where(cos > 0, 4.0, -2.0) / cos, np.where(sin > 0, 2.5, -1.5) / sin))
-    ranges = np.where(walls > 0, walls, np.inf).min(axis=0)
-    box = (bearings > 0.3) & (bearings < 0.5)
-    ranges[box] = 2.0 / np.cos(bearings[box] - 0.4)
-    ranges[[40, 41]] = 0.0
-    return Scan(ranges, bearings[0], np.radians(1.0), range_max=30.0)
 
 
 def float32(value: float) -> float:
@@ -338,8 +324,8 @@ def extract(
     scan:
         The :class:`~scanlines.Scan`.
     method:
-        ``"adaptive"`` (the paper's method, with defaults that hold on real noisy
-        scans), or another of :func:`method_names`:
+        ``"adaptive"`` (the paper's steps, each changed where real noisy scans need it;
+        the method as printed is ``paper``), or another of :func:`method_names`:
         {other_methods}.
     preset:
         A named parameter set of the method; ``"paper"`` runs the adaptive method

@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from scanlines.errors import ParameterError
+from scanlines.untrusted import clip, quote
 
 __all__ = [
     "GROUPS",
@@ -31,6 +32,7 @@ __all__ = [
     "kernel_settings",
     "number",
     "optional",
+    "param_applies",
     "radians",
     "resolve",
     "with_default",
@@ -67,12 +69,24 @@ class Param:
     """One parameter of a method: its default, its domain (a :class:`Check`), a one-line
     doc and how a compiled kernel reads it: ``kernel`` fields of its settings record
     (``None``: the one field its check implies, see :func:`kernel_settings`; ``()``:
-    none)."""
+    none); ``applies``: when another parameter's value decides whether it is read."""
 
     default: Any
     check: Check
     doc: str
     kernel: tuple[KernelField, ...] | None = None
+    #: ``(other, values, when_in)``: read only while the parameter ``other`` holds one of
+    #: ``values`` (``when_in``) or none of them (not ``when_in``); ``None``: always read.
+    #: The viewer hides a parameter that is not read; a method without ``other`` reads it.
+    applies: tuple[str, tuple[Any, ...], bool] | None = None
+
+
+def param_applies(param: Param, values: Mapping[str, Any]) -> bool:
+    """Whether ``param`` is read with a method's parameter ``values`` (its ``applies``)."""
+    if param.applies is None or param.applies[0] not in values:
+        return True
+    other, chosen, when_in = param.applies
+    return (values[other] in chosen) == when_in
 
 
 GROUPS = ("noise", "clustering", "segments", "events", "output")
@@ -144,13 +158,13 @@ MAX_NUMBER = 1e6
 def _real(name: str, value: Any, kind: str = "a number") -> float:
     """``value`` as a finite float (strings from the command line are parsed)."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real | str):
-        raise ParameterError(f"{name} must be {kind}, got {value!r}")
+        raise ParameterError(f"{name} must be {kind}, got {quote(value)}")
     try:
         out = float(value)
     except (TypeError, ValueError, OverflowError):
-        raise ParameterError(f"{name} must be {kind}, got {value!r}") from None
+        raise ParameterError(f"{name} must be {kind}, got {quote(value)}") from None
     if not math.isfinite(out):
-        raise ParameterError(f"{name} must be a finite number, got {value!r}")
+        raise ParameterError(f"{name} must be a finite number, got {quote(value)}")
     return out
 
 
@@ -166,7 +180,7 @@ class Number(Check):
         out = _real(name, value)
         below = out <= self.low if self.low_open else out < self.low
         if below or out > self.high:
-            raise ParameterError(f"{name} must be {self.describe()}, got {value!r}")
+            raise ParameterError(f"{name} must be {self.describe()}, got {quote(value)}")
         return out
 
     def domain(self) -> dict[str, Any]:
@@ -195,14 +209,14 @@ class Integer(Check):
         elif not isinstance(value, int) or isinstance(value, bool):
             real = _real(name, value, "an integer")
             if isinstance(value, bool) or not real.is_integer():
-                raise ParameterError(f"{name} must be an integer, got {value!r}")
+                raise ParameterError(f"{name} must be an integer, got {quote(value)}")
             value = real
         if isinstance(value, float):
             if not value.is_integer():
-                raise ParameterError(f"{name} must be an integer, got {value!r}")
+                raise ParameterError(f"{name} must be an integer, got {quote(value)}")
             value = int(value)
         if not self.low <= value <= self.high:
-            raise ParameterError(f"{name} must be {self.describe()}, got {value!r}")
+            raise ParameterError(f"{name} must be {self.describe()}, got {quote(value)}")
         return int(value)
 
     def domain(self) -> dict[str, Any]:
@@ -231,7 +245,7 @@ class Choice(Check):
                         return option
                 elif str(option) == lowered:
                     return option
-        raise ParameterError(f"{name} must be {self.describe()}, got {value!r}")
+        raise ParameterError(f"{name} must be {self.describe()}, got {quote(value)}")
 
     def domain(self) -> dict[str, Any]:
         return {"type": "choice", "choices": list(self.options)}
@@ -272,10 +286,10 @@ class Pair(Check):
         try:
             first, second = value
         except (TypeError, ValueError):
-            raise ParameterError(f"{name} must be a pair (a, b), got {value!r}") from None
+            raise ParameterError(f"{name} must be a pair (a, b), got {quote(value)}") from None
         a, b = self.element(name, first), self.element(name, second)
         if not a < b:
-            raise ParameterError(f"{name} must have a < b, got {value!r}")
+            raise ParameterError(f"{name} must have a < b, got {quote(value)}")
         return (a, b)
 
     def domain(self) -> dict[str, Any]:
@@ -334,13 +348,16 @@ def resolve(
     if preset is not None:
         if preset not in presets:
             valid = ", ".join(sorted(presets)) or "none"
-            raise ParameterError(f"unknown preset {preset!r} for method {method!r}; valid: {valid}")
+            raise ParameterError(
+                f"unknown preset {quote(preset)} for method {quote(method)}; valid: {valid}"
+            )
         values.update(presets[preset])
     unknown = sorted(map(str, set(overrides) - set(spec)))
     if unknown:
         valid = ", ".join(sorted(spec))
         raise ParameterError(
-            f"unknown parameter(s) {', '.join(unknown)} for method {method!r}; valid: {valid}",
+            f"unknown parameter(s) {clip(', '.join(unknown), 160)} for method {quote(method)}; "
+            f"valid: {valid}",
             parameter=unknown[0],
         )
     values.update(overrides)

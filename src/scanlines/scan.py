@@ -180,6 +180,11 @@ class Scan:
         increment = _as_float("angle_increment", angle_increment, finite=True)
         if increment == 0.0:
             raise ScanError("angle_increment must be non-zero, got 0.0")
+        if abs(increment) < 1e-30 and np.float32(increment) == 0.0:  # (no cast of a huge one)
+            raise ScanError(
+                f"angle_increment {increment!r} rad rounds to 0 in float32, the precision "
+                "features are computed in (and LaserScan carries): beams would coincide"
+            )
         span = abs(increment) * max(ranges_arr.shape[0] - 1, 1)
         if span > MAX_SPAN:
             raise ScanError(

@@ -158,11 +158,6 @@ class Truth:
         return self.breakpoints[self.breakpoint_dont_care]
 
     @property
-    def dont_care_corners(self) -> np.ndarray:
-        """Beam indices of the don't-care corners (see :attr:`corner_dont_care`)."""
-        return self.corners[self.corner_dont_care]
-
-    @property
     def true_return(self) -> np.ndarray:
         """Beams whose measured range is a return of the surface they hit."""
         return self.status == BeamStatus.HIT

@@ -12,7 +12,8 @@ Channels
     ``scanlines run PATH --out DIR/out.jsonl --on-error skip``, in-process.
 
 ``run mcap`` (``--out DIR/out.mcap``) is an extra channel for the corpus. The map
-target's channels, ``map`` and ``eval map``, are in ``map_channels.py``; the DDS target's,
+target's channels, ``map`` and ``eval map``, are in ``map_channels.py``; those of the
+settings files (parameters, profiles, line maps) in ``file_channels.py``; the DDS target's,
 ``dds node`` and ``node exit``, in ``dds_target.py``. :class:`Case` (an input and its
 outcomes) serves all three targets.
 
@@ -55,6 +56,7 @@ from pathlib import Path
 from typing import Any
 
 from .binaries import BinaryWatch
+from .file_channels import ALL_FILE_CHANNELS, file_channel
 from .map_channels import MAP_CHANNELS, map_channel
 
 CHANNELS = ("library fail", "library skip", "info", "run")
@@ -202,6 +204,8 @@ def run_channel(channel: str, path: str, workdir: str, declared: int | None) -> 
         warnings.simplefilter("always")
         if channel in MAP_CHANNELS:
             outcome = map_channel(channel, Path(path), Path(workdir))
+        elif channel in ALL_FILE_CHANNELS:
+            outcome = file_channel(channel, Path(path), Path(workdir))
         elif channel.startswith("library"):
             outcome = library_channel(channel, Path(path))
         else:

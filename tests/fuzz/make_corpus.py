@@ -377,6 +377,73 @@ def carmen_flaser_256mb_line(path: Path) -> None:
         fh.write(b"0 0 0 0 0 0 1.0 host 1.0\n")
 
 
+# -- the files that set things (built at test time: each beside a CARMEN excerpt) ----------
+
+
+def settings_input(path: Path, name: str, text: str, scans: int = 3) -> None:
+    """A settings-file input (``file_target.py``): ``name`` holding ``text`` beside an
+    excerpt of ``scans`` scans of the Intel sample."""
+    from .seeds import carmen_excerpt
+
+    path.mkdir(parents=True)
+    (path / name).write_text(text)
+    (path / "log.clf").write_text(carmen_excerpt("intel", scans))
+
+
+def alias_bomb_yaml(levels: int = 8) -> str:
+    rows = ['    a: &a ["lol","lol","lol","lol","lol","lol","lol","lol","lol"]']
+    names = "abcdefghij"
+    for k in range(1, levels):
+        rows.append(f"    {names[k]}: &{names[k]} [{','.join(['*' + names[k - 1]] * 9)}]")
+    tail = f"scanlines:\n  ros__parameters:\n    min_points: *{names[levels - 1]}\n"
+    return "other:\n  ros__parameters:\n" + "\n".join(rows) + "\n" + tail
+
+
+PARAMS = "scanlines:\n  ros__parameters:\n"
+SETTINGS_ENTRIES = {
+    "params_alias_bomb": ("params.yaml", alias_bomb_yaml()),
+    "params_recursive_alias": ("params.yaml", "scanlines:\n  ros__parameters: &a\n    n: *a\n"),
+    "params_nested_100kb": ("params.yaml", PARAMS + "    k: " + "[" * 100_000 + "\n"),
+    "params_integer_5000_digits": ("params.yaml", PARAMS + "    min_points: " + "1" * 5000),
+    "config_nested_arrays": ("config.toml", "[params]\nmin_points = " + "[" * 100_000),
+    "profile_nested": ("profile.json", "[" * 100_000 + "]" * 100_000),
+    "profile_integer_5000_digits": (
+        "profile.json",
+        '{"format": "scanlines-sensor-profile/1", "noise_sigma0": ' + "1" * 5000 + "}",
+    ),
+}
+for _name, (_file, _text) in SETTINGS_ENTRIES.items():
+    entry(_name, GENERATED)(lambda path, f=_file, t=_text: settings_input(path, f, t))
+
+
+def map_input(path: Path, change: Callable[[dict], None] | None, raw: str | None = None) -> None:
+    """A line-map input: the map of the Intel excerpt's first 20 scans, changed."""
+    import json
+
+    from scanlines.map import build_map
+    from scanlines.map.export import write_map
+
+    scans = intel_scans(20)
+    settings_input(path, "initial.txt", "{!r},{!r},{!r},{!r}\n".format(
+        scans[0].timestamp, *scans[0].pose), scans=20)  # fmt: skip
+    write_map(build_map(enumerate(scans)).line_map.lines(), path / "map.json", overwrite=True)
+    document = json.loads((path / "map.json").read_text())
+    if change is not None:
+        change(document)
+    text = json.dumps(document)
+    (path / "map.json").write_text(text if raw is None else text.replace('"@raw@"', raw, 1))
+
+
+MAP_ENTRIES: dict[str, tuple[Callable[[dict], None] | None, str | None]] = {
+    "map_ends_1e308": (lambda m: m["lines"][0].update(start=[1e308, 1e308]), None),
+    "map_origin_nan": (lambda m: m["frame"].update(origin=[float("nan"), 0.0]), None),
+    "map_rho_digits": (lambda m: m["lines"][0].update(rho="@raw@"), "9" * 4301),
+    "map_nested_covariance": (lambda m: m["lines"][0].update(covariance="@raw@"), "[" * 10**5),
+}
+for _name, (_change, _raw) in MAP_ENTRIES.items():
+    entry(_name, GENERATED)(lambda path, c=_change, r=_raw: map_input(path, c, r))
+
+
 # -- building -----------------------------------------------------------------------------
 
 

@@ -1,29 +1,33 @@
-"""Fuzz the log readers, the map commands and the ROS 2 node: mutate the seeds, try each
-input, report.
+"""Fuzz the log readers, the map commands, the files that set things and the ROS 2 node:
+mutate the seeds, try each input, report.
 
 Usage, from the repository root::
 
-    python -m tests.fuzz.run --count 5000 --seed 1 [--jobs 2] [--targets logs maps dds]
-                             [--save-failures DIR]
+    python -m tests.fuzz.run --count 5000 --seed 1 [--jobs 2]
+        [--targets logs maps params profiles linemaps dds] [--save-failures DIR]
 
-Three targets. ``logs``: every log format (``seeds.py``), mutated by the plans of
+Six targets. ``logs``: every log format (``seeds.py``), mutated by the plans of
 ``plans.py``, read through every channel of ``channels.py`` (the library, ``info``,
 ``run``). ``maps``: a CARMEN log's poses and a TUM file of them (``map_target.py``),
 mutated by ``mutate_maps.py``, through ``map`` and ``eval --map`` (``map_channels.py``).
+``params``, ``profiles``, ``linemaps``: a parameters file and a configuration, a sensor
+profile, the line map ``localize`` reads (``file_target.py``), mutated by
+``mutate_files.py``, read and run through ``file_channels.py``.
 ``dds``: a LaserScan sample mutated by ``mutate_cdr.py``, sent to one running ROS 2 node
 (``dds_target.py``); it starts a node, so it runs only when named. ``--targets`` takes
-any of them (default ``logs maps``). ``--count`` is shared: input ``k`` of the campaign
-goes to target ``k mod T`` of the ``T`` named. Input ``i`` of ``logs`` or ``maps`` is
+any of them (default: all but ``dds``). ``--count`` is shared: input ``k`` of the campaign
+goes to target ``k mod T`` of the ``T`` named. Input ``i`` of a seeded target is
 seed ``i mod S`` of that target (round robin over its seeds) mutated by the next plan of
 that seed (round robin over its mutators); input ``i`` of ``dds`` is the sample mutated by
 plan ``i mod P``. Each target's generator is seeded by ``(seed, i)``: the same ``--seed``
 always gives the same inputs, and the first ``n`` inputs of a target in a longer run are
 those of a run of ``n``. Prints a table of outcomes by seed and channel for each target
 and every defect; exits 1 if there is any defect. ``--replay`` takes saved inputs: log
-files and bag directories, map inputs (a folder with ``log.clf``) and DDS samples
-(``.cdr``, sent to a node). A shared object rewritten during the campaign (``binaries.py``:
-another build of the core copied over the installed one) ends it with one line, exit 2:
-the crashes it causes are not the inputs'.
+files and bag directories, map inputs (a folder with ``log.clf``), settings inputs (a
+folder with ``log.clf`` and ``params.yaml``, ``config.toml``, ``profile.json`` or
+``map.json``) and DDS samples (``.cdr``, sent to a node). A shared object rewritten during
+the campaign (``binaries.py``: another build of the core copied over the installed one)
+ends it with one line, exit 2: the crashes it causes are not the inputs'.
 """
 
 from __future__ import annotations
@@ -57,6 +61,8 @@ from .channels import (
     Outcome,
     Worker,
 )
+from .file_channels import FILE_CHANNELS
+from .file_target import build_file_seeds, file_input_kind, file_plans, seeds_of
 from .map_channels import MAP_CHANNELS
 from .map_target import MAP_SEED_FILES, build_map_seeds, map_plans
 from .plans import Plan, make_input, plans_for
@@ -77,11 +83,22 @@ class SeededTarget(NamedTuple):
 SEEDED_TARGETS = {
     "logs": SeededTarget(tuple(SEED_FILES), build_seeds, plans_for, CHANNELS),
     "maps": SeededTarget(tuple(MAP_SEED_FILES), build_map_seeds, map_plans, MAP_CHANNELS),
+    **{
+        target: SeededTarget(
+            seeds_of(target),
+            lambda folder, target=target: build_file_seeds(folder, target),
+            file_plans,
+            channels,
+        )
+        for target, channels in FILE_CHANNELS.items()
+    },
 }
-#: What inputs go to: the log readers, the map commands, a ROS 2 node (``dds_target.py``).
-TARGETS = ("logs", "maps", "dds")
+#: What inputs go to: the log readers, the map commands, the files that set things
+#: (parameters files and configurations, sensor profiles, line maps), a ROS 2 node
+#: (``dds_target.py``).
+TARGETS = ("logs", "maps", "params", "profiles", "linemaps", "dds")
 #: Those of a run that names none (``dds`` starts a node: only when named).
-DEFAULT_TARGETS = ("logs", "maps")
+DEFAULT_TARGETS = ("logs", "maps", "params", "profiles", "linemaps")
 
 
 def make_case(
@@ -275,6 +292,11 @@ def _dds_cases(make, count, workdir, sample, seed=0, **options: Any) -> list[Cas
     from .dds_target import DEFAULT_DOMAIN, run_dds
 
     domain = options.get("domain", DEFAULT_DOMAIN)
+    if domain is None:  # a domain no other process on this machine uses
+        sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+        from dds_domains import free_domain
+
+        domain = free_domain()
     progress, watch = options.get("progress", False), options.get("watch")
     cases = run_dds(
         make, count, workdir=workdir, seed=sample, domain=domain, progress=progress, watch=watch
@@ -300,7 +322,9 @@ def replay(paths: list[Path], *, workdir: Path | None = None, **options: Any) ->
 
             def make(index: int) -> Case:
                 path = paths[index]
-                channels = MAP_CHANNELS if is_map_input(path) else None
+                kind = file_input_kind(path)
+                channels = FILE_CHANNELS[kind] if kind else None
+                channels = MAP_CHANNELS if channels is None and is_map_input(path) else channels
                 return Case(index, path.name, "replay", path, channels=channels)
 
             logs_options = without_domain(options)
@@ -379,9 +403,12 @@ def report(cases: list[Case], seconds: float | None = None, *, kinds: bool = Tru
     from .dds_target import SEED_NAME, outcomes_by_plan
 
     samples = [case for case in cases if case.seed_name == SEED_NAME]
-    maps = [case for case in cases if case.channels == MAP_CHANNELS]
-    logs = [c for c in cases if c.seed_name != SEED_NAME and c.channels != MAP_CHANNELS]
-    parts = [outcome_table(group) for group in (logs, maps) if group]
+    groups = {channels: [] for channels in (MAP_CHANNELS, *FILE_CHANNELS.values())}
+    logs = []
+    for case in cases:
+        if case.seed_name != SEED_NAME:
+            groups.get(case.channels, logs).append(case)
+    parts = [outcome_table(group) for group in (logs, *groups.values()) if group]
     parts += [outcomes_by_plan(samples)] if samples else []
     if seconds is not None:
         parts.append(f"{len(cases)} inputs in {seconds:.0f} s")
@@ -428,10 +455,16 @@ def main(argv: list[str] | None = None) -> int:
         choices=TARGETS,
         metavar="TARGET",
         help="what the inputs go to, any of logs (the log readers), maps (the map "
-        "commands), dds (a ROS 2 node: started only when named); space separated or "
-        "repeated (logs maps)",
+        "commands), params (parameters files and configurations), profiles (sensor "
+        "profiles), linemaps (the line maps localize reads), dds (a ROS 2 node: started "
+        "only when named); space separated or repeated (logs maps params profiles linemaps)",
     )
-    parser.add_argument("--domain-id", type=int, default=97, help="dds: the DDS domain (97)")
+    parser.add_argument(
+        "--domain-id",
+        type=int,
+        default=None,
+        help="dds: the DDS domain (default: one no other process on this machine uses)",
+    )
     args = parser.parse_args(argv)
     options: dict[str, Any] = {
         "jobs": args.jobs,
@@ -457,7 +490,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def is_map_input(path: Path) -> bool:
-    """A map target's input: a folder holding ``log.clf``."""
+    """A map target's input (a folder holding ``log.clf``), or a settings file's (a folder
+    holding ``log.clf`` and the file: ``file_target.py``)."""
     return path.is_dir() and (path / "log.clf").is_file()
 
 

@@ -1,5 +1,5 @@
-"""Fuzzing the log readers, the map commands and the ROS 2 node: past failures stay
-fixed, and seeded mutations find no defect.
+"""Fuzzing the log readers, the map commands, the files that set things and the ROS 2
+node: past failures stay fixed, and seeded mutations find no defect.
 
 Every log input is read through the library (fail and skip modes) and the ``info`` and
 ``run`` commands, every map input (a log's poses, a TUM file) through ``map`` and ``eval
@@ -18,15 +18,17 @@ from pathlib import Path
 
 import pytest
 
-from .make_corpus import build_generated, corpus_inputs
+from dds_domains import free_domain
+
+from .make_corpus import GENERATED, build_generated, corpus_inputs
 from .run import Case, fuzz, replay, report
 
 pytestmark = pytest.mark.slow  # thousands of damaged inputs
 
 SHORT_RUN = 300
 MAP_RUN = 45
+SETTINGS_RUN = 90
 DDS_SHORT_RUN = 200
-DDS_DOMAIN = 98  # not the campaign's 97: a campaign may run meanwhile
 LONG_RUN = 5000
 SEED = 1
 JOBS = max(1, min(2, len(os.sched_getaffinity(0))))
@@ -46,7 +48,7 @@ def corpus_cases(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Case]:
     return {case.path.name: case for case in cases}
 
 
-CORPUS_NAMES = [p.name for p in corpus_inputs()] + ["carmen_flaser_256mb_line.log.gz"]
+CORPUS_NAMES = [p.name for p in corpus_inputs()] + list(GENERATED)
 
 
 @pytest.mark.parametrize("name", CORPUS_NAMES)
@@ -76,10 +78,25 @@ def test_short_map_run(tmp_path: Path) -> None:
     fail_on_defects(cases)
 
 
+def test_short_settings_files_run(tmp_path: Path) -> None:
+    """The settings-file targets, bounded: 90 inputs (30 each of parameters files and
+    configurations, sensor profiles and line maps: alias bombs, deep nesting, huge
+    integers, booleans, lines off their ends) read and run. Reproduce with ``python -m
+    tests.fuzz.run --count 90 --seed 1 --targets params profiles linemaps``."""
+    targets = ("params", "profiles", "linemaps")
+    failures = tmp_path / "failures"
+    cases = fuzz(SETTINGS_RUN, SEED, targets=targets, jobs=JOBS, save_failures=failures)
+    assert len(cases) == SETTINGS_RUN
+    assert {case.seed_name for case in cases} == {
+        "params-yaml", "config-toml", "profile-json", "line-map",
+    }  # fmt: skip
+    fail_on_defects(cases)
+
+
 @pytest.mark.long
 def test_long_mutation_run(request: pytest.FixtureRequest, tmp_path: Path) -> None:
-    """``python -m tests.fuzz.run --count 5000 --seed 1 --jobs N``: 2,500 inputs each of the
-    logs and maps targets."""
+    """``python -m tests.fuzz.run --count 5000 --seed 1 --jobs N``: 1,000 inputs each of the
+    logs, maps, params, profiles and linemaps targets."""
     if not request.config.getoption("--long"):
         pytest.skip("a long run: give pytest --long")
     jobs = max(1, len(os.sched_getaffinity(0)))
@@ -95,7 +112,7 @@ def test_dds_corpus_samples_are_handled_cleanly() -> None:
     """Samples that once failed the node (``corpus_dds/README.md``), sent to a running one."""
     samples = sorted(DDS_CORPUS.glob("*.cdr"))
     assert len(samples) >= 2
-    cases = replay(samples, domain=DDS_DOMAIN + 1)
+    cases = replay(samples, domain=free_domain())
     assert len(cases) == len(samples)
     fail_on_defects(cases)
 
@@ -105,7 +122,8 @@ def test_dds_short_run(tmp_path: Path) -> None:
     each (a good scan is still published after), and exits on SIGTERM with its summary.
     Reproduce with ``python -m tests.fuzz.run --count 200 --seed 1 --targets dds``."""
     failures = tmp_path / "failures"
-    cases = fuzz(DDS_SHORT_RUN, SEED, targets=("dds",), save_failures=failures, domain=DDS_DOMAIN)
+    domain = free_domain()  # one no other process (a campaign, another clone) uses
+    cases = fuzz(DDS_SHORT_RUN, SEED, targets=("dds",), save_failures=failures, domain=domain)
     assert len(cases) == DDS_SHORT_RUN
     fail_on_defects(cases)
     outcomes = [outcome for case in cases for outcome in case.outcomes]

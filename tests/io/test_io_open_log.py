@@ -156,6 +156,7 @@ def test_reader_option_names_lists_keywords() -> None:
         "fov",
         "angle_convention",
         "max_range",
+        "range_max",
         "range_min",
         "pose",
         "mounting",

@@ -10,6 +10,7 @@ import pytest
 
 from scanlines import Extractor, Scan, extract
 from scanlines.data import sample
+from scanlines.extractor import at_float32, float32
 from scanlines.io import open_log
 from scanlines.sensor import learned_noise
 from scanlines.sensor.profile import estimate_profile
@@ -87,14 +88,20 @@ def test_a_densely_sampled_square_room_is_four_walls(beams):
 def test_an_extractor_without_a_profile_learns_the_noise_run_measures(monkeypatch):
     monkeypatch.setattr(learned_noise, "LEARNED_SCANS", 20)
     scans = list(open_log(sample("intel")))[:30]
-    profile = estimate_profile(scans[:20], max_scans=20)
+    # The learner measures the ranges the kernels take, at float32 precision.
+    taken = [
+        Scan(at_float32(s.ranges), s.angle_min, s.angle_increment, s.range_min, s.range_max)
+        for s in scans[:20]
+    ]
+    profile = estimate_profile(taken, max_scans=20)
     learning, profiled = Extractor("surfaces"), Extractor("surfaces", sensor_profile=profile)
     own = Extractor("surfaces", noise_sigma=0.01)  # differs from both: the check can fail
     for k, scan in enumerate(scans):
         extraction = learning(scan)
         if k >= 20:
             assert extraction.lines.tolist() == profiled(scan).lines.tolist()
-    geometry = learned_noise.NoiseLearner.geometry(scans[0])
+    first = scans[0]
+    geometry = (len(first), float32(first.angle_min), float32(first.angle_increment))
     assert learning._learner.line(geometry) == profile.noise
     assert own(scans[-1]).lines.tolist() != profiled(scans[-1]).lines.tolist()
 
@@ -111,3 +118,82 @@ def test_batch_learns_as_the_scans_one_by_one_do(monkeypatch):
     for k, extraction in enumerate(one_by_one):
         assert table[k].lines.tolist() == extraction.lines.tolist()
         assert table[k].breakpoints.tolist() == extraction.breakpoints.tolist()
+
+
+def _noisy_intel_scans(count: int) -> list[Scan]:
+    """Shipped scans with float64 noise added: ranges no float32 holds exactly."""
+    rng = np.random.default_rng(5)
+    return [
+        Scan(s.ranges + rng.normal(0.0, 1e-4, len(s)), s.angle_min, s.angle_increment, 0.0, 50.0)
+        for s in list(open_log(sample("intel")))[:count]
+    ]
+
+
+def test_batch_equals_the_calls_to_the_bit_while_learning():
+    scans = _noisy_intel_scans(40)
+    calls = Extractor("surfaces")
+    one_by_one = [calls(scan) for scan in scans]
+    stack = np.stack([scan.ranges for scan in scans])
+    table = Extractor("surfaces").batch(
+        stack, scans[0].angle_min, scans[0].angle_increment, 0.0, 50.0
+    )
+    for k, extraction in enumerate(one_by_one):
+        assert table[k].lines.tobytes() == extraction.lines.tobytes()
+        assert table[k].covariances.tobytes() == extraction.covariances.tobytes()
+        assert table[k].breakpoints.tolist() == extraction.breakpoints.tolist()
+
+
+def _lines_in_order(extractor: Extractor, scans: list[Scan]) -> list[bytes]:
+    return [extractor(scan).lines.tobytes() for scan in scans]
+
+
+def test_threads_sharing_a_bare_extractor_each_learn_from_their_own_scans():
+    import threading
+
+    scans = _noisy_intel_scans(48)
+    shares = [scans[k::8] for k in range(8)]  # each thread's scans, in its order
+    expected = [_lines_in_order(Extractor("surfaces"), share) for share in shares]
+    shared = Extractor("surfaces")
+    got: list[list[bytes]] = [[] for _ in shares]
+    start = threading.Barrier(len(shares))
+
+    def work(k: int) -> None:
+        start.wait()
+        got[k] = _lines_in_order(shared, shares[k])
+
+    threads = [threading.Thread(target=work, args=(k,)) for k in range(len(shares))]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert got == expected
+    # the learning shows: each scan alone (its own noise estimate) gives other lines
+    alone = [Extractor("surfaces")(scan).lines.tobytes() for scan in shares[0]]
+    assert alone != expected[0]
+
+
+def _same_partition(a, b) -> bool:
+    return all(
+        np.array_equal(getattr(a, name), getattr(b, name)) for name in ("first", "last", "outliers")
+    )
+
+
+@pytest.mark.parametrize("log", ["intel", "freiburg", "urg"])
+def test_the_two_stage_search_finds_the_full_searchs_partition_on_the_shipped_scans(log):
+    scans = list(open_log(sample(log)))
+    full, two_stage = Extractor("surfaces"), Extractor("surfaces", two_stage=True)
+    same = sum(_same_partition(full(scan), two_stage(scan)) for scan in scans)
+    assert same >= 0.99 * len(scans)  # 299, 299 and 150 of 300, 300 and 150 on 2026-12-07
+
+
+def test_the_two_stage_search_keeps_a_dense_room_four_walls():
+    beams = 20_000
+    step = 2.0 * math.pi / beams
+    bearings = -math.pi + step * np.arange(beams)
+    facing = np.round(bearings / (math.pi / 2)) * (math.pi / 2)
+    ranges = 5.0 / np.cos(bearings - facing)
+    ranges += np.random.default_rng(3).normal(0.0, 0.01, beams)
+    scan = Scan(ranges, -math.pi, step, range_max=30.0)
+    result = extract(scan, "surfaces", two_stage=True)
+    assert len(result) == 4
+    assert result.corners.size == 4

@@ -3,8 +3,8 @@ method and preset on a 361-beam scan, each timed.
 
     python tools/benchmarks/first_result.py [--python OTHER_PYTHON] [--repeats 5]
 
-Each repeat is a new process with empty caches (``XDG_CACHE_HOME``, ``NUMBA_CACHE_DIR`` and
-``MPLCONFIGDIR`` pointed at a new folder), so nothing a previous process left is used.
+Each repeat is a new process with empty caches (``XDG_CACHE_HOME`` and ``MPLCONFIGDIR``
+pointed at a new folder), so nothing a previous process left is used.
 Printed: the median over repeats of the import, of each first call and of the whole (wall
 from before the import to after the last call), with the load average. ``--python`` runs
 another installed version (its own virtual environment's interpreter) the same way.
@@ -46,7 +46,6 @@ def child(python: str) -> dict:
         env = {
             **os.environ,
             "XDG_CACHE_HOME": cache,
-            "NUMBA_CACHE_DIR": os.path.join(cache, "numba"),
             "MPLCONFIGDIR": os.path.join(cache, "mpl"),
         }
         done = subprocess.run(

@@ -5,8 +5,8 @@
 #
 #     bash tools/benchmarks/fresh_install.sh [COMMIT]   # default: HEAD of this checkout
 #
-# "Empty caches": XDG_CACHE_HOME (pip's, matplotlib's, any kernel cache) and
-# NUMBA_CACHE_DIR point at new folders, so pip downloads every dependency again.
+# "Empty caches": XDG_CACHE_HOME (pip's, matplotlib's) and MPLCONFIGDIR point at new
+# folders, so pip downloads every dependency again.
 set -euo pipefail
 repo="$(cd "$(dirname "$0")/../.." && pwd)"
 commit="${1:-HEAD}"
@@ -14,7 +14,7 @@ work="$(mktemp -d /tmp/scanlines-fresh.XXXXXX)"
 trap 'rm -rf "$work"' EXIT
 git clone -q "$repo" "$work/clone"
 git -C "$work/clone" checkout -q "$commit"
-export XDG_CACHE_HOME="$work/cache" NUMBA_CACHE_DIR="$work/numba" MPLCONFIGDIR="$work/mpl"
+export XDG_CACHE_HOME="$work/cache" MPLCONFIGDIR="$work/mpl"
 cd "$work/clone"
 echo "commit $(git rev-parse --short HEAD); load before: $(cut -d' ' -f1-3 /proc/loadavg)"
 python3 -m venv .venv

@@ -57,7 +57,7 @@ def main(argv: list[str] | None = None) -> int:
             out = folder / f"map-{offset:g}.json"
             code, stderr, seconds = run(["map", str(log), "--out", str(out)])
             scored = folder / f"eval-{offset:g}"
-            run(["eval", "--map", str(log), "--out", str(scored)])
+            run(["eval", "map", str(log), "--out", str(scored)])
             lines, difference, coverage, refusal = "-", "-", "-", ""
             if code == 0:
                 mine = ends(out)

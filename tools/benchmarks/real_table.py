@@ -150,7 +150,7 @@ def table(rows: list[dict[str, Any]], labels: list[str], pairs: int) -> str:
     head = ["log", "mode", "noise line", "pairs", *labels]
     lines = [
         f"Strict repeatability / coverage / repeated m per scan / fidelity mm "
-        f"(`scanlines eval --real LOG --pairs {pairs} [--bare]`).",
+        f"(`scanlines eval real LOG --pairs {pairs} [--bare]`).",
         "",
         "| " + " | ".join(head) + " |",
         "|" + "---|" * len(head),

@@ -2,6 +2,18 @@
 
     python tools/benchmarks/ros2_latency.py [--rate 40] [--scans 400] [--log intel|sim1081]
         [--node-arg=--markers-topic= ...]
+    python tools/benchmarks/ros2_latency.py --map MAP.json --log RAW.clf.gz
+        --initial-pose T,X,Y,YAW [--scans 5505] [--rate 40] [--node-cpu 0]
+
+With ``--map`` (live localisation): ``scanlines localize`` runs on the log's first
+``--scans`` scans in this process; then the node (``scanlines ros2 --map``, pinned to core
+``--node-cpu`` with ``taskset``) is given ``/initialpose`` (the pose of ``--initial-pose``
+less the log's mounting, stamped with the restamped stamp of ``localize``'s first scan),
+and ``scanlines ros2 --play LOG --restamp --rate R`` plays the scans into it. Printed: the
+poses received, the largest distance of a scan's ``amcl_pose`` from ``localize``'s pose for
+the same scan (matched by stamp), the node's own summary (latency from taking the scan off
+its reader to writing its pose), and the latency from the player writing each scan to the
+node writing its pose (DDS source timestamps, one clock).
 
 Starts ``scanlines ros2`` (the default method, loopback DDS) in a process of its own,
 publishes the scans to it at ``--rate`` Hz from this process, and prints the node's own
@@ -48,10 +60,20 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rate", type=float, default=40.0)
     parser.add_argument("--scans", type=int, default=400)
-    parser.add_argument("--log", choices=("intel", "sim1081"), default="intel")
+    parser.add_argument("--log", default="intel", help="intel, sim1081, or (--map) a log")
     parser.add_argument("--domain-id", type=int, default=90)
     parser.add_argument("--node-arg", action="append", default=[], help="an option of the node")
+    parser.add_argument("--map", help="live localisation on this map (module docstring)")
+    parser.add_argument("--initial-pose", help="--map: T,X,Y,YAW as localize takes it")
+    parser.add_argument("--node-cpu", type=int, default=0, help="--map: the node's core")
     args = parser.parse_args()
+    if args.map:
+        from ros2_localisation import localisation_benchmark
+
+        localisation_benchmark(args)
+        return
+    if args.log not in ("intel", "sim1081"):
+        sys.exit("--log: intel or sim1081 (a log's path only with --map)")
     scans = (intel_scans if args.log == "intel" else sim1081_scans)(args.scans)
     from cyclonedds.sub import DataReader
     from cyclonedds.topic import Topic

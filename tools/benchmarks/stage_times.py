@@ -4,12 +4,20 @@
 
 The kernel is C++ (``cpp/scanlines/methods/adaptive.cpp``): its stages are not callable on
 their own, so ``scanlines._core.adaptive_stage_seconds`` runs the whole kernel and times
-each stage inside it with a steady clock (about 50 ns of clock reads per stage). The stages
-add up to the kernel without its call overhead (the conversion of the arguments and the
-boxing of the table). The whole call and the whole kernel are timed from Python by the
-package's one timing rule (:func:`scanlines.bench.timing.time_calls`); every row is the
-median of ``repeats`` samples, passes interleaved. Speed is measured here, never asserted in
-tests.
+each stage inside it with a steady clock (about 50 ns of clock reads per stage). That
+function exists only in a build made for this tool (product builds carry no timing code),
+in a virtual environment of its own::
+
+    python -m venv /tmp/stages && . /tmp/stages/bin/activate
+    pip install scikit-build-core nanobind
+    pip install --no-build-isolation -Ccmake.define.SCANLINES_STAGE_TIMES=ON .
+
+The timed kernel makes adaptive_scan's calls in its order; the tool checks that its table is
+``adaptive_stack``'s. The stages add up to the kernel without its call overhead (the
+conversion of the arguments and the boxing of the table). The whole call and the whole
+kernel are timed from Python by the package's one timing rule
+(:func:`scanlines.bench.timing.time_calls`); every row is the median of ``repeats`` samples,
+passes interleaved. Speed is measured here, never asserted in tests.
 """
 
 from __future__ import annotations
@@ -33,6 +41,11 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=3)
     parser.add_argument("--repeats", type=int, default=300)
     args = parser.parse_args()
+    if not hasattr(_core, "adaptive_stage_seconds"):
+        raise SystemExit(
+            "stage_times.py: this build of scanlines has no stage timing; build one with "
+            "-Ccmake.define.SCANLINES_STAGE_TIMES=ON (see this script's docstring)"
+        )
     scan = random_scene(args.seed, args.sensor).scan(args.seed).scan
     extractor = Extractor()
     method = extractor._method
@@ -52,7 +65,12 @@ def main() -> None:
     stage_seconds: list[dict[str, float]] = []
 
     def stages() -> None:
-        stage_seconds.append(_core.adaptive_stage_seconds(*arguments))
+        stage_seconds.append(_core.adaptive_stage_seconds(*arguments)[0])
+
+    timed_table = _core.adaptive_stage_seconds(*arguments)[1]
+    for timed, plain in zip(timed_table, _core.adaptive_stack(*arguments), strict=True):
+        if not np.array_equal(timed, plain, equal_nan=True):
+            raise SystemExit("stage_times.py: the timed kernel's table is not adaptive_stack's")
 
     rows = {
         "whole call (Extractor)": lambda: extractor(scan),

@@ -52,7 +52,7 @@ two mixed pixels at a depth jump, or one with the near surface's last return), `
 
 The two-return rule was added after the first version of this page: it drops what a cluster of
 two at a depth jump usually is, and keeps a small object in front of both sides
-(`tests/test_adaptive.py::test_two_returns_between_two_surfaces`). It lifted breakpoint F1 on
+(`tests/methods/test_adaptive.py::test_two_returns_between_two_surfaces`). It lifted breakpoint F1 on
 300 scenes per sensor from 0.930 / 0.948 / 0.947 / 0.910 to 0.937 / 0.951 / 0.954 / 0.917
 (lms_1deg, lms_05deg, tim571, urg04lx; commit `bbdd791`), corner F1 moved by at most 0.001, and
 the hand-labelled Intel frames did not change (`python tools/decisions/labelled_frames.py`).
@@ -119,7 +119,7 @@ falling after it) scores zero (`tests/test_steps.py::test_dk_as_printed_misses_a
 fitted by y = kx + b; its error is vertical) and `fit="tls"` (orthogonal fit in Hesse form).
 
 y = kx + b has no slope for a wall parallel to the sensor's y axis (the fit is undefined: NaN,
-`tests/test_adaptive.py::test_vertical_wall_paper_fit_has_no_slope`) and its vertical error
+`tests/methods/test_adaptive.py::test_vertical_wall_paper_fit_has_no_slope`) and its vertical error
 misjudges steep walls; five means throw away the information of the points.""",
         "`tls` (the default).",
     ),
@@ -168,7 +168,7 @@ it is reported as a breakpoint at the last beam of the first segment) and `corne
 The incidence-bounded clustering (see the breakpoint page) keeps walls seen at grazing incidence
 whole, but it also lets a small depth step, or a jump split by a mixed pixel, pass as continuous;
 the turn score then finds a "corner" there. Two parallel walls at different depths do not meet
-near the step (`tests/test_adaptive.py::test_corner_check_turns_a_bridged_depth_step_into_a_breakpoint`).
+near the step (`tests/methods/test_adaptive.py::test_corner_check_turns_a_bridged_depth_step_into_a_breakpoint`).
 Known limit: when noise puts a 3-point segment across the step, both of its junctions meet.""",
         "`corner_check=True` (the default).",
     ),

@@ -278,6 +278,7 @@ TrackStep track_scan(const TrackVector& state, const TrackMatrix& covariance,
         }
         double g3[3] = {0, 0, 0};
         std::fill(h, h + 9, 0.0);
+        Index weighted = 0;  // pairs whose weight did not vanish (a residual of 1e308 m)
         for (Index k = 0; k < m; ++k) {
             const Index l = line_of[k];
             if (l < 0 || per_line[l] < p.line_returns) continue;
@@ -289,11 +290,17 @@ TrackStep track_scan(const TrackVector& state, const TrackMatrix& covariance,
                                static_cast<double>(per_line[l]) * p.line_sigma * p.line_sigma;
             const double z = std::fabs(e) / std::sqrt(var);
             const double w = (z <= p.huber ? 1.0 : p.huber / z) / var;
+            if (!(w > 0.0 && std::isfinite(w * e))) continue;
+            ++weighted;
             const double j[3] = {jx, jy, jt};
             for (int r = 0; r < 3; ++r) {
                 g3[r] += j[r] * w * e;
                 for (int s = 0; s < 3; ++s) h[r * 3 + s] += j[r] * w * j[s];
             }
+        }
+        if (weighted < p.min_pairs) {  // the map's lines say nothing of this scan
+            fitted = false;
+            break;
         }
         TrackMatrix system = info;
         for (int r = 0; r < 3; ++r)

@@ -1,7 +1,9 @@
 #include "scanlines/methods/adaptive.hpp"
 
 #include <algorithm>
+#ifdef SCANLINES_STAGE_TIMES
 #include <chrono>
+#endif
 #include <cmath>
 #include <limits>
 #include <tuple>
@@ -21,19 +23,6 @@
 #include "scanlines/steps/split.hpp"
 
 namespace scanlines {
-
-const std::array<const char*, N_ADAPTIVE_STAGES> ADAPTIVE_STAGE_NAMES = {
-    "returns, noise, rule",
-    "denoise",
-    "turn window",
-    "clustering",
-    "sigmas, running sums, costs",
-    "corner scores",
-    "candidates + sweep + choice",
-    "cut, refine, merge, split",
-    "corner beams",
-    "assembly (fits, covariances)",
-};
 
 namespace {
 
@@ -153,7 +142,7 @@ std::pair<Ints, Ints> refine_cuts(const RunCost& cost, const Ints& a, const Ints
 }
 
 // Greedily merge the neighbour pair that lowers the criterion most, until none does.
-Runs merge_by_criterion(const RunCost& cost, const Ints& a_in, const Ints& b_in,
+GroupedRuns merge_by_criterion(const RunCost& cost, const Ints& a_in, const Ints& b_in,
                         const Ints& cluster_in, double segment_cost) {
     Ints a = a_in, b = b_in, cluster = cluster_in;
     Index m = static_cast<Index>(a.size());
@@ -230,10 +219,10 @@ std::pair<double, Index> farthest_from_chord_in_tolerances(const Reals& x, const
 }
 
 // Cut runs at their worst point until every point is within its tolerance.
-Runs split_by_residual(const Reals& x, const Reals& y, Index fit, const Moments& moments,
+GroupedRuns split_by_residual(const Reals& x, const Reals& y, Index fit, const Moments& moments,
                        const Ints& a, const Ints& b, const Ints& cluster, const Reals& tolerance,
                        Index min_points) {
-    Runs out;
+    GroupedRuns out;
     const Index shortest = std::max<Index>(min_points, 1);
     std::vector<std::pair<Index, Index>> stack;
     for (std::size_t k = 0; k < a.size(); ++k) {
@@ -266,15 +255,23 @@ Runs split_by_residual(const Reals& x, const Reals& y, Index fit, const Moments&
     return out;
 }
 
-// The noise line the thresholds use: the noise_sigma override, else the sensor profile's
-// noise or the scan's own (one constant, its value at the median range, with
-// constant_noise).
-NoiseLine scan_noise_model(const AdaptiveSettings::Noise& s, NoiseLine noise,
-                           const Returns& returns, const Ints& gap) {
-    if (!s.estimate_noise) return {s.noise_sigma, 0.0};
-    noise = resolve_noise(noise, returns, gap);
-    if (s.constant_noise) return {noise_at(noise, median(returns.r)), 0.0};
-    return noise;
+// The noise line the thresholds use and its value at the median range.
+struct ScanNoise {
+    NoiseLine line;
+    double typical;
+};
+
+// The noise_sigma override, else the sensor profile's noise or the scan's own (one
+// constant, its value at the median range, with constant_noise).
+ScanNoise scan_noise(const AdaptiveSettings::Noise& s, NoiseLine noise, const Returns& returns,
+                     Index n_beams) {
+    if (!s.estimate_noise) {
+        noise = {s.noise_sigma, 0.0};
+    } else {
+        noise = resolve_noise(noise, returns, beam_gaps(returns.index, n_beams));
+        if (s.constant_noise) noise = {noise_at(noise, median(returns.r)), 0.0};
+    }
+    return {noise, noise_at(noise, median(returns.r))};
 }
 
 // The clustering rule of the settings with the range noise.
@@ -288,24 +285,42 @@ BreakpointRule breakpoint_rule(const AdaptiveSettings::Clustering& s, NoiseLine 
 
 // The run cost of the criterion: in noise units for BIC (each run's error over its
 // returns' mean noise variance, sigma per return, and incidence), square metres for SSE.
-RunCost run_cost_of(const AdaptiveSettings::Segments& s, Moments moments, const Returns& returns,
+RunCost run_cost_of(const AdaptiveSteps::Selection& s, const Returns& returns,
                     const Reals& sigma) {
-    if (s.criterion != BIC) return {s.fit, std::move(moments), {}, {}};
+    Moments moments = prefix_moments(returns.x, returns.y);
+    if (!s.noise_units) return {s.fit, std::move(moments), {}, {}};
     Reals variances = variance_sums(sigma);
     return {s.fit, std::move(moments), inverse_square_sums(returns.r), std::move(variances)};
 }
 
-// Step 5's score at every position: the turn angle, or eq. 13.
-Reals corner_scores(const Returns& returns, Index n_beams, double step, const Moments& moments,
-                    const Ints& start, const Ints& end, Index window, Index kind) {
-    if (kind == TURN) return turn_scores(returns.x, returns.y, moments, start, end, window);
-    Ints gap = beam_gaps(returns.index, n_beams);
-    return slope_scores(returns.r, gap, step, start, end, kind == DK_SIGNED);
+// The corner score at every position: the turn angle, or the paper's eq. 13.
+Reals corner_scores(const Clusters& clusters, Index n_beams, double step, const Moments& moments,
+                    Index window, Index kind) {
+    const Returns& ret = clusters.returns;
+    if (kind == TURN) return turn_scores(ret.x, ret.y, moments, clusters.start, clusters.end, window);
+    Ints gap = beam_gaps(ret.index, n_beams);
+    return slope_scores(ret.r, gap, step, clusters.start, clusters.end, kind == DK_SIGNED);
 }
 
+// The corner candidates: the peaks of the scores, and their scores.
+struct Candidates {
+    Ints positions;
+    Reals scores;
+};
+
+Candidates corner_candidates(const Reals& scores, const Clusters& clusters) {
+    Candidates out{peak_positions(scores, clusters.start, clusters.end), {}};
+    out.scores.resize(out.positions.size());
+    for (std::size_t j = 0; j < out.positions.size(); ++j) out.scores[j] = scores[out.positions[j]];
+    return out;
+}
+
+// The chosen corners, the scale of the noise model (1, or with rescale the scale the lines
+// of a first choice measure) and the variance unit of a segment's cost (the scaled noise's
+// in noise units, the typical noise's in square metres).
 struct Choice {
     Ints corners;
-    double scale;
+    double scale, unit;
 };
 
 Index points_in(const Ints& start, const Ints& end) {
@@ -317,92 +332,89 @@ Index points_in(const Ints& start, const Ints& end) {
 // The noise scale that the lines of a first choice of corners measure.
 double measured_scale(const RunCost& cost, const Ints& start, const Ints& end,
                       const Ints& corners, bool shared) {
-    Runs runs = cut_at(start, end, corners, shared);
+    GroupedRuns runs = cut_at(start, end, corners, shared);
     return std::max(residual_noise(cost, runs.a, runs.b, 1.0), 1e-3);
 }
 
-// choose_corners over every tried threshold (the "sse" criterion, or a fixed dkth_range).
-Choice chosen_by_full_sweep(const RunCost& cost, const Ints& start, const Ints& end,
-                            const Ints& candidates, const Reals& scores, bool rescale,
-                            const AdaptiveSettings::Segments& s, const Reals& grid) {
-    Levels swept = sweep_levels(cost, start, end, candidates, scores, grid, s.use_grid,
-                                s.max_evaluations, s.shared_corner);
+// The threshold sweep's choice over every tried threshold (the "sse" criterion, or a fixed
+// dkth_range).
+Choice chosen_by_full_sweep(const RunCost& cost, const Clusters& clusters,
+                            const Candidates& candidates, double typical,
+                            const AdaptiveSteps::Selection& s, const Reals& grid) {
+    const Ints& start = clusters.start;
+    const Ints& end = clusters.end;
+    Levels swept = sweep_levels(cost, start, end, candidates.positions, candidates.scores, grid,
+                                s.use_grid, s.max_evaluations, s.shared);
     const Index n_points = points_in(start, end);
     double scale = 1.0;
     Index best = best_level(s.criterion, swept.sse, swept.segments, swept.levels, n_points, scale,
                             s.penalty)
                      .first;
     Ints corners = level_corners(swept.ranked, swept.accepted, swept.levels[best]);
-    if (rescale) {
-        scale = measured_scale(cost, start, end, corners, s.shared_corner);
+    if (s.rescale) {
+        scale = measured_scale(cost, start, end, corners, s.shared);
         best = best_level(s.criterion, swept.sse, swept.segments, swept.levels, n_points, scale,
                           s.penalty)
                    .first;
         corners = level_corners(swept.ranked, swept.accepted, swept.levels[best]);
     }
-    return {corners, scale};
+    return {corners, scale, s.noise_units ? scale * scale : typical * typical};
 }
 
-// Steps 5-7: corner candidates and the threshold sweep; the corners and the scale of the
-// noise model (1, or with rescale the scale the lines of a first choice measure). Under
-// "bic" the sweep stops where the choice is certain.
-Choice choose_corners(const RunCost& cost, const Ints& start, const Ints& end,
-                      const Reals& scores, bool rescale, const AdaptiveSettings::Segments& s,
-                      const Reals& grid) {
-    Ints candidates = peak_positions(scores, start, end);
-    Reals candidate_scores(candidates.size());
-    for (std::size_t j = 0; j < candidates.size(); ++j) candidate_scores[j] = scores[candidates[j]];
-    if (s.criterion != BIC || s.use_grid)
-        return chosen_by_full_sweep(cost, start, end, candidates, candidate_scores, rescale, s,
-                                    grid);
+// The threshold sweep's choice by the "bic" criterion on the candidates' own scores: the
+// sweep stops where the choice is certain.
+Choice chosen_by_decided_sweep(const RunCost& cost, const Clusters& clusters,
+                               const Candidates& candidates, const AdaptiveSteps::Selection& s,
+                               const Reals& grid) {
+    const Ints& start = clusters.start;
+    const Ints& end = clusters.end;
     const Index n_points = points_in(start, end);
-    Sweep sweep = start_sweep(cost, start, end, candidates, candidate_scores, grid, s.use_grid,
-                              s.max_evaluations);
-    auto [best, done] = sweep_decided(sweep, cost, s.shared_corner, 0, n_points, 1.0, s.penalty);
+    Sweep sweep = start_sweep(cost, start, end, candidates.positions, candidates.scores, grid,
+                              false, s.max_evaluations);
+    auto [best, done] = sweep_decided(sweep, cost, s.shared, 0, n_points, 1.0, s.penalty);
     Ints corners = level_corners(sweep.ranked, sweep.accepted, best);
     double scale = 1.0;
-    if (rescale) {
+    if (s.rescale) {
         // Second choice with the noise scaled to the lines of the first.
-        scale = measured_scale(cost, start, end, corners, s.shared_corner);
-        best = sweep_decided(sweep, cost, s.shared_corner, done, n_points, scale, s.penalty).first;
+        scale = measured_scale(cost, start, end, corners, s.shared);
+        best = sweep_decided(sweep, cost, s.shared, done, n_points, scale, s.penalty).first;
         corners = level_corners(sweep.ranked, sweep.accepted, best);
     }
-    return {corners, scale};
+    return {corners, scale, scale * scale};
 }
 
-// Runs [a, b] (and the cluster of each) after cutting, refining, merging and bounding.
-Runs segments(const Returns& returns, const RunCost& cost, const Ints& start, const Ints& end,
-              const Ints& corners, double unit, const AdaptiveSettings& s, NoiseLine noise,
-              const Reals& sigma) {
-    const Reals& x = returns.x;
-    const Reals& y = returns.y;
-    Runs runs = cut_at(start, end, corners, s.segments.shared_corner);
-    if (!s.segments.shared_corner) std::tie(runs.a, runs.b) = refine_cuts(cost, runs.a, runs.b, runs.group);
-    if (s.segments.merge) {
+// The segments: runs [a, b] (and the cluster of each) after cutting at the corners,
+// refining, merging and bounding the residuals, small ones dropped.
+GroupedRuns segments(const Clusters& clusters, const RunCost& cost, const Choice& choice,
+                     const AdaptiveSteps::Cutting& s, NoiseLine noise, const Reals& sigma) {
+    const Returns& ret = clusters.returns;
+    GroupedRuns runs = cut_at(clusters.start, clusters.end, choice.corners, s.shared);
+    if (s.refine) std::tie(runs.a, runs.b) = refine_cuts(cost, runs.a, runs.b, runs.group);
+    if (s.merge) {
         double segment_cost =
-            s.segments.penalty * std::log(static_cast<double>(std::max<Index>(returns.size(), 2))) * unit;
+            s.penalty * std::log(static_cast<double>(std::max<Index>(ret.size(), 2))) * choice.unit;
         runs = merge_by_criterion(cost, runs.a, runs.b, runs.group, segment_cost);
-        if (s.segments.merge_chi2 > 0.0 && s.segments.fit != PAPER)
-            runs = merge_by_chi_square(returns, cost.moments, runs.a, runs.b, runs.group, sigma,
-                                       s.segments.merge_chi2, true);
+        if (s.merge_chi2 > 0.0)
+            runs = merge_by_chi_square(ret, cost.moments, runs.a, runs.b, runs.group, sigma,
+                                       s.merge_chi2, true);
     }
-    if (s.segments.max_residual < INF) {
-        Reals tolerance = residual_tolerances(returns.r, noise, s.segments.max_residual);
-        runs = split_by_residual(x, y, s.segments.fit, cost.moments, runs.a, runs.b, runs.group, tolerance,
-                                 s.output.min_points);
+    if (s.max_residual < INF) {
+        Reals tolerance = residual_tolerances(ret.r, noise, s.max_residual);
+        runs = split_by_residual(ret.x, ret.y, s.fit, cost.moments, runs.a, runs.b, runs.group,
+                                 tolerance, s.min_points);
     }
-    Runs out;
+    GroupedRuns kept;  // those of min_points returns and min_length
     for (std::size_t k = 0; k < runs.a.size(); ++k) {
         Index a = runs.a[k], b = runs.b[k];
-        double dx = x[b] - x[a], dy = y[b] - y[a];
+        double dx = ret.x[b] - ret.x[a], dy = ret.y[b] - ret.y[a];
         double length = std::sqrt(dx * dx + dy * dy);
-        if (b - a + 1 >= s.output.min_points && length >= s.output.min_length) {
-            out.a.push_back(a);
-            out.b.push_back(b);
-            out.group.push_back(runs.group[k]);
+        if (b - a + 1 >= s.min_points && length >= s.min_length) {
+            kept.a.push_back(a);
+            kept.b.push_back(b);
+            kept.group.push_back(runs.group[k]);
         }
     }
-    return out;
+    return kept;
 }
 
 // Standard deviation of each segment's direction, from the noise (sigma per return) and
@@ -416,101 +428,207 @@ Reals direction_sigmas(const Returns& returns, const Moments& moments, const Int
     return out;
 }
 
-// The time since the last lap added to a stage's seconds (nothing without seconds).
+// The clustering's breakpoints with the corners and jumps between the kept segments; with the corner check, two lines whose turn is within noise (sigma of the scaled
+// noise model at the typical range) of their directions meet at no corner.
+Events junctions(const Clusters& clusters, const Moments& moments, const GroupedRuns& runs,
+                 const Reals& sigma, double noise, const AdaptiveSteps::Junctions& s) {
+    const Returns& ret = clusters.returns;
+    Reals turn_sigmas;
+    if (s.corner_check) turn_sigmas = direction_sigmas(ret, moments, runs.a, runs.b, sigma);
+    auto [corners, jumps] =
+        junction_events(ret, s.fit, moments, runs.a, runs.b, runs.group, s.shared, clusters.ring,
+                        s.corner_check ? noise : -1.0, turn_sigmas);
+    Ints breakpoints = clusters.breakpoints;
+    breakpoints.insert(breakpoints.end(), jumps.begin(), jumps.end());
+    return {sorted_distinct(std::move(breakpoints)), std::move(corners), {}};
+}
+
+}  // namespace
+
+AdaptiveSteps adaptive_steps(const AdaptiveSettings& s) {
+    const AdaptiveSettings::Segments& g = s.segments;
+    const bool paper_fit = g.fit == PAPER;
+    const bool bic = g.criterion == BIC;
+    AdaptiveSteps out;
+    out.sensor_frame = paper_fit;
+    out.noise = s.noise;
+    out.clustering = s.clustering;
+    out.window = {g.slope_window, g.auto_slope_window};
+    out.corner_score = g.corner_score;
+    out.selection = {g.fit,          bic,          bic && !g.use_grid,
+                     bic && s.noise.estimate_noise, g.criterion, g.penalty,
+                     g.use_grid,     g.max_evaluations, g.shared_corner};
+    out.cutting = {g.fit,          g.shared_corner, !g.shared_corner,
+                   g.merge,        g.penalty,       paper_fit ? 0.0 : g.merge_chi2,
+                   g.max_residual, s.output.min_points, s.output.min_length};
+    out.junctions = {g.fit, g.shared_corner, s.events.corner_check};
+    out.lines = {g.fit, s.output.range_sigma};
+    return out;
+}
+
+ScanResult adaptive_scan(View<double> ranges, View<bool> valid, const Stack& sensor,
+                         const AdaptiveSteps& s, const Reals& grid) {
+    const Index n_beams = ranges.size;
+    const double step = sensor.step;
+    const bool full_circle = sensor.full_circle;
+
+    // The points, the first beam along x; turned into the sensor frame for the paper's fit
+    // (y = kx + b depends on the frame).
+    Returns returns = valid_returns(ranges, valid, sensor.cos, sensor.sin);
+    if (returns.size() == 0) return empty_result({}, {});
+    if (s.sensor_frame) returns = turned(std::move(returns), sensor.angle_min);
+    const double angle_min = s.sensor_frame ? 0.0 : sensor.angle_min;
+
+    // Step 1: the noise line every threshold uses, and the clustering rule with it.
+    const ScanNoise noise = scan_noise(s.noise, sensor.noise, returns, n_beams);
+    const BreakpointRule rule = breakpoint_rule(s.clustering, noise.line, step);
+
+    // Step 2: noise points dropped (reported as outliers) or moved; the rule's margin is the
+    // noise of a range difference.
+    const double margin = s.clustering.rule.noise_k * std::sqrt(2.0) * noise.typical;
+    Denoised clean = denoise(std::move(returns), n_beams, step, full_circle, rule,
+                             s.clustering.denoise, s.clustering.window,
+                             s.clustering.min_cluster_points, margin);
+    if (clean.returns.size() == 0) return empty_result(clean.outliers, clean.outliers);
+
+    // Step 3: the clusters; a closed ring is anchored with the turn score's window (points
+    // fitted on each side: fixed, or measured on the scan).
+    const Index window = s.window.measured ? turn_window(clean.returns.x, clean.returns.y,
+                                                         clean.returns.index, noise.typical)
+                                           : s.window.fixed;
+    Clusters clusters = cluster_returns(std::move(clean.returns), n_beams, step, full_circle,
+                                        rule, window, std::move(clean.breaks));
+
+    // Each return's noise (criterion, merge, corner check, covariances); a run's cost.
+    Reals sigma = return_sigmas(clusters.returns.r, noise.line);
+    const RunCost cost = run_cost_of(s.selection, clusters.returns, sigma);
+
+    // Step 4: the corner score at every position, its peaks the candidates.
+    Reals scores = corner_scores(clusters, n_beams, step, cost.moments, window, s.corner_score);
+    Candidates candidates = corner_candidates(scores, clusters);
+
+    // Step 5: the threshold sweep's choice of corners.
+    Choice choice = s.selection.decided
+                        ? chosen_by_decided_sweep(cost, clusters, candidates, s.selection, grid)
+                        : chosen_by_full_sweep(cost, clusters, candidates, noise.typical,
+                                               s.selection, grid);
+
+    // Step 6: the segments, cut at the corners, refined, merged, bounded; small ones dropped.
+    GroupedRuns runs = segments(clusters, cost, choice, s.cutting, noise.line, sigma);
+
+    // Step 7: breakpoints, and the corners and jumps between the segments.
+    Events events = junctions(clusters, cost.moments, runs, sigma, choice.scale * noise.typical,
+                              s.junctions);
+    events.outliers = std::move(clean.outliers);
+
+    // Step 8: the lines and their covariances, from the noise line or range_sigma.
+    if (s.lines.range_sigma == s.lines.range_sigma) sigma.assign(sigma.size(), s.lines.range_sigma);
+    return assemble(clusters.returns, s.lines.fit, cost.moments, runs.a, runs.b, angle_min, sigma,
+                    std::move(events), n_beams, full_circle);
+}
+
+Table adaptive_stack(const Stack& stack, const AdaptiveSettings& s, const Reals& grid) {
+    return each_row(stack, adaptive_scan, adaptive_steps(s), grid);
+}
+
+#ifdef SCANLINES_STAGE_TIMES
+// Stage timing, for tools/benchmarks/stage_times.py only: a build with
+// -DSCANLINES_STAGE_TIMES=ON. adaptive_scan's calls in its order, a lap after each stage;
+// the tool checks that the table is adaptive_stack's.
+
+const std::array<const char*, N_ADAPTIVE_STAGES> ADAPTIVE_STAGE_NAMES = {
+    "returns, noise, rule",
+    "denoise",
+    "turn window",
+    "clustering",
+    "sigmas, running sums, costs",
+    "corner scores",
+    "candidates + sweep + choice",
+    "cut, refine, merge, split",
+    "corner beams",
+    "assembly (fits, covariances)",
+};
+
+namespace {
+
+// The time since the last lap added to a stage's seconds.
 class Laps {
 public:
-    explicit Laps(StageSeconds* seconds) : seconds_(seconds) {
-        if (seconds_) last_ = Clock::now();
-    }
+    explicit Laps(StageSeconds& seconds) : seconds_(seconds), last_(Clock::now()) {}
     void end(AdaptiveStage stage) {
-        if (!seconds_) return;
         Clock::time_point now = Clock::now();
-        (*seconds_)[stage] += std::chrono::duration<double>(now - last_).count();
+        seconds_[stage] += std::chrono::duration<double>(now - last_).count();
         last_ = now;
     }
 
 private:
     using Clock = std::chrono::steady_clock;
-    StageSeconds* seconds_;
+    StageSeconds& seconds_;
     Clock::time_point last_;
 };
 
-}  // namespace
-
-ScanResult adaptive_scan(View<double> ranges, View<bool> valid, const Stack& sensor,
-                         const AdaptiveSettings& s, const Reals& grid, StageSeconds* seconds) {
-    Laps laps(seconds);
+ScanResult adaptive_scan_timed(View<double> ranges, View<bool> valid, const Stack& sensor,
+                               const AdaptiveSteps& s, const Reals& grid, Laps& laps) {
     const Index n_beams = ranges.size;
     const double step = sensor.step;
     const bool full_circle = sensor.full_circle;
-    double angle_min = sensor.angle_min;
     Returns returns = valid_returns(ranges, valid, sensor.cos, sensor.sin);
     if (returns.size() == 0) return empty_result({}, {});
-    if (s.segments.fit == PAPER) {
-        // y = kx + b depends on the frame: fit in the sensor frame, as the paper does.
-        returns = turned(std::move(returns), angle_min);
-        angle_min = 0.0;
-    }
-    Ints gap = beam_gaps(returns.index, n_beams);
-    NoiseLine noise = scan_noise_model(s.noise, sensor.noise, returns, gap);
-    const double typical = noise_at(noise, median(returns.r));
-    BreakpointRule rule = breakpoint_rule(s.clustering, noise, step);
-    const double margin = s.clustering.rule.noise_k * std::sqrt(2.0) * typical;
+    if (s.sensor_frame) returns = turned(std::move(returns), sensor.angle_min);
+    const double angle_min = s.sensor_frame ? 0.0 : sensor.angle_min;
+    const ScanNoise noise = scan_noise(s.noise, sensor.noise, returns, n_beams);
+    const BreakpointRule rule = breakpoint_rule(s.clustering, noise.line, step);
     laps.end(STAGE_NOISE);
-    Denoised clean = denoise(std::move(returns), n_beams, step, full_circle, rule, s.clustering.denoise,
-                             s.clustering.window, s.clustering.min_cluster_points, margin);
+    const double margin = s.clustering.rule.noise_k * std::sqrt(2.0) * noise.typical;
+    Denoised clean = denoise(std::move(returns), n_beams, step, full_circle, rule,
+                             s.clustering.denoise, s.clustering.window,
+                             s.clustering.min_cluster_points, margin);
     laps.end(STAGE_DENOISE);
     if (clean.returns.size() == 0) return empty_result(clean.outliers, clean.outliers);
-    Index window = s.segments.slope_window;
-    if (s.segments.auto_slope_window)
-        window = turn_window(clean.returns.x, clean.returns.y, clean.returns.index, typical);
+    const Index window = s.window.measured ? turn_window(clean.returns.x, clean.returns.y,
+                                                         clean.returns.index, noise.typical)
+                                           : s.window.fixed;
     laps.end(STAGE_TURN_WINDOW);
-    Clusters clusters = cluster_returns(std::move(clean.returns), n_beams, step, full_circle, rule,
-                                        window, std::move(clean.breaks));
+    Clusters clusters = cluster_returns(std::move(clean.returns), n_beams, step, full_circle,
+                                        rule, window, std::move(clean.breaks));
     laps.end(STAGE_CLUSTERS);
-    const Returns& ret = clusters.returns;
-    const Ints& start = clusters.start;
-    const Ints& end = clusters.end;
-    Reals sigma = return_sigmas(ret.r, noise);  // once: the criterion, merge, checks, covariances
-    const RunCost cost = run_cost_of(s.segments, prefix_moments(ret.x, ret.y), ret, sigma);
-    const Moments& moments = cost.moments;
+    Reals sigma = return_sigmas(clusters.returns.r, noise.line);
+    const RunCost cost = run_cost_of(s.selection, clusters.returns, sigma);
     laps.end(STAGE_COSTS);
-    Reals scores = corner_scores(ret, n_beams, step, moments, start, end, window, s.segments.corner_score);
+    Reals scores = corner_scores(clusters, n_beams, step, cost.moments, window, s.corner_score);
     laps.end(STAGE_SCORES);
-    const bool rescale = s.noise.estimate_noise && s.segments.criterion == BIC;
-    Choice choice = choose_corners(cost, start, end, scores, rescale, s.segments, grid);
+    Candidates candidates = corner_candidates(scores, clusters);
+    Choice choice = s.selection.decided
+                        ? chosen_by_decided_sweep(cost, clusters, candidates, s.selection, grid)
+                        : chosen_by_full_sweep(cost, clusters, candidates, noise.typical,
+                                               s.selection, grid);
     laps.end(STAGE_CHOICE);
-    const double unit =
-        s.segments.criterion == BIC ? choice.scale * choice.scale : typical * typical;
-    Runs runs = segments(ret, cost, start, end, choice.corners, unit, s, noise, sigma);
+    GroupedRuns runs = segments(clusters, cost, choice, s.cutting, noise.line, sigma);
     laps.end(STAGE_SEGMENTS);
-    const double check_sigma = s.events.corner_check ? choice.scale * typical : -1.0;
-    Reals turn_sigmas;
-    if (s.events.corner_check) turn_sigmas = direction_sigmas(ret, moments, runs.a, runs.b, sigma);
-    auto [corner_beams, jumps] = junction_events(ret, s.segments.fit, moments, runs.a, runs.b, runs.group,
-                                                 s.segments.shared_corner, clusters.ring, check_sigma,
-                                                 turn_sigmas);
-    Ints breakpoints = clusters.breakpoints;
-    breakpoints.insert(breakpoints.end(), jumps.begin(), jumps.end());
-    breakpoints = sorted_distinct(std::move(breakpoints));
+    Events events = junctions(clusters, cost.moments, runs, sigma, choice.scale * noise.typical,
+                              s.junctions);
+    events.outliers = std::move(clean.outliers);
     laps.end(STAGE_EVENTS);
-    if (s.output.range_sigma == s.output.range_sigma)  // given: it replaces the noise line
-        sigma.assign(ret.r.size(), s.output.range_sigma);
-    ScanResult result =
-        assemble(ret, s.segments.fit, moments, runs.a, runs.b, angle_min, sigma,
-                 {std::move(breakpoints), std::move(corner_beams), std::move(clean.outliers)},
-                 n_beams, full_circle);
+    if (s.lines.range_sigma == s.lines.range_sigma) sigma.assign(sigma.size(), s.lines.range_sigma);
+    ScanResult result = assemble(clusters.returns, s.lines.fit, cost.moments, runs.a, runs.b,
+                                 angle_min, sigma, std::move(events), n_beams, full_circle);
     laps.end(STAGE_ASSEMBLY);
     return result;
 }
 
-Table adaptive_stack(const Stack& stack, const AdaptiveSettings& s, const Reals& grid,
-                     StageSeconds* seconds) {
+}  // namespace
+
+Table adaptive_stack_timed(const Stack& stack, const AdaptiveSettings& s, const Reals& grid,
+                           StageSeconds& seconds) {
+    const AdaptiveSteps steps = adaptive_steps(s);
     Table table;
-    for (Index row = 0; row < stack.rows; ++row)
-        table.add(
-            adaptive_scan(stack.row_ranges(row), stack.row_valid(row), stack, s, grid, seconds));
+    for (Index row = 0; row < stack.rows; ++row) {
+        Laps laps(seconds);
+        table.add(adaptive_scan_timed(stack.row_ranges(row), stack.row_valid(row), stack, steps,
+                                      grid, laps));
+    }
     return table;
 }
+#endif
 
 }  // namespace scanlines

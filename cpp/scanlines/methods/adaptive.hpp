@@ -44,22 +44,49 @@ struct AdaptiveSettings {
     OutputBounds output;
 };
 
-// The stages of adaptive_scan, in order, for timing them (tools/benchmarks/stage_times.py).
-enum AdaptiveStage : int {
-    STAGE_NOISE,
-    STAGE_DENOISE,
-    STAGE_TURN_WINDOW,
-    STAGE_CLUSTERS,
-    STAGE_COSTS,
-    STAGE_SCORES,
-    STAGE_CHOICE,
-    STAGE_SEGMENTS,
-    STAGE_EVENTS,
-    STAGE_ASSEMBLY,
-    N_ADAPTIVE_STAGES
+// The settings resolved into the steps they select (adaptive_steps, once per stack): each
+// stage of adaptive_scan is given its own group and reads no switch of another stage's.
+struct AdaptiveSteps {
+    bool sensor_frame;  // the paper's fit: y = kx + b depends on the frame, fit in the sensor's
+    AdaptiveSettings::Noise noise;
+    AdaptiveSettings::Clustering clustering;
+    struct TurnWindow {
+        Index fixed;
+        bool measured;  // on the scan: auto
+    } window;
+    Index corner_score;
+    struct Selection {
+        Index fit;
+        bool noise_units;  // bic: each run's error in noise variances; sse: in square metres
+        bool decided;      // bic on the candidates' own scores: stop where the choice is certain
+        bool rescale;      // choose again with the noise the first choice's lines measure
+        Index criterion;
+        double penalty;
+        bool use_grid;
+        Index max_evaluations;
+        bool shared;
+    } selection;
+    struct Cutting {
+        Index fit;
+        bool shared, refine, merge;
+        double penalty;
+        double merge_chi2;    // 0: no chi-square merge (always so with the paper's fit)
+        double max_residual;  // inf: no bound
+        Index min_points;
+        double min_length;
+    } cutting;
+    struct Junctions {
+        Index fit;
+        bool shared, corner_check;
+    } junctions;
+    struct Lines {
+        Index fit;
+        double range_sigma;  // NaN: each return's noise
+    } lines;
 };
-extern const std::array<const char*, N_ADAPTIVE_STAGES> ADAPTIVE_STAGE_NAMES;
-using StageSeconds = std::array<double, N_ADAPTIVE_STAGES>;
+
+// Every switch of the settings read once, into the steps it selects.
+AdaptiveSteps adaptive_steps(const AdaptiveSettings& s);
 
 // The adaptive method's own steps, bound for the tests (scanlines/methods/adaptive.py
 // documents them; the rest of its own steps are adaptive.cpp's alone).
@@ -77,12 +104,33 @@ std::pair<Index, Index> sweep_decided(Sweep& sweep, const RunCost& cost, bool sh
                                       Index n_points, double sigma, double penalty);
 
 // The whole method on one scan; grid: the thresholds of a fixed dkth_range (else empty).
-// With seconds, the time of each stage is added to it.
 ScanResult adaptive_scan(View<double> ranges, View<bool> valid, const Stack& sensor,
-                         const AdaptiveSettings& s, const Reals& grid,
-                         StageSeconds* seconds = nullptr);
+                         const AdaptiveSteps& s, const Reals& grid);
 
-Table adaptive_stack(const Stack& stack, const AdaptiveSettings& s, const Reals& grid,
-                     StageSeconds* seconds = nullptr);
+Table adaptive_stack(const Stack& stack, const AdaptiveSettings& s, const Reals& grid);
+
+#ifdef SCANLINES_STAGE_TIMES
+// The stages of adaptive_scan, in order, for timing them (a build with
+// -DSCANLINES_STAGE_TIMES=ON, for tools/benchmarks/stage_times.py).
+enum AdaptiveStage : int {
+    STAGE_NOISE,
+    STAGE_DENOISE,
+    STAGE_TURN_WINDOW,
+    STAGE_CLUSTERS,
+    STAGE_COSTS,
+    STAGE_SCORES,
+    STAGE_CHOICE,
+    STAGE_SEGMENTS,
+    STAGE_EVENTS,
+    STAGE_ASSEMBLY,
+    N_ADAPTIVE_STAGES
+};
+extern const std::array<const char*, N_ADAPTIVE_STAGES> ADAPTIVE_STAGE_NAMES;
+using StageSeconds = std::array<double, N_ADAPTIVE_STAGES>;
+
+// adaptive_stack with the time of each stage added to seconds.
+Table adaptive_stack_timed(const Stack& stack, const AdaptiveSettings& s, const Reals& grid,
+                           StageSeconds& seconds);
+#endif
 
 }  // namespace scanlines

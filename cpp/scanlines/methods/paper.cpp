@@ -68,8 +68,8 @@ ScanResult paper_scan(View<double> ranges, View<bool> valid, const Stack& sensor
 
     // The parts: the corner point shared by both sides; those of min_points returns and
     // min_length kept.
-    Runs parts = cut_at(start, end, corners, true);
-    Runs runs;
+    GroupedRuns parts = cut_at(start, end, corners, true);
+    GroupedRuns runs;
     for (std::size_t k = 0; k < parts.a.size(); ++k) {
         Index a = parts.a[k], b = parts.b[k];
         double dx = ret.x[b] - ret.x[a], dy = ret.y[b] - ret.y[a];
@@ -99,10 +99,7 @@ ScanResult paper_scan(View<double> ranges, View<bool> valid, const Stack& sensor
 }
 
 Table paper_stack(const Stack& stack, const PaperSettings& s, const Reals& grid) {
-    Table table;
-    for (Index row = 0; row < stack.rows; ++row)
-        table.add(paper_scan(stack.row_ranges(row), stack.row_valid(row), stack, s, grid));
-    return table;
+    return each_row(stack, paper_scan, s, grid);
 }
 
 }  // namespace scanlines

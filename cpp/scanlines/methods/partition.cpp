@@ -15,39 +15,6 @@ namespace {
 
 using namespace penalised;
 
-constexpr double EVENT_SIGMAS = 3.0;
-
-struct ScanShape {
-    bool full_circle, ring;
-    Index n_beams;
-};
-
-std::pair<Ints, Ints> partition_events(const Returns& ret, const Sums& sums, const Reals& sigma,
-                                       const Runs& runs, const Ints& gap, double step,
-                                       ScanShape shape) {
-    const Index n = ret.size();
-    Ints breakpoints, corners;
-    Ints owner(n, -1);
-    for (std::size_t k = 0; k < runs.a.size(); ++k)
-        for (Index p = runs.a[k]; p <= runs.b[k]; ++p) owner[p] = static_cast<Index>(k);
-    const Index last = shape.ring ? n : n - 1;
-    for (Index p = 0; p < last; ++p) {
-        Index q = (p + 1) % n;
-        if (owner[p] >= 0 && owner[p] == owner[q]) continue;
-        Index beams = p < n - 1 ? gap[p] : py_mod(ret.index[0] - ret.index[n - 1], shape.n_beams);
-        bool across_gap = p < n - 1 && gap[p] > MAX_BRIDGED_GAP;
-        if (across_gap || !continuous(ret, p, q, beams, step, sigma, EVENT_SIGMAS)) {
-            breakpoints.push_back(ret.index[p]);
-        } else if (owner[p] >= 0 && owner[q] >= 0) {
-            Index at = corner_between(ret, sums, sigma, runs, owner[p], owner[q], EVENT_SIGMAS);
-            if (at >= 0) corners.push_back(ret.index[at]);
-        }
-    }
-    if (shape.full_circle && !shape.ring) breakpoints.push_back(ret.index[n - 1]);
-    std::sort(breakpoints.begin(), breakpoints.end());
-    return {breakpoints, corners};
-}
-
 // The result without the segments whose rho standard deviation exceeds max_rho_sigma.
 ScanResult well_determined(const ScanResult& result, double max_rho_sigma) {
     ScanResult out;
@@ -79,9 +46,10 @@ ScanResult partition_scan(View<double> ranges, View<bool> valid, const Stack& se
     const Objective objective{s.segments, s.output.min_points, Residual::ALONG_BEAM, false};
     Reals once(scan.ret.r.size(), 1.0);  // every return one observation
     Partition part = ring_partition(scan, once, n_beams, sensor.step, objective);
-    auto [breakpoints, corners] =
-        partition_events(scan.ret, part.sums, scan.sigma, part.runs, part.gap, sensor.step,
-                         {sensor.full_circle, scan.ring, n_beams});
+    Ints every(scan.ret.r.size());  // left-out returns are pieces of their own here
+    for (std::size_t p = 0; p < every.size(); ++p) every[p] = static_cast<Index>(p);
+    auto [breakpoints, corners] = events(scan.ret, part, scan.sigma, every, sensor.step,
+                                         {sensor.full_circle, scan.ring, n_beams});
     Ints kept_ids = kept_runs(scan.ret, part.held, part.runs, s.output.min_points, s.output.min_length);
     HeldRuns held = held_runs(scan, part, kept_ids, s.output.range_sigma);
     Moments moments = prefix_moments(held.ret.x, held.ret.y);
@@ -106,10 +74,7 @@ std::pair<Ints, Ints> partition_optimal_runs(const Reals& x, const Reals& y, con
 }
 
 Table partition_stack(const Stack& stack, const PartitionSettings& s) {
-    Table table;
-    for (Index row = 0; row < stack.rows; ++row)
-        table.add(partition_scan(stack.row_ranges(row), stack.row_valid(row), stack, s));
-    return table;
+    return each_row(stack, partition_scan, s);
 }
 
 }  // namespace scanlines

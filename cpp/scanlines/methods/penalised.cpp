@@ -16,7 +16,14 @@ constexpr double INF = std::numeric_limits<double>::infinity();
 constexpr double PI = 3.141592653589793;
 const double GRAZING_ANGLE = 10.0 * (PI / 180.0);  // as math.radians(10.0) rounds
 constexpr double CUT_SIGMAS = 5.0;
+constexpr double EVENT_SIGMAS = 3.0;
 constexpr Index LOOK_BACK = 256;
+// The two-stage search: blocks of the first stage, how far around its boundaries the second
+// stage looks, and the starts within reach of every end.
+constexpr Index COARSE_BLOCK = 4;
+constexpr Index BOUNDARY_WINDOW = 16;
+constexpr double COARSE_PENALTY = 0.25;  // of the penalty: the first stage over-segments
+constexpr Index NEAR_STARTS = 8;
 constexpr int ROUNDS = 3;
 constexpr int C = Sums::COLUMNS;
 
@@ -175,7 +182,8 @@ bool continuous(const Returns& ret, Index p, Index q, Index beams, double step,
     return apart <= reach + spread;
 }
 
-Runs optimal_runs(const Sums& sums, const Flags& opens, const Objective& o) {
+Runs optimal_runs(const Sums& sums, const Flags& opens, const Objective& o, const Ints& at,
+                  const Flags& allowed) {
     const Index n = static_cast<Index>(sums.v.size() / C) - 1;
     Reals best(n + 1), cost(n + 1);
     Ints start(n + 1), candidates(n + 1), expires(n + 1, n + 1);
@@ -189,12 +197,15 @@ Runs optimal_runs(const Sums& sums, const Flags& opens, const Objective& o) {
         // The prefix sums up to t, read once (the same arithmetic as scatter(sums, s, t - 1)).
         double end[C];
         std::copy(prefix + C * t, prefix + C * t + C, end);
-        double best_t = best[t - 1] + o.clutter_cost;
+        const double left_out = at.empty() ? 1.0 : static_cast<double>(at[t] - at[t - 1]);
+        double best_t = best[t - 1] + o.clutter_cost * left_out;
         Index start_t = -1;
         Index kept = 0;
         for (Index c = 0; c < count; ++c) {
             const Index s = candidates[c];
-            if (expires[s] <= t || t - s > LOOK_BACK) continue;
+            const Index span = at.empty() ? t - s : at[t] - at[s];
+            if (expires[s] <= t || span > LOOK_BACK) continue;
+            if (!allowed.empty() && !allowed[s] && span > NEAR_STARTS) continue;
             candidates[kept] = s;
             double value = INF;
             const double* from = prefix + C * s;
@@ -211,7 +222,7 @@ Runs optimal_runs(const Sums& sums, const Flags& opens, const Objective& o) {
                                                        end[7] - from[7], sums.x0, sums.y0,
                                                        o.model_error);
                 value = best[s] + 0.5 * chi2;
-                value += o.clutter_cost * (static_cast<double>(t - s) - held);
+                value += o.clutter_cost * (static_cast<double>(span) - held);
                 if (value + o.penalty < best_t) {
                     best_t = value + o.penalty;
                     start_t = s;
@@ -243,6 +254,42 @@ Runs optimal_runs(const Sums& sums, const Flags& opens, const Objective& o) {
     return out;
 }
 
+// The optimum in two stages: the same objective at a quarter of the penalty on blocks of
+// COARSE_BLOCK returns (cut also where clusters open), then over every return but with a
+// segment longer than NEAR_STARTS starting only within BOUNDARY_WINDOW of a boundary of the
+// first stage or where a cluster opens.
+Runs two_stage_runs(const Sums& sums, const Flags& opens, const Objective& o) {
+    const Index n = static_cast<Index>(sums.v.size() / C) - 1;
+    Ints at;
+    for (Index p = 0; p < n; ++p)
+        if (p % COARSE_BLOCK == 0 || opens[p]) at.push_back(p);
+    at.push_back(n);
+    const Index m = static_cast<Index>(at.size()) - 1;
+    Sums coarse{Reals(static_cast<std::size_t>(C * (m + 1))), sums.x0, sums.y0};
+    Flags coarse_opens(m);
+    for (Index j = 0; j <= m; ++j) {
+        std::copy(sums.v.begin() + C * at[j], sums.v.begin() + C * at[j] + C,
+                  coarse.v.begin() + C * j);
+        if (j < m) coarse_opens[j] = opens[at[j]];
+    }
+    Objective relaxed = o;
+    relaxed.penalty = COARSE_PENALTY * o.penalty;
+    Runs blocks = optimal_runs(coarse, coarse_opens, relaxed, at);
+    Flags allowed(n + 1, false);
+    auto allow = [&](Index p) {
+        for (Index q = std::max<Index>(0, p - BOUNDARY_WINDOW);
+             q <= std::min(n, p + BOUNDARY_WINDOW); ++q)
+            allowed[q] = true;
+    };
+    for (std::size_t k = 0; k < blocks.a.size(); ++k) {
+        allow(at[blocks.a[k]]);
+        allow(at[blocks.b[k] + 1]);
+    }
+    for (Index p = 0; p < n; ++p)
+        if (opens[p]) allowed[p] = true;
+    return optimal_runs(sums, opens, o, {}, allowed);
+}
+
 Partition best_partition(const Returns& ret, const Reals& sigma, const Reals& footprint,
                          Index n_beams, double step, const Objective& o) {
     const Index n = ret.size();
@@ -263,7 +310,7 @@ Partition best_partition(const Returns& ret, const Reals& sigma, const Reals& fo
     Runs runs;
     for (int round = 0; round < ROUNDS; ++round) {
         Sums sums = weighted_sums(ret, sigma, footprint, o.model_error, held);
-        runs = optimal_runs(sums, opens, o);
+        runs = o.two_stage ? two_stage_runs(sums, opens, o) : optimal_runs(sums, opens, o);
         // Joined until no two neighbours join: a long wall comes out of the look-back in
         // pieces, and a join of two long pieces can pay where each piece's first did not.
         for (std::size_t before = 0; before != runs.a.size();) {
@@ -318,6 +365,36 @@ Index corner_between(const Returns& ret, const Sums& sums, const Reals& sigma, c
     double to_begin = std::hypot(cx - x[begin], cy - y[begin]);
     if (to_end > reach || to_begin > reach) return -1;
     return to_end <= to_begin ? end : begin;
+}
+
+std::pair<Ints, Ints> events(const Returns& ret, const Partition& part, const Reals& sigma,
+                             const Ints& positions, double step, ScanShape shape) {
+    const Index n = ret.size();
+    Ints breakpoints, corners;
+    const Index m = static_cast<Index>(positions.size());
+    if (m == 0) return {breakpoints, corners};
+    Ints owner(n, -1);
+    for (std::size_t k = 0; k < part.runs.a.size(); ++k)
+        for (Index p = part.runs.a[k]; p <= part.runs.b[k]; ++p) owner[p] = static_cast<Index>(k);
+    Ints wide(n + 1, 0);  // beam gaps too wide to bridge, counted up to each position
+    for (Index p = 0; p + 1 < n; ++p) wide[p + 1] = wide[p] + (part.gap[p] > MAX_BRIDGED_GAP);
+    const Index last = shape.ring ? m : m - 1;
+    for (Index k = 0; k < last; ++k) {
+        Index p = positions[k], q = positions[(k + 1) % m];
+        if (owner[p] >= 0 && owner[p] == owner[q]) continue;
+        bool across_gap = q > p && wide[q] > wide[p];
+        Index beams = py_mod(ret.index[q] - ret.index[p], shape.n_beams);
+        if (across_gap || !continuous(ret, p, q, beams, step, sigma, EVENT_SIGMAS)) {
+            breakpoints.push_back(ret.index[p]);
+        } else if (owner[p] >= 0 && owner[q] >= 0) {
+            Index at = corner_between(ret, part.sums, sigma, part.runs, owner[p], owner[q],
+                                      EVENT_SIGMAS);
+            if (at >= 0) corners.push_back(ret.index[at]);
+        }
+    }
+    if (shape.full_circle && !shape.ring) breakpoints.push_back(ret.index[positions[m - 1]]);
+    std::sort(breakpoints.begin(), breakpoints.end());
+    return {breakpoints, corners};
 }
 
 Ints kept_runs(const Returns& ret, const Flags& held, const Runs& runs, Index min_points,

@@ -27,6 +27,8 @@ struct Objective : ObjectiveSettings {
     // A return left out (a lone spike, a mixed pixel) does not cut the surface its
     // neighbours share: it opens no new cluster, and a run may span it.
     bool bridge_left_out;
+    // The optimum searched in two stages (two_stage_runs) instead of over every start.
+    bool two_stage = false;
 };
 
 // Prefix sums (rows 0..n) of w, wx, wy, wxx, wxy, wyy about (x0, y0), the held count and
@@ -75,7 +77,10 @@ bool continuous(const Returns& ret, Index p, Index q, Index beams, double step,
                 const Reals& sigma, double sigmas);
 
 // The optimal runs [a, b]: the dynamic programme with PELT pruning.
-Runs optimal_runs(const Sums& sums, const Flags& opens, const Objective& objective);
+// `at`: the return position of each row of `sums` (empty: row p is return p); `allowed`:
+// the starts a segment longer than a few returns may have (empty: every start).
+Runs optimal_runs(const Sums& sums, const Flags& opens, const Objective& objective,
+                  const Ints& at = {}, const Flags& allowed = {});
 
 struct Partition {
     Runs runs;
@@ -98,6 +103,19 @@ std::pair<Returns, bool> seam_at_widest_gap(Returns ret, const Ints& gap, Index 
 // spacing plus sigmas noise sigmas of them.
 Index corner_between(const Returns& ret, const Sums& sums, const Reals& sigma, const Runs& runs,
                      Index i, Index j, double sigmas);
+
+// Whether a scan is a full circle, whether its returns close into a ring, its beam count.
+struct ScanShape {
+    bool full_circle, ring;
+    Index n_beams;
+};
+
+// Breakpoints where a surface ends and corners where two segments meet, read between
+// consecutive returns of `positions` (every return, or the held ones only): a breakpoint
+// at the first of two returns farther apart than a surface can put them, a corner between
+// neighbouring runs whose lines turn and meet (corner_between).
+std::pair<Ints, Ints> events(const Returns& ret, const Partition& part, const Reals& sigma,
+                             const Ints& positions, double step, ScanShape shape);
 
 // The runs (their numbers) that hold at least min_points returns in their fit and are at least min_length long.
 Ints kept_runs(const Returns& ret, const Flags& held, const Runs& runs, Index min_points,

@@ -17,7 +17,7 @@ namespace {
 struct SplitClusters {
     Returns returns;
     Moments moments;
-    Runs runs;
+    GroupedRuns runs;
     Clustering clustering;
 };
 
@@ -28,9 +28,9 @@ SplitClusters cluster_and_split(Returns returns, Index n_beams, const Stack& sen
     Clusters clusters = cluster_scan(std::move(returns), n_beams, sensor.step, sensor.full_circle,
                                      s.clustering.rule, sensor.noise);
     Moments moments = prefix_moments(clusters.returns.x, clusters.returns.y);
-    Runs whole{clusters.start, clusters.end, Ints(clusters.start.size())};
+    GroupedRuns whole{clusters.start, clusters.end, Ints(clusters.start.size())};
     std::iota(whole.group.begin(), whole.group.end(), Index{0});
-    Runs runs = split_at_farthest(clusters.returns.x, clusters.returns.y, moments, whole,
+    GroupedRuns runs = split_at_farthest(clusters.returns.x, clusters.returns.y, moments, whole,
                                   s.segments.split_distance, s.segments.split_reference);
     return {std::move(clusters.returns), std::move(moments), std::move(runs),
             {true, clusters.ring, std::move(clusters.breakpoints)}};
@@ -89,7 +89,7 @@ ScanResult split_merge_scan(View<double> ranges, View<bool> valid, const Stack& 
     if (returns.size() == 0) return empty_result({}, outliers);
     SplitClusters split = cluster_and_split(std::move(returns), n_beams, sensor, s);
     const Returns& ret = split.returns;
-    Runs runs = split.runs;
+    GroupedRuns runs = split.runs;
     drop_small(ret.x, ret.y, runs.a, runs.b, runs.group, s.output.min_points,
                s.output.min_length);
     Reals sigma =
@@ -103,17 +103,11 @@ ScanResult split_merge_scan(View<double> ranges, View<bool> valid, const Stack& 
 }  // namespace
 
 Table iepf_stack(const Stack& stack, const SplitSettings& s) {
-    Table table;
-    for (Index row = 0; row < stack.rows; ++row)
-        table.add(iepf_scan(stack.row_ranges(row), stack.row_valid(row), stack, s));
-    return table;
+    return each_row(stack, iepf_scan, s);
 }
 
 Table split_merge_stack(const Stack& stack, const SplitSettings& s) {
-    Table table;
-    for (Index row = 0; row < stack.rows; ++row)
-        table.add(split_merge_scan(stack.row_ranges(row), stack.row_valid(row), stack, s));
-    return table;
+    return each_row(stack, split_merge_scan, s);
 }
 
 }  // namespace scanlines

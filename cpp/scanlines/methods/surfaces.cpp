@@ -14,7 +14,6 @@ namespace {
 
 using namespace penalised;
 
-constexpr double EVENT_SIGMAS = 3.0;
 constexpr std::size_t LOOK_BEHIND = 3;
 // The least a return weighs: at the finest sampling ten returns count as one observation,
 // which keeps a corner's evidence within the partition's look-back of 256 returns.
@@ -28,47 +27,6 @@ Reals footprint_weights(const Returns& ret, double step, double footprint) {
         for (std::size_t p = 0; p < out.size(); ++p)
             out[p] = std::clamp(ret.r[p] * step / footprint, LIGHTEST_RETURN, 1.0);
     return out;
-}
-
-struct ScanShape {
-    bool full_circle, ring;
-    Index n_beams;
-};
-
-// Breakpoints where a surface ends and corners where two meet, read between the held
-// returns of neighbouring runs: a return left out inside a surface (a spike, a mixed pixel)
-// is no event.
-std::pair<Ints, Ints> surface_events(const Returns& ret, const Partition& part,
-                                     const Reals& sigma, double step, ScanShape shape) {
-    const Index n = ret.size();
-    Ints breakpoints, corners;
-    Ints owner(n, -1), held;
-    for (std::size_t k = 0; k < part.runs.a.size(); ++k)
-        for (Index p = part.runs.a[k]; p <= part.runs.b[k]; ++p) owner[p] = static_cast<Index>(k);
-    for (Index p = 0; p < n; ++p)
-        if (part.held[p]) held.push_back(p);
-    const Index m = static_cast<Index>(held.size());
-    if (m == 0) return {breakpoints, corners};
-    // Beam gaps too wide to bridge, counted up to each position.
-    Ints wide(n + 1, 0);
-    for (Index p = 0; p + 1 < n; ++p) wide[p + 1] = wide[p] + (part.gap[p] > MAX_BRIDGED_GAP);
-    const Index last = shape.ring ? m : m - 1;
-    for (Index k = 0; k < last; ++k) {
-        Index p = held[k], q = held[(k + 1) % m];
-        if (owner[p] == owner[q] && q > p) continue;
-        bool across_gap = q > p ? wide[q] > wide[p] : false;
-        Index beams = py_mod(ret.index[q] - ret.index[p], shape.n_beams);
-        if (across_gap || !continuous(ret, p, q, beams, step, sigma, EVENT_SIGMAS)) {
-            breakpoints.push_back(ret.index[p]);
-        } else if (owner[p] != owner[q]) {
-            Index at = corner_between(ret, part.sums, sigma, part.runs, owner[p], owner[q],
-                                      EVENT_SIGMAS);
-            if (at >= 0) corners.push_back(ret.index[at]);
-        }
-    }
-    if (shape.full_circle && !shape.ring) breakpoints.push_back(ret.index[held[m - 1]]);
-    std::sort(breakpoints.begin(), breakpoints.end());
-    return {breakpoints, corners};
 }
 
 // The raw weighted sums (w, wx, wy, wxx, wxy, wyy, footprints) of run [a, b].
@@ -181,11 +139,15 @@ ScanResult surfaces_scan(View<double> ranges, View<bool> valid, const Stack& sen
     const Index n_beams = ranges.size;
     ScanReturns scan = scan_returns(ranges, valid, sensor, s.noise_sigma);
     if (scan.ret.size() == 0) return empty_result({}, {});
-    const Objective objective{s.segments, s.output.min_points, Residual::ALONG_BEAM, true};
+    const Objective objective{s.segments, s.output.min_points, Residual::ALONG_BEAM, true,
+                              s.segments.two_stage};
     Reals weights = footprint_weights(scan.ret, sensor.step, s.segments.footprint);
     Partition part = ring_partition(scan, weights, n_beams, sensor.step, objective);
-    auto [breakpoints, corners] = surface_events(scan.ret, part, scan.sigma, sensor.step,
-                                                 {sensor.full_circle, scan.ring, n_beams});
+    Ints in_fit;  // events between held returns: a return left out inside a surface is none
+    for (std::size_t p = 0; p < part.held.size(); ++p)
+        if (part.held[p]) in_fit.push_back(static_cast<Index>(p));
+    auto [breakpoints, corners] = events(scan.ret, part, scan.sigma, in_fit, sensor.step,
+                                         {sensor.full_circle, scan.ring, n_beams});
     Ints kept_ids = kept_runs(scan.ret, part.held, part.runs, s.output.min_points, s.output.min_length);
     Ints group = surface_groups(part.sums, part.runs, kept_ids, s.segments.penalty,
                                  s.segments.model_error);
@@ -199,10 +161,7 @@ ScanResult surfaces_scan(View<double> ranges, View<bool> valid, const Stack& sen
 }
 
 Table surfaces_stack(const Stack& stack, const SurfacesSettings& s) {
-    Table table;
-    for (Index row = 0; row < stack.rows; ++row)
-        table.add(surfaces_scan(stack.row_ranges(row), stack.row_valid(row), stack, s));
-    return table;
+    return each_row(stack, surfaces_scan, s);
 }
 
 }  // namespace scanlines

@@ -15,6 +15,7 @@ struct SurfacesSettings {
     double noise_sigma;  // noise; NaN: the noise line
     struct Segments : penalised::ObjectiveSettings {
         double footprint;
+        bool two_stage;  // the two-stage search (penalised::two_stage_runs)
     } segments;
     OutputBounds output;
 };

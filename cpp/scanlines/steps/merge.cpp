@@ -21,7 +21,7 @@ double chi_square(double rho_1, double alpha_1, double rho_2, double alpha_2,
     return (s * d_rho * d_rho - 2.0 * q * d_rho * d_alpha + p * d_alpha * d_alpha) / det;
 }
 
-Runs merge_by_chi_square(const Returns& returns, const Moments& moments, const Ints& a_in,
+GroupedRuns merge_by_chi_square(const Returns& returns, const Moments& moments, const Ints& a_in,
                          const Ints& b_in, const Ints& group_in, const Reals& sigma,
                          double threshold, bool inflate) {
     Ints a = a_in, b = b_in, group = group_in;

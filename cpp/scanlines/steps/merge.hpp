@@ -12,7 +12,7 @@ double chi_square(double rho_1, double alpha_1, double rho_2, double alpha_2,
                   const double* covariance_1, const double* covariance_2);
 
 // Merge neighbouring runs of one group while their lines pass the chi-square test.
-Runs merge_by_chi_square(const Returns& returns, const Moments& moments, const Ints& a,
+GroupedRuns merge_by_chi_square(const Returns& returns, const Moments& moments, const Ints& a,
                          const Ints& b, const Ints& group, const Reals& sigma, double threshold,
                          bool inflate);
 

@@ -64,9 +64,9 @@ double chord_distance(const Reals& x, const Reals& y, Index a, Index b, Index p)
     return std::hypot(px - t * dx, py - t * dy);
 }
 
-Runs split_at_farthest(const Reals& x, const Reals& y, const Moments& moments, const Runs& runs,
-                       double threshold, Index reference) {
-    Runs out;
+GroupedRuns split_at_farthest(const Reals& x, const Reals& y, const Moments& moments,
+                              const GroupedRuns& runs, double threshold, Index reference) {
+    GroupedRuns out;
     struct Pending {
         Index lo, hi, group;
     };
@@ -93,8 +93,8 @@ Runs split_at_farthest(const Reals& x, const Reals& y, const Moments& moments, c
     return out;
 }
 
-Runs cut_at(const Ints& start, const Ints& end, const Ints& corners, bool shared) {
-    Runs out;
+GroupedRuns cut_at(const Ints& start, const Ints& end, const Ints& corners, bool shared) {
+    GroupedRuns out;
     out.a = start;
     for (Index c : corners) out.a.push_back(c + (shared ? 0 : 1));
     out.b = corners;

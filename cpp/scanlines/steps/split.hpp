@@ -11,7 +11,7 @@ namespace scanlines {
 enum SplitReference : Index { CHORD = 0, LINE = 1 };
 
 // Runs [a, b] and the group of each.
-struct Runs {
+struct GroupedRuns {
     Ints a, b, group;
 };
 
@@ -24,10 +24,10 @@ inline double line_residual(const Reals& x, const Reals& y, Index p, double rho,
 }
 
 // Each run split recursively at its farthest point, depth first (iterative end-point fit).
-Runs split_at_farthest(const Reals& x, const Reals& y, const Moments& moments, const Runs& runs,
-                       double threshold, Index reference);
+GroupedRuns split_at_farthest(const Reals& x, const Reals& y, const Moments& moments,
+                              const GroupedRuns& runs, double threshold, Index reference);
 
 // Runs and their cluster number after cutting the clusters at corners.
-Runs cut_at(const Ints& start, const Ints& end, const Ints& corners, bool shared);
+GroupedRuns cut_at(const Ints& start, const Ints& end, const Ints& corners, bool shared);
 
 }  // namespace scanlines

@@ -43,4 +43,14 @@ struct Stack {
     View<bool> row_valid(Index row) const { return {valid + row * beams, beams}; }
 };
 
+// Each row of the stack through a method's scan kernel, scan(ranges, valid, stack,
+// settings...): one flat table.
+template <class ScanKernel, class... Settings>
+Table each_row(const Stack& stack, ScanKernel scan, const Settings&... settings) {
+    Table table;
+    for (Index row = 0; row < stack.rows; ++row)
+        table.add(scan(stack.row_ranges(row), stack.row_valid(row), stack, settings...));
+    return table;
+}
+
 }  // namespace scanlines

@@ -95,6 +95,7 @@ def bench_command(
     ] = None,
 ) -> object:  # the BenchResult (typer evaluates the annotation at start-up)
     from scanlines.bench import measure
+    from scanlines.cli.progress import progress
     from scanlines.report import command_line
 
     changes = {
@@ -126,38 +127,12 @@ def bench_command(
     config = make(**changes)
     config = config.validated()  # bad input ends here, before anything is timed
 
-    with _Progress() as progress:
-        result = measure.run(config, command=command_line(), progress=progress)
+    with progress("bench", unit="") as tick:
+        result = measure.run(config, command=command_line(), progress=tick.stage)
     _print(result)
     if json_path is not None:
         typer.echo(f"wrote {result.to_json(json_path)}")
     return result  # for a caller that writes a page of it (the repository's tools)
-
-
-class _Progress:
-    """A transient rich progress bar on stderr; the instance is the ``progress`` callback."""
-
-    def __enter__(self) -> _Progress:
-        from rich.console import Console
-        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
-
-        self.bar = Progress(
-            "{task.description}",
-            BarColumn(),
-            MofNCompleteColumn(),
-            TimeElapsedColumn(),
-            transient=True,
-            console=Console(stderr=True),
-        )
-        self.bar.__enter__()
-        self.task = self.bar.add_task("bench", total=None)
-        return self
-
-    def __call__(self, stage: str, done: int, total: int) -> None:
-        self.bar.update(self.task, description=stage, completed=done, total=total)
-
-    def __exit__(self, *exc: object) -> None:
-        self.bar.__exit__(*exc)
 
 
 def _print(result: BenchResult) -> None:

@@ -14,7 +14,7 @@ import typer
 from scanlines.builtin_methods import BUILTIN_METHODS
 from scanlines.cli.interrupts import Terminated, any_terminated, is_interrupt
 from scanlines.errors import ParameterError, ScanlinesError
-from scanlines.reader_options import ReaderOptions
+from scanlines.reader_options import SCANS_HELP, ReaderOptions
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -27,9 +27,10 @@ TERMINATED = 143
 #: How an NPZ without ``range_max`` is read (:mod:`scanlines.io.npz`), in the help of every
 #: command that reads one.
 NPZ_HELP = (
-    "An .npz holds ranges, angle_min, angle_increment and range_max; without range_max, "
-    "the largest range, where at least 1 % of the beams hold it exactly, is read as a "
-    "no-return code (the SICK 81.83 m), not as a wall."
+    "An .npz holds ranges, angle_min, angle_increment and range_max; without range_max "
+    "(an .npz key, a .csv's '# range_max=' comment or --range-max), the largest range, where "
+    "at least 1 % of the beams hold it exactly, is read as a no-return code (the SICK "
+    "81.83 m), not as a wall."
 )
 LogArgument = Annotated[
     Path,
@@ -49,6 +50,14 @@ AngleMinOption = Annotated[
 AngleStepOption = Annotated[
     float | None, typer.Option("--angle-increment", help="CSV: bearing step, degrees.")
 ]
+RangeMaxOption = Annotated[
+    float | None,
+    typer.Option(
+        "--range-max",
+        help="Largest valid range, metres: farther beams read as no return (CARMEN, .dat, "
+        "CSV, NPZ; a bag's messages state their own). Default: the log's.",
+    ),
+]
 OnErrorOption = Annotated[
     Literal["fail", "skip"],
     typer.Option("--on-error", help="Stop at a malformed record, or skip and count it."),
@@ -59,9 +68,7 @@ MaxBeamsOption = Annotated[
 ]
 PresetOption = Annotated[str | None, typer.Option(help="Named parameter set, e.g. paper.")]
 ParamOption = Annotated[list[str] | None, typer.Option("--param", help="NAME=VALUE, repeatable.")]
-ScansOption = Annotated[
-    str | None, typer.Option("--scans", help="Python slice of scan indices, e.g. 100:200.")
-]
+ScansOption = Annotated[str | None, typer.Option("--scans", help=SCANS_HELP)]
 JobsOption = Annotated[
     int | None,
     typer.Option("--jobs", "-j", help="Threads extracting chunks of scans (default: every core)."),
@@ -83,9 +90,13 @@ def guarded(command: F) -> F:
     @functools.wraps(command)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
         try:
+            check_input_paths(kwargs)
             return command(*args, **kwargs)
-        except (ScanlinesError, OSError, EOFError) as error:
+        except (ScanlinesError, EOFError) as error:
             print(f"scanlines: error: {error}", file=sys.stderr)
+            raise typer.Exit(INPUT_ERROR) from None
+        except OSError as error:
+            print(f"scanlines: error: {os_error_line(error)}", file=sys.stderr)
             raise typer.Exit(INPUT_ERROR) from None
         except (KeyboardInterrupt, Terminated) as stop:
             if not is_interrupt(stop):
@@ -99,6 +110,53 @@ def guarded(command: F) -> F:
     return wrapper  # type: ignore[return-value]
 
 
+#: The path options a command writes (every other path option is read): checked by
+#: :func:`writable` instead, never required to exist.
+OUTPUT_PARAMETERS = frozenset({"out", "output", "plot", "poses_out", "save_scenes", "json_path"})
+
+
+def input_paths(arguments: dict[str, Any]) -> list[tuple[str, Path]]:
+    """The ``(parameter, path)`` pairs of a command's arguments that name files it reads:
+    every :class:`~pathlib.Path` value (or list of them) not in :data:`OUTPUT_PARAMETERS`,
+    globs left to the command that expands them."""
+    found = []
+    for name, value in arguments.items():
+        if name in OUTPUT_PARAMETERS:
+            continue
+        for path in value if isinstance(value, list | tuple) else [value]:
+            if isinstance(path, Path) and not any(c in str(path) for c in "*?["):
+                found.append((name, path))
+    return found
+
+
+def check_input_paths(arguments: dict[str, Any]) -> None:
+    """Every file a command reads is there and readable, before any work: else an
+    :class:`OSError` naming it, which :func:`guarded` prints as ``PATH: no such file or
+    directory`` (or ``PATH: permission denied``), whatever the option."""
+    import errno
+    import os
+
+    for _, path in input_paths(arguments):
+        if not path.exists():
+            raise OSError(errno.ENOENT, os.strerror(errno.ENOENT), str(path))
+        if not os.access(path, os.R_OK):
+            raise OSError(errno.EACCES, os.strerror(errno.EACCES), str(path))
+
+
+def os_error_line(error: OSError) -> str:
+    """An :class:`OSError` in the one form of every command, ``PATH: reason``
+    (``x.clf: no such file or directory``), without Python's ``[Errno 2]``."""
+    import os
+
+    if error.errno is None:
+        return str(error)
+    reason = os.strerror(error.errno)
+    reason = reason[:1].lower() + reason[1:]
+    if error.filename is None:
+        return reason
+    return f"{error.filename}: {reason}"
+
+
 def jobs_option(jobs: int | None) -> int:
     """``--jobs``: at least 1; ``None`` is every core this process may use."""
     from scanlines.runs.runner import default_jobs
@@ -110,14 +168,14 @@ def jobs_option(jobs: int | None) -> int:
     return jobs
 
 
-#: The built-in methods, as choices of ``--method`` (named without importing the methods).
-MethodName = Literal[BUILTIN_METHODS]  # type: ignore[valid-type]
-
 #: ``--method`` of a command that takes ``--config``: ``None`` when not given.
 ConfigMethodOption = Annotated[
-    MethodName | None,
+    str | None,
     typer.Option(
-        "--method", help="Extraction method.", show_default="the --config file's, else adaptive"
+        "--method",
+        metavar=f"[{'|'.join(BUILTIN_METHODS)}]",
+        help="Extraction method (or one registered with scanlines.methods.register).",
+        show_default="the --config file's, else adaptive",
     ),
 ]
 
@@ -166,6 +224,7 @@ def method_options(
     from scanlines.config import DEFAULT_METHOD, load_config
 
     params = parse_params(param)
+    check_method(method)
     if config is None:
         return method or DEFAULT_METHOD, preset, params
     loaded = load_config(config)
@@ -187,6 +246,17 @@ def method_options(
     return loaded.method, loaded.preset if preset is None else preset, {**loaded.params, **params}
 
 
+def check_method(method: str | None) -> None:
+    """``--method``: a method's name, else one line listing them (no usage box)."""
+    if method is None:
+        return
+    from scanlines.extractor import method_names
+
+    names = method_names()
+    if method not in names:
+        raise ParameterError(f"--method {method!r} is not a method; methods: {', '.join(names)}")
+
+
 def parse_params(pairs: list[str] | None) -> dict[str, Any]:
     """``["k=3", "fit=tls"]`` -> ``{"k": "3", "fit": "tls"}`` (values validated by the method)."""
     params: dict[str, Any] = {}
@@ -206,6 +276,7 @@ def reader_options(
     angle_increment: float | None = None,
     on_error: str | None = None,
     max_beams: int | None = None,
+    range_max: float | None = None,
 ) -> ReaderOptions:
     """The reader options the user gave on the command line (angles given in degrees),
     and only those: each reader refuses the ones it does not take."""
@@ -217,6 +288,7 @@ def reader_options(
         angle_min=None if angle_min is None else math.radians(angle_min),
         angle_increment=None if angle_increment is None else math.radians(angle_increment),
         on_error=on_error,
+        range_max=range_max,
     )
 
 

@@ -1,5 +1,5 @@
 """What ``scanlines eval`` prints: the score tables, the family tables, the repeatability
-table, and the progress bar."""
+table."""
 
 from __future__ import annotations
 
@@ -36,12 +36,13 @@ def _print_tables(result: EvalResult) -> None:
     from rich.console import Console
     from rich.table import Table
 
+    from scanlines.evaluation.eval_results import COUNT_RATE_CAPTION
     from scanlines.evaluation.evaluate import TABLE_COLUMNS, tolerance_caption
 
     config = result.config
     caption = (
         f"{tolerance_caption(config.tol)}. Rates pooled over scans; split/merge totals; "
-        "accuracy: mean per-scan rate; us/scan: median extraction time."
+        f"us/scan: median extraction time; {COUNT_RATE_CAPTION}."
     )
     console = Console()
     if not console.is_terminal:
@@ -160,37 +161,6 @@ def _print_family(result: EvalResult, out: Path) -> list[Path]:
         write_csv(out / "family.csv", [r.to_dict() for r in rows]),
         write_csv(out / "family_worst.csv", [w.to_dict() for w in worst]),
     ]
-
-
-class _progress:
-    """A transient rich progress bar (on stderr); gives ``advance(done, total)``."""
-
-    def __init__(self, description: str, unit: str = "scenes") -> None:
-        self.description = description
-        self.unit = unit
-
-    def __enter__(self):
-        from rich.console import Console
-        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
-
-        self.bar = Progress(
-            "{task.description}",
-            BarColumn(),
-            MofNCompleteColumn(),
-            self.unit,
-            TimeElapsedColumn(),
-            transient=True,
-            console=Console(stderr=True),
-        )
-        self.bar.__enter__()
-        self.task = self.bar.add_task(self.description, total=None)
-        return self.advance
-
-    def advance(self, done: int, total: int) -> None:
-        self.bar.update(self.task, completed=done, total=total)
-
-    def __exit__(self, *exc: object) -> None:
-        self.bar.__exit__(*exc)
 
 
 TABLE_WIDTH = 180

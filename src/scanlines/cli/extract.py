@@ -98,8 +98,7 @@ def load_one_scan(
         options["angle_increment"] = math.radians(angle_increment)
     if range_max is not None:
         options["range_max"] = range_max
-    name = file.name.lower()
-    kind = "npz" if name.endswith(".npz") else "csv"
+    kind = single_scan_format(file)
     if kind == "npz" and options:
         raise LogFormatError(
             "--angle-min/--angle-increment/--range-max are for CSV files", path=file
@@ -112,6 +111,31 @@ def load_one_scan(
     if next(scans, None) is not None:
         raise LogFormatError("holds more than one scan; use 'scanlines run' for logs", path=file)
     return scan, reader.notes
+
+
+#: The log formats ``extract`` refuses, as its message names them.
+LOG_NAMES = {"carmen": "CARMEN", "rosbag": "ROS bag", "coreslam": "CoreSLAM (.dat)"}
+
+
+def single_scan_format(file: Path) -> str:
+    """``"npz"`` or ``"csv"``: the format of a file ``extract`` reads; a log of another
+    format is refused naming the commands that read logs."""
+    from scanlines.io import detect_format
+
+    if file.name.lower().endswith(".npz"):
+        return "npz"
+    try:
+        found = detect_format(file)
+    except LogFormatError:
+        return "csv"  # the CSV reader says what is wrong with it
+    if found in ("csv", "npz"):
+        return found
+    raise LogFormatError(
+        f"a {LOG_NAMES.get(found, found)} log, not a single scan (.npz or .csv): "
+        "`scanlines plot LOG --scan N` draws one of its scans, `scanlines run LOG` extracts "
+        "them all",
+        path=file,
+    )
 
 
 def print_tables(file: Path, scan, result) -> None:

@@ -8,7 +8,7 @@ from typing import Annotated
 
 import typer
 
-from scanlines.cli.common import LogArgument, OverwriteOption, guarded
+from scanlines.cli.common import LogArgument, OverwriteOption, RangeMaxOption, guarded
 
 
 def register(app: typer.Typer) -> None:
@@ -38,6 +38,45 @@ def parse_initial_pose(text: str) -> tuple[float, tuple[float, float, float]]:
     return values[0], (values[1], values[2], values[3])
 
 
+#: How far (seconds) a pose of --initial-pose-from may lie from the log's first time.
+INITIAL_POSE_TOLERANCE = 0.05
+
+
+def initial_pose_of(log: Path, options, given: str | None, source: Path | None):
+    """``(t, (x, y, yaw))``: ``--initial-pose``, or the pose of ``--initial-pose-from`` at
+    the time of the log's first scan (the nearest within :data:`INITIAL_POSE_TOLERANCE`);
+    ``None`` when neither is given (the pose is searched for on the map)."""
+    from scanlines.errors import ParameterError
+
+    if given is not None and source is not None:
+        raise ParameterError(
+            "give one of --initial-pose T,X,Y,YAW or --initial-pose-from POSES.tum (the "
+            "poses `scanlines map LOG --align --poses-out POSES.tum` writes), not both"
+        )
+    if given is None and source is None:
+        return None
+    if given is not None:
+        return parse_initial_pose(given)
+    from scanlines.io import open_log
+    from scanlines.map.poses import read_tum
+
+    trajectory = read_tum(source)
+    with open_log(log, options=options) as reader:
+        first = next((s.timestamp for s in reader if s.timestamp is not None), None)
+    if first is None:
+        raise ParameterError(f"{log}: no scan has a timestamp to find in {source}")
+    gaps = abs(trajectory.times - first)
+    nearest = int(gaps.argmin())
+    if gaps[nearest] > INITIAL_POSE_TOLERANCE:
+        raise ParameterError(
+            f"{source}: no pose within {1000 * INITIAL_POSE_TOLERANCE:.0f} ms of the first time "
+            f"of {log.name}, {first!r} s (its poses run from {float(trajectory.times[0])!r} "
+            f"to {float(trajectory.times[-1])!r} s); give --initial-pose T,X,Y,YAW"
+        )
+    x, y, yaw = (float(v) for v in trajectory.poses[nearest])
+    return first, (x, y, yaw)
+
+
 def localize_command(
     log: LogArgument,
     map_file: Annotated[
@@ -49,8 +88,19 @@ def localize_command(
         typer.Option(
             "--initial-pose",
             help="T,X,Y,YAW: where the robot stands (map frame, metres, heading in radians) "
-            "at time T (seconds of the log's clock); earlier scans are skipped. Without it "
-            "the pose is searched for on the map (global localisation) from the first scan.",
+            "at time T (seconds of the log's clock); earlier scans are skipped. A pose of "
+            "the map's trajectory (`map --align --poses-out`), or one read off the map. "
+            "Without it (nor --initial-pose-from) the pose is searched for on the map "
+            "(global localisation) from the first scan.",
+        ),
+    ] = None,
+    initial_pose_from: Annotated[
+        Path | None,
+        typer.Option(
+            "--initial-pose-from",
+            metavar="POSES.tum",
+            help="Instead of --initial-pose: the pose at the log's first time, taken from "
+            "this TUM file (the poses `map --align --poses-out` wrote for the map).",
         ),
     ] = None,
     ignore_sides: Annotated[
@@ -62,24 +112,32 @@ def localize_command(
         ),
     ] = False,
     overwrite: OverwriteOption = False,
+    range_max: RangeMaxOption = None,
 ) -> None:
     import time
 
-    from scanlines.cli.common import writable
+    from scanlines.cli.common import reader_options, writable
+    from scanlines.cli.progress import progress
     from scanlines.io import open_log
     from scanlines.map.export import naming_output
     from scanlines.map.filter import FilterSettings
     from scanlines.map.localize import localize, read_line_map
     from scanlines.map.tracked import write_tracked
 
-    initial = None if initial_pose is None else parse_initial_pose(initial_pose)
+    options = reader_options(range_max=range_max)
+    initial = initial_pose_of(log, options, initial_pose, initial_pose_from)
     writable(out, overwrite)
     writable(out.with_name(out.stem + ".cov.json"), overwrite)
     lines, frame = read_line_map(map_file)
     started = time.perf_counter()
-    with open_log(log) as reader:
+    with (
+        open_log(log, options=options) as reader,
+        progress(f"localising {log.name}", reader.scans_in_file) as tick,
+    ):
         settings = FilterSettings(sides=not ignore_sides)
-        run = localize(reader.enumerate(), lines, frame, initial, settings=settings)
+        run = localize(
+            reader.enumerate(), lines, frame, initial, settings=settings, on_scan=tick.scan
+        )
     seconds = time.perf_counter() - started
     if not run.tracked:
         from scanlines.errors import ParameterError

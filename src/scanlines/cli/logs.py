@@ -24,6 +24,7 @@ from scanlines.cli.common import (
     ParamOption,
     PresetOption,
     ProfileOption,
+    RangeMaxOption,
     ScansOption,
     TopicOption,
     guarded,
@@ -40,6 +41,7 @@ from scanlines.cli.log_reports import (
     _print_summary,
     _run_with_progress,
 )
+from scanlines.reader_options import SCANS_HELP
 
 
 def register(app: typer.Typer) -> None:
@@ -57,6 +59,11 @@ def register(app: typer.Typer) -> None:
     app.command("demo", help="Run the default method on the shipped Intel excerpt.")(
         guarded(demo_command)
     )
+    app.command(
+        "sample",
+        help="The path of a shipped sample log (intel, freiburg, urg), for any command: "
+        "LOG=$(scanlines sample intel). Without a name, every sample and its path.",
+    )(guarded(sample_command))
 
 
 def info_command(
@@ -68,6 +75,7 @@ def info_command(
     angle_increment: AngleStepOption = None,
     on_error: OnErrorOption = "fail",
     max_beams: MaxBeamsOption = None,
+    range_max: RangeMaxOption = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON.")] = False,
 ) -> None:
     import json
@@ -76,7 +84,7 @@ def info_command(
     from scanlines.runs.runner import describe_log
 
     options = reader_options(
-        fov, angle_convention, topic, angle_min, angle_increment, on_error, max_beams
+        fov, angle_convention, topic, angle_min, angle_increment, on_error, max_beams, range_max
     )
     with open_log(log, options=options) as reader:
         description = describe_log(reader)
@@ -110,6 +118,7 @@ def run_command(
     ] = "sensor",
     on_error: OnErrorOption = "fail",
     max_beams: MaxBeamsOption = None,
+    range_max: RangeMaxOption = None,
     fov: FovOption = None,
     angle_convention: ConventionOption = None,
     topic: TopicOption = None,
@@ -149,7 +158,14 @@ def run_command(
         from scanlines.cli.fleet import run_many
 
         options = reader_options(
-            fov, angle_convention, topic, angle_min, angle_increment, on_error, max_beams
+            fov,
+            angle_convention,
+            topic,
+            angle_min,
+            angle_increment,
+            on_error,
+            max_beams,
+            range_max,
         )
         run_many(logs, out, output_format, method=method, preset=preset,
                  params=params, options=options, sensor_profile=sensor_profile,
@@ -175,7 +191,7 @@ def run_command(
 
         require_rerun()  # and a missing Rerun SDK
     options = reader_options(
-        fov, angle_convention, topic, angle_min, angle_increment, on_error, max_beams
+        fov, angle_convention, topic, angle_min, angle_increment, on_error, max_beams, range_max
     )
     jobs = jobs_option(jobs)
     profile = profile_for_run(log, options, selection, sensor_profile)
@@ -199,7 +215,10 @@ def run_command(
 def calibrate_command(
     log: LogArgument,
     out: Annotated[
-        Path | None, typer.Option(help="Profile file (.json); default: <log name>.profile.json.")
+        Path | None,
+        typer.Option(
+            help="Profile file (.json); default: <log name>.profile.json in the current folder."
+        ),
     ] = None,
     plot: Annotated[
         Path | None, typer.Option(help="Figure of the noise curve (PNG, PDF, SVG).")
@@ -212,6 +231,7 @@ def calibrate_command(
     topic: TopicOption = None,
     angle_min: AngleMinOption = None,
     angle_increment: AngleStepOption = None,
+    range_max: RangeMaxOption = None,
 ) -> None:
     from rich.console import Console
     from rich.table import Table
@@ -223,9 +243,11 @@ def calibrate_command(
 
     if max_scans < 1:
         raise ParameterError(f"--max-scans must be at least 1, got {max_scans}")
-    options = reader_options(fov, angle_convention, topic, angle_min, angle_increment)
+    options = reader_options(
+        fov, angle_convention, topic, angle_min, angle_increment, range_max=range_max
+    )
     with open_log(log, options=options) as reader:  # a missing log before its profile's folder
-        out = out or log.with_name(log.name.split(".")[0] + ".profile.json")
+        out = out or Path(log.name.split(".")[0] + ".profile.json")  # never beside the log
         writable(out, overwrite)
         writable(plot, overwrite)
         profile = measure_profile(reader, parse_slice(scans), max_scans=max_scans, source=log.name)
@@ -261,8 +283,7 @@ def plot_command(
     log: LogArgument,
     scan: Annotated[int | None, typer.Option("--scan", help="Index of one scan to draw.")] = None,
     scans: Annotated[
-        str | None,
-        typer.Option("--scans", help="Slice of scans for grids of 12, e.g. 0:300:50."),
+        str | None, typer.Option("--scans", help=f"Scans for grids of 12. {SCANS_HELP}")
     ] = None,
     output: Annotated[
         Path,
@@ -281,6 +302,7 @@ def plot_command(
     topic: TopicOption = None,
     angle_min: AngleMinOption = None,
     angle_increment: AngleStepOption = None,
+    range_max: RangeMaxOption = None,
 ) -> None:
     from scanlines.errors import ParameterError
     from scanlines.extractor import Extractor
@@ -290,12 +312,14 @@ def plot_command(
     from scanlines.viz.scans import plot_extraction, plot_grid
 
     if (scan is None) == (scans is None):
-        raise ParameterError("give exactly one of --scan N or --scans START:STOP[:STEP]")
+        raise ParameterError("give exactly one of --scan INDEX or --scans N|START:STOP[:STEP]")
     selection = slice(scan, scan + 1) if scan is not None else parse_slice(scans)
     method, preset, params = method_options(method, preset, param, config)
     extractor = Extractor(method, preset, **params)
     writable(output, overwrite)
-    options = reader_options(fov, angle_convention, topic, angle_min, angle_increment)
+    options = reader_options(
+        fov, angle_convention, topic, angle_min, angle_increment, range_max=range_max
+    )
     with open_log(log, options=options) as reader:
         chosen, selected = [], 0
         for index, item in select(reader.enumerate(), selection):
@@ -334,6 +358,24 @@ def _page_path(output: Path, number: int, pages: int) -> Path:
     if number == 1:
         return output
     return output.with_name(f"{output.stem}-{number}{output.suffix}")
+
+
+def sample_command(
+    name: Annotated[
+        str | None, typer.Argument(help="intel, freiburg or urg; none: list them all.")
+    ] = None,
+) -> None:
+    from scanlines.data import SAMPLES, sample
+
+    if name is not None:
+        if name not in SAMPLES:
+            from scanlines.errors import ParameterError
+
+            raise ParameterError(f"no sample {name!r}; samples: {', '.join(SAMPLES)}")
+        typer.echo(str(sample(name)))
+        return
+    for known in SAMPLES:
+        typer.echo(f"{known:<9} {sample(known)}")
 
 
 def demo_command(

@@ -17,6 +17,8 @@ from scanlines.cli.common import (
     ParamOption,
     PresetOption,
     ProfileOption,
+    RangeMaxOption,
+    ScansOption,
     TopicOption,
     guarded,
     reader_options,
@@ -38,25 +40,15 @@ MinScansOption = Annotated[
         "--min-scans", min=1, help="Lines seen by fewer scans are dropped as clutter (default 3)."
     ),
 ]
-MapLogOption = Annotated[
-    Path | None,
-    typer.Option(
-        "--map",
-        help="Score a line map instead: built from every scan of LOG but each 10th "
-        "(`scanlines map`), scored on those: coverage of their returns, median distance, "
-        "map lines per 100 m and per segment, the loop test. Writes map_eval.json into --out.",
-    ),
-]
 MapPosesOption = Annotated[
-    Path | None,
-    typer.Option("--poses", help="With --map: a TUM trajectory file of the log's poses."),
+    Path | None, typer.Option("--poses", help="A TUM trajectory file of the log's poses.")
 ]
 AlignOption = Annotated[
     bool,
     typer.Option(
         "--align",
-        help="With --map: track each scan on the map so far before fusing it (as `scanlines "
-        "map --align`); the held-out scans are then scored at their predicted poses and also "
+        help="Track each scan on the map so far before fusing it (as `scanlines map "
+        "--align`); the held-out scans are then scored at their predicted poses and also "
         "localised (aligned to the finished map).",
     ),
 ]
@@ -78,9 +70,6 @@ PosesOutOption = Annotated[
         "their covariances beside it (NAME.cov.json).",
     ),
 ]
-FirstScansOption = Annotated[
-    int | None, typer.Option("--scans", min=1, help="Only the first N scans of the log.")
-]
 
 
 def register(app: typer.Typer) -> None:
@@ -91,12 +80,49 @@ def register(app: typer.Typer) -> None:
     )(guarded(map_command))
 
 
+def register_eval(group: typer.Typer) -> None:
+    group.command(
+        "map",
+        help="Score a line map: built from every scan of LOG but each 10th (`scanlines map`), "
+        "scored on those: coverage of their returns, median distance, map lines per 100 m and "
+        "per segment, the loop test. Writes map_eval.json into --out.",
+    )(guarded(eval_map_command))
+
+
+def eval_map_command(
+    log: LogArgument,
+    method: Annotated[
+        list[str] | None,
+        typer.Option("--method", "-m", help="The method spec scored (one; default adaptive)."),
+    ] = None,
+    config: Annotated[
+        list[Path] | None,
+        typer.Option("--config", metavar="FILE", help="An extraction configuration instead."),
+    ] = None,
+    scans: ScansOption = None,
+    sensor_profile: ProfileOption = None,
+    poses: MapPosesOption = None,
+    align: AlignOption = False,
+    out: Annotated[Path, typer.Option(help="Folder for map_eval.json.")] = Path("scanlines-eval"),
+    range_max: RangeMaxOption = None,
+) -> None:
+    from scanlines.cli.eval_options import method_specs
+    from scanlines.errors import ParameterError
+
+    specs = method_specs(method, config)
+    if len(specs) > 1:
+        raise ParameterError("eval map scores one method: give one --method or one --config")
+    evaluate_map_command(
+        log, specs[0], scans, sensor_profile, poses, out, align, range_max=range_max
+    )
+
+
 def map_command(
     log: LogArgument,
     out: Annotated[Path, typer.Option(help=OUT_HELP)],
     poses: PosesOption = None,
     min_scans: MinScansOption = None,
-    scans: FirstScansOption = None,
+    scans: ScansOption = None,
     method: ConfigMethodOption = None,
     preset: PresetOption = None,
     param: ParamOption = None,
@@ -108,6 +134,7 @@ def map_command(
     overwrite: OverwriteOption = False,
     on_error: OnErrorOption = "fail",
     max_beams: MaxBeamsOption = None,
+    range_max: RangeMaxOption = None,
     topic: TopicOption = None,
     align: TrackOption = False,
     poses_out: PosesOutOption = None,
@@ -124,7 +151,9 @@ def map_command(
     writable(poses_out, overwrite)
     if poses_out is not None:
         writable(poses_out.with_name(poses_out.stem + ".cov.json"), overwrite)
-    options = reader_options(topic=topic, on_error=on_error, max_beams=max_beams)
+    options = reader_options(
+        topic=topic, on_error=on_error, max_beams=max_beams, range_max=range_max
+    )
     prepared = prepare(log, options, poses, min_scans, method, preset, param, config,
                        sensor_profile, scans)  # fmt: skip
     if align:
@@ -202,7 +231,7 @@ def prepare(
     param: list[str] | None,
     config: Path | None,
     sensor_profile: Path | None,
-    scans: int | None,
+    scans: str | None,
 ) -> dict[str, Any]:
     """The extractor, pose source and fusion settings of a map command, every option
     checked before the log is read for the map."""
@@ -213,6 +242,7 @@ def prepare(
     from scanlines.io import open_log
     from scanlines.map.fusion import FusionSettings
     from scanlines.map.poses import RegistrationOdometry, choose_poses
+    from scanlines.reader_options import parse_scans
 
     method, preset, params = method_options(method, preset, param, config)
     Extractor(method, preset, **params)  # bad parameters fail before the log is read
@@ -221,24 +251,30 @@ def prepare(
         source = choose_poses(islice(iter(reader), 10), poses)
     if isinstance(source, RegistrationOdometry):
         typer.echo(f"poses: {log.name} carries none; {source.name}", err=True)
-    selection = slice(None) if scans is None else slice(0, scans)
+    selection = parse_scans(scans)
     profile = profile_for_run(log, options, selection, sensor_profile)
     extractor = Extractor(method, preset, sensor_profile=profile, **params)
     return {"extractor": extractor, "poses": source, "settings": settings, "profile": profile}
 
 
-def run_build(log: Path, options: ReaderOptions, prepared: dict[str, Any], scans: int | None):
-    from itertools import islice
-
+def run_build(log: Path, options: ReaderOptions, prepared: dict[str, Any], scans: str | None):
+    from scanlines.cli.progress import progress
     from scanlines.io import open_log
     from scanlines.map import build_map
+    from scanlines.reader_options import parse_scans, select_scans
+    from scanlines.runs.runner import selected_count
 
+    selection = parse_scans(scans)
     with open_log(log, options=options) as reader:
-        indexed = reader.enumerate() if scans is None else islice(reader.enumerate(), scans)
-        return build_map(
-            indexed, prepared["extractor"], poses=prepared["poses"], settings=prepared["settings"],
-            track=prepared.get("track"), source=str(log),
-        )  # fmt: skip
+        indexed = select_scans(reader.enumerate(), selection)
+        total = selected_count(reader.scans_in_file, selection)
+        what = "tracking and mapping" if prepared.get("track") else "mapping"
+        with progress(f"{what} {log.name}", total) as tick:
+            return build_map(
+                indexed, prepared["extractor"], poses=prepared["poses"],
+                settings=prepared["settings"], track=prepared.get("track"), source=str(log),
+                on_scan=tick.scan,
+            )  # fmt: skip
 
 
 def map_meta(log: Path, build, prepared: dict[str, Any]) -> dict[str, Any]:
@@ -264,39 +300,46 @@ def map_meta(log: Path, build, prepared: dict[str, Any]) -> dict[str, Any]:
 def evaluate_map_command(
     log: Path,
     spec,
-    scans: int | None,
+    scans: str | None,
     sensor_profile: Path | None,
     poses: Path | None,
     out: Path,
     align: bool = False,
+    *,
+    range_max: float | None = None,
 ) -> None:
-    """``scanlines eval --map LOG``: the map of every scan but each 10th, scored on those."""
+    """``scanlines eval map LOG``: the map of every scan but each 10th, scored on those."""
     import time
 
     from rich.console import Console
     from rich.table import Table
 
+    from scanlines.cli.progress import progress
     from scanlines.errors import ParameterError
     from scanlines.io import open_log
     from scanlines.map.build import MAPPING
     from scanlines.map.export import dumps, naming_output
     from scanlines.map.holdout import evaluate_map
     from scanlines.outputs import write_text_atomically
+    from scanlines.reader_options import parse_scans
 
     if spec.is_truth:
-        raise ParameterError("--map scores a method; 'truth' has no scans to map")
+        raise ParameterError("eval map scores a method; 'truth' has no scans to map")
     params = [f"{name}={value}" for name, value in spec.params]
-    prepared = prepare(log, {}, poses, None, spec.method, spec.preset, params, None,
+    options = reader_options(range_max=range_max)
+    prepared = prepare(log, options, poses, None, spec.method, spec.preset, params, None,
                        sensor_profile, scans)  # fmt: skip
     profile = prepared["profile"]
     if profile is None:
         raise ParameterError(f"{log}: no sensor profile could be measured; give --sensor-profile")
     started = time.perf_counter()
-    score, build = evaluate_map(
-        lambda: open_log(log), prepared["extractor"], profile.sigma_at,
-        poses=prepared["poses"], settings=prepared["settings"], limit=scans,
-        track=MAPPING if align else None, source=str(log),
-    )  # fmt: skip
+    with progress(f"mapping {log.name}") as tick:
+        score, build = evaluate_map(
+            lambda: open_log(log, options=options), prepared["extractor"], profile.sigma_at,
+            poses=prepared["poses"], settings=prepared["settings"], limit=parse_scans(scans),
+            track=MAPPING if align else None, source=str(log),
+            on_scan=lambda stage, _index: (tick.begin(f"{stage} {log.name}"), tick.scan()),
+        )  # fmt: skip
     seconds = time.perf_counter() - started
     table = Table(title=f"line map of {log.name}: {score.poses}", show_header=False)
     table.add_column("what", style="bold")

@@ -22,6 +22,7 @@ from scanlines.cli.common import (
     OnErrorOption,
     ParamOption,
     PresetOption,
+    RangeMaxOption,
     ScansOption,
     guarded,
     method_options,
@@ -33,11 +34,14 @@ ROS_ARGS = "scanlines.ros_args"
 
 HELP = (
     "ROS 2 node over DDS (no ROS install): LaserScan in; laser_line_extraction's line "
-    "segments and Marker, and a MarkerArray, out. --play LOG publishes a log's scans (and "
-    "its poses on /tf). ROS arguments follow --ros-args: -r FROM:=TO (-r __ns:=/NS, "
+    "segments and Marker, and a MarkerArray, out; with --map MAP.json it also localises "
+    "each scan on the map as AMCL does (amcl_pose, map -> odom on /tf, /initialpose, the map "
+    "on /map). --play LOG publishes a log's scans (its odometry on /odom and /tf, the "
+    "mounting on /tf_static). ROS arguments follow --ros-args: -r FROM:=TO (-r __ns:=/NS, "
     "-r __node:=NAME), -p NAME:=VALUE, --params-file FILE (NAME: ros__parameters: ...); "
     "parameters are the options' names with _ (method, preset, sensor_profile, topic, "
-    "markers_topic...) and the method's parameters."
+    "markers_topic, map, odometry...), AMCL's global_frame_id, odom_frame_id and "
+    "base_frame_id, and the method's parameters."
 )
 
 
@@ -90,6 +94,7 @@ def ros2_command(
     ] = None,
     scans: ScansOption = None,
     on_error: OnErrorOption = "fail",
+    range_max: RangeMaxOption = None,
     topic: Annotated[
         str, typer.Option(help="The LaserScan topic (relative: under the namespace).")
     ] = "scan",
@@ -108,17 +113,53 @@ def ros2_command(
         typer.Option(help="Also publish the full result (scanlines/msg/ScanFeatures) here."),
     ] = None,
     frame_id: Annotated[
-        str, typer.Option(help="--play: the scans' frame_id (the child frame of /tf).")
+        str, typer.Option(help="--play: the scans' frame_id (the laser's frame).")
     ] = "laser",
-    odom_frame: Annotated[
-        str, typer.Option(help="--play: the frame of the log's poses on /tf.")
+    odom_frame: Annotated[str, typer.Option(help="The odometry's frame.")] = "odom",
+    base_frame: Annotated[str, typer.Option(help="The robot's frame (odometry's child).")] = (
+        "base_link"
+    ),
+    restamp: Annotated[
+        bool,
+        typer.Option(
+            help="--play: stamps that only go forward: the log's intervals where positive, "
+            "the median positive interval where the log's clock steps back."
+        ),
+    ] = False,
+    map_file: Annotated[
+        Path | None,
+        typer.Option(
+            "--map",
+            metavar="MAP.json",
+            help="Node: localise each scan on this line map (`scanlines map` writes it) "
+            "from the pose given on /initialpose (or --initial-pose).",
+        ),
+    ] = None,
+    odometry: Annotated[
+        str,
+        typer.Option(
+            help="--map: the odometry from the odom topic (nav_msgs/Odometry) or from /tf "
+            "(odom-frame -> base-frame).",
+        ),
     ] = "odom",
+    global_frame: Annotated[str, typer.Option(help="--map: the map's frame.")] = "map",
+    initial_pose: Annotated[
+        str | None,
+        typer.Option(
+            help="--map: X,Y,YAW: where the robot's base stands in the map (metres, radians) "
+            "at the first scan, as if sent on /initialpose (which may still move it).",
+        ),
+    ] = None,
     domain_id: Annotated[
         int, typer.Option(help="ROS domain id.", show_default="$ROS_DOMAIN_ID, else 0")
     ] = _domain_default(),
     loopback: Annotated[
         bool,
-        typer.Option("--loopback/--network", help="DDS on 127.0.0.1 only, or as configured."),
+        typer.Option(
+            "--loopback/--network",
+            help="DDS sent over 127.0.0.1 only (Cyclone still listens on every interface: "
+            "see the README), or as configured.",
+        ),
     ] = False,
     wait: Annotated[
         float, typer.Option(help="--play: seconds to wait for a subscriber first.", min=0)
@@ -148,7 +189,9 @@ def ros2_command(
         options = apply_parameters(options, values)
         play_log(
             play, rate, scans, on_error, ros.resolve(options.topics["topic"]), ros.resolve("/tf"),
-            frame_id, odom_frame, domain_id, loopback, wait,
+            frame_id, odom_frame, domain_id, loopback, wait, restamp=restamp,
+            odom_topic=ros.resolve("odom"), tf_static_topic=ros.resolve("/tf_static"),
+            base_frame=base_frame, range_max=range_max,
         )  # fmt: skip
         return
     chosen = NodeOptions(
@@ -161,8 +204,51 @@ def ros2_command(
             "marker_array_topic": marker_array_topic or None,
             "features_topic": features_topic or None,
         },
+        live={
+            "map": None if map_file is None else str(map_file),
+            "odometry": odometry,
+            "global_frame_id": global_frame,
+            "odom_frame_id": odom_frame,
+            "base_frame_id": base_frame,
+        },
     )
-    _node(apply_parameters(chosen, values), ros, domain_id, loopback, max_scans, duration)
+    options = apply_parameters(chosen, values)
+    live = _live_options(options.live)
+    if live is not None:
+        live = (*live, None if initial_pose is None else _pose(initial_pose))
+    _node(options, ros, domain_id, loopback, max_scans, duration, live)
+
+
+def _pose(text: str) -> tuple[float, float, float]:
+    """``X,Y,YAW`` as numbers, or one line saying what is wrong."""
+    import math
+
+    from scanlines.errors import ParameterError
+
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        values = []
+    if len(values) != 3 or not all(math.isfinite(v) for v in values):
+        raise ParameterError(
+            f"--initial-pose: {text!r} is not X,Y,YAW (three finite numbers: metres, metres, "
+            "radians)"
+        )
+    return values[0], values[1], values[2]
+
+
+def _live_options(values: dict):
+    """The map's path and the frames of the live localisation (``None``: no map)."""
+    from scanlines.errors import ParameterError
+    from scanlines.ros2.live import LiveFrames
+
+    if values["odometry"] not in ("odom", "tf"):
+        raise ParameterError(f"--odometry must be odom or tf, got {values['odometry']!r}")
+    if values["map"] is None:
+        return None
+    frames = LiveFrames(values["global_frame_id"], values["odom_frame_id"],
+                        values["base_frame_id"], values["odometry"])  # fmt: skip
+    return Path(values["map"]), frames
 
 
 def _ros_arguments(words: list[str] | None):
@@ -186,13 +272,56 @@ def _ros_arguments(words: list[str] | None):
     return ros, values
 
 
-def _node(options, ros, domain_id, loopback, max_scans, duration) -> None:
+def _read_map(map_file: Path):
+    """The lines and frame of ``map_file``; one line when it is not there."""
+    from scanlines.errors import NO_SUCH_FILE, ParameterError
+    from scanlines.map.localize import read_line_map
+
+    if not map_file.is_file():
+        raise ParameterError(f"{map_file}: {NO_SUCH_FILE}")
+    return read_line_map(map_file)
+
+
+def _live(node, map_file, lines, frame, frames, initial, ros):
+    """The node's localisation on the map (AMCL's topics, resolved), the map published;
+    and its start-up line."""
+    from scanlines.ros2.live import LiveLocalisation, LiveTopics
+    from scanlines.ros2.localizer import Localizer
+
+    topics = LiveTopics(*(ros.resolve(name) for name in (
+        "odom", "/tf", "/tf_static", "initialpose", "amcl_pose", "map", "scanlines/map_markers"
+    )))  # fmt: skip
+    localizer = Localizer(lines, frame, base_frame=frames.base_frame)
+    if initial is not None:
+        localizer.set_initial(0.0, initial)
+    live = LiveLocalisation(localizer, node.participant, topics=topics, frames=frames)
+    node.attach(live)
+    live.publish_map()
+    source = (
+        f"{topics.tf} ({frames.odom_frame} -> {frames.base_frame})"
+        if frames.odometry == "tf"
+        else f"{topics.odom} (Odometry)"
+    )
+    line = (
+        f"scanlines ros2: localising on {map_file} ({len(lines.rho)} lines): odometry from "
+        f"{source}, the laser's mounting from {topics.tf_static} (else the lever learnt), "
+        f"the initial pose from {'--initial-pose, then ' if initial else ''}"
+        f"{topics.initialpose}; publishing {topics.amcl_pose} "
+        f"(PoseWithCovarianceStamped), {frames.global_frame} -> {frames.odom_frame} on "
+        f"{topics.tf}, the map on {topics.map} (OccupancyGrid) and {topics.map_markers} "
+        "(MarkerArray)"
+    )
+    return live, line
+
+
+def _node(options, ros, domain_id, loopback, max_scans, duration, live=None) -> None:
     from scanlines.extractor import Extractor
     from scanlines.ros2 import LineNode
     from scanlines.sensor.profile import read_profile
 
     path = options.sensor_profile
     profile = None if path is None else read_profile(path)
+    the_map = None if live is None else _read_map(live[0])  # before any DDS
     extractor = Extractor(options.method, options.preset, sensor_profile=profile, **options.params)
     topics = {
         name: None if given is None else ros.resolve(given)
@@ -210,13 +339,23 @@ def _node(options, ros, domain_id, loopback, max_scans, duration) -> None:
     )
     line = start_line(ros.fully_qualified_name, domain_id, extractor, options, path, topics)
     print(line, file=sys.stderr, flush=True)
+    if live is not None:
+        _, line = _live(node, live[0], *the_map, *live[1:], ros)
+        print(line, file=sys.stderr, flush=True)
     try:
         node.spin(max_scans=max_scans, duration=duration)
     except BaseException as stop:
         if is_interrupt(stop):
-            stop.add_note(node.stats.summary())  # the interrupt's one line carries it
+            stop.add_note(_summary(node))  # the interrupt's one line carries it
         raise
-    print(f"scanlines ros2: {node.stats.summary()}", file=sys.stderr, flush=True)
+    print(f"scanlines ros2: {_summary(node)}", file=sys.stderr, flush=True)
+
+
+def _summary(node) -> str:
+    text = node.stats.summary()
+    if node.localisation is not None:
+        text += f"; {node.localisation.stats.summary()}"
+    return text
 
 
 _KINDS = (

@@ -1,4 +1,4 @@
-"""``scanlines eval --trajectory EST --reference REF``: a trajectory's ATE and RPE."""
+"""``scanlines eval trajectory EST --reference REF``: a trajectory's ATE and RPE."""
 
 from __future__ import annotations
 
@@ -7,45 +7,49 @@ from typing import Annotated
 
 import typer
 
-TrajectoryOption = Annotated[
-    Path | None,
-    typer.Option(
-        "--trajectory",
-        help="Score an estimated trajectory (a TUM file .tum/.txt, or a log's poses) against "
-        "--reference instead: ATE after "
-        "a rigid 2-D alignment and RPE per metre travelled, poses matched within 10 ms (as "
-        "evo). Writes trajectory_eval.json into --out (or to --out if it ends in .json).",
-    ),
-]
-ReferenceOption = Annotated[
-    Path | None,
-    typer.Option(
-        "--reference",
-        help="With --trajectory: the reference, a TUM file (.tum, .txt) or a log with poses.",
-    ),
-]
+from scanlines.cli.common import guarded
+
+
+def register(group: typer.Typer) -> None:
+    group.command(
+        "trajectory",
+        help="Score an estimated trajectory against a reference: ATE after a rigid 2-D "
+        "alignment and RPE per metre travelled, poses matched within 10 ms (as evo). Writes "
+        "trajectory_eval.json into --out (or to --out if it ends in .json).",
+    )(guarded(evaluate_trajectory_command))
 
 
 def evaluate_trajectory_command(
-    estimate: Path | None, reference: Path | None, out: Path, others: bool = False
+    estimate: Annotated[
+        Path,
+        typer.Argument(
+            metavar="ESTIMATE",
+            help="The estimated trajectory: a TUM file (.tum, .txt) or a log's poses.",
+        ),
+    ],
+    reference: Annotated[
+        Path | None,
+        typer.Option(help="The reference: a TUM file (.tum, .txt) or a log with poses."),
+    ] = None,
+    out: Annotated[
+        Path, typer.Option(help="Folder for trajectory_eval.json, or a .json file.")
+    ] = Path("scanlines-eval"),
 ) -> None:
-    """Print the table of ``estimate`` against ``reference`` and write it as JSON
-    (``others``: options of another kind of evaluation were given too)."""
+    """Print the table of ``estimate`` against ``reference`` and write it as JSON."""
     from rich.console import Console
     from rich.table import Table
 
-    from scanlines.errors import ParameterError
+    from scanlines.cli.progress import progress
     from scanlines.evaluation.trajectory import load_trajectory, trajectory_error
     from scanlines.map.export import dumps, naming_output
     from scanlines.outputs import write_text_atomically
 
-    if others:
-        raise ParameterError("--trajectory scores poses alone; it takes only --reference, --out")
-    if estimate is None:
-        raise ParameterError("--reference goes with --trajectory ESTIMATED.tum")
     if reference is None:
-        raise ParameterError("--trajectory needs a --reference (a TUM file or a log with poses)")
-    score = trajectory_error(load_trajectory(estimate), load_trajectory(reference))
+        from scanlines.errors import ParameterError
+
+        raise ParameterError("eval trajectory needs --reference (a TUM file or a log with poses)")
+    with progress(f"reading {estimate.name} and {reference.name}", unit=None):
+        score = trajectory_error(load_trajectory(estimate), load_trajectory(reference))
     table = Table(title=f"{score.estimate} against {score.reference}", show_header=False)
     table.add_column("what", style="bold")
     table.add_column("value", justify="right")

@@ -19,6 +19,7 @@ from scanlines.cli.common import (
     ParamOption,
     PresetOption,
     ProfileOption,
+    RangeMaxOption,
     TopicOption,
     guarded,
     method_options,
@@ -60,6 +61,7 @@ def view_command(
     topic: TopicOption = None,
     angle_min: AngleMinOption = None,
     angle_increment: AngleStepOption = None,
+    range_max: RangeMaxOption = None,
 ) -> None:
     from scanlines.errors import LogFormatError
     from scanlines.viewer.scan_store import ScanStore
@@ -73,7 +75,7 @@ def view_command(
 
         profile = read_profile(sensor_profile)
     options = reader_options(
-        fov, angle_convention, topic, angle_min, angle_increment, on_error, max_beams
+        fov, angle_convention, topic, angle_min, angle_increment, on_error, max_beams, range_max
     )
     store = ScanStore(log, options)
     store.hold(after=HELD_SCANS)  # the rest of a long log waits until the page is prepared

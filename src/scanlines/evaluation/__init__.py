@@ -10,7 +10,7 @@ them). The truth types they score against are :mod:`scanlines.truth`::
     truth_row         the "truth" reference row (the one module using scanlines.steps)
     evaluate          evaluate(): specs on scenes, per-scan and pooled scores (scanlines eval)
     cases             a scan with truth, labels or neither, and one method's score on it
-    repeatability     scan-to-scan repeatability on real logs, no labels (eval --real)
+    repeatability     scan-to-scan repeatability on real logs, no labels (eval real)
 
 Times are taken by :mod:`scanlines.bench.timing`, tables and numbers written by
 :mod:`scanlines.report`; the figures are in :mod:`scanlines.viz`. The repository's own

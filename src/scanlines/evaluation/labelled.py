@@ -17,7 +17,7 @@ than five returns, and the coverage (share of returns on a segment)::
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -137,22 +137,27 @@ def evaluate_labelled(
     *,
     tolerance: int = 2,
     sensor_profile: SensorProfile | None = None,
+    on_progress: Callable[[int, int], None] | None = None,
 ) -> LabelledResult:
     """Score ``specs`` on the hand-labelled frames of ``samples`` (default: every one),
-    with ``sensor_profile`` (``None``: one measured from each excerpt)."""
+    with ``sensor_profile`` (``None``: one measured from each excerpt);
+    ``on_progress(done, total)`` after each (sample, spec) scored."""
     from scanlines.data import sample
     from scanlines.data.labels import label_log_options, label_set, labelled_samples
     from scanlines.io import open_log
 
     result = LabelledResult(tolerance=tolerance)
     specs = parse_specs(specs)
-    for name in samples or labelled_samples():
+    names = list(samples or labelled_samples())
+    for name in names:
         labels = label_set(name)
         options = label_log_options(name, labels.angle_convention)
         scans = list(open_log(sample(name), **options))
         profile = sensor_profile or estimate_profile(scans, source=sample(name).name)
         for spec in specs:
             result.rows_.append(_score(name, spec, scans, labels.frames, profile, tolerance))
+            if on_progress is not None:
+                on_progress(len(result.rows_), len(names) * len(specs))
     return result
 
 

@@ -350,7 +350,7 @@ def _log_profile(scans: Sequence[tuple[int, Scan]], log: str) -> SensorProfile |
 def repeatability(
     log_path: str | Path,
     specs: Iterable[str | MethodSpec],
-    max_scans: int | None = None,
+    max_scans: int | slice | None = None,
     *,
     tol: RepeatTolerances | None = None,
     settings: IcpSettings | None = None,
@@ -368,7 +368,8 @@ def repeatability(
     specs:
         Method specs (:func:`~scanlines.evaluation.specs.parse_specs`); not ``truth``.
     max_scans:
-        Read the first ``max_scans`` scans only (``None``: all).
+        Read the first ``max_scans`` scans only (``None``: all), or those a slice of scan
+        indices selects (``--scans``).
     tol, settings:
         :class:`RepeatTolerances` and :class:`~.registration.IcpSettings`.
     sensor_profile:
@@ -380,12 +381,12 @@ def repeatability(
     **reader_options:
         Options of the log's reader (:func:`scanlines.io.open_log`).
     """
-    from itertools import islice
-
     from scanlines.io import open_log
+    from scanlines.reader_options import select_scans
 
+    selection = max_scans if isinstance(max_scans, slice) else slice(max_scans)
     reader = open_log(log_path, **reader_options)
-    scans = list(islice(reader.enumerate(), max_scans))
+    scans = list(select_scans(reader.enumerate(), selection))
     return repeatability_of_scans(
         scans, specs, log=str(log_path), tol=tol, settings=settings, on_progress=on_progress,
         sensor_profile=sensor_profile, bare=bare,

@@ -55,7 +55,7 @@ class Tolerances:
         (:attr:`scanlines.truth.Truth.breakpoint_dont_care` and ``corner_dont_care``:
         junctions of touching surfaces, depth steps and turns the range noise hides)
         are don't care. Off by default, so that the presets' figures stay as they
-        were; ``scanlines eval --family`` turns it on.
+        were; ``scanlines eval family`` turns it on.
     """
 
     event_beams: int = 2

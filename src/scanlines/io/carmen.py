@@ -80,8 +80,9 @@ class CarmenReader(LogReader):
         Field of view in degrees for ``FLASER``/``RLASER``; ``None``: PARAM or 180.
     angle_convention:
         ``"step"`` or ``"linspace"`` for ``FLASER``/``RLASER`` beam angles.
-    max_range:
-        ``Scan.range_max`` in metres; ``None``: PARAM, the record's value, or 80.
+    max_range, range_max:
+        ``Scan.range_max`` in metres (two names of one option); ``None``: PARAM, the
+        record's value, or 80.
     range_min:
         ``Scan.range_min`` in metres.
     pose:
@@ -113,6 +114,7 @@ class CarmenReader(LogReader):
         fov: float | None = None,
         angle_convention: AngleConvention = "step",
         max_range: float | None = None,
+        range_max: float | None = None,
         range_min: float = 0.0,
         pose: PoseSource = "laser",
         mounting: Sequence[float] | None = None,
@@ -130,6 +132,12 @@ class CarmenReader(LogReader):
         _check_choice("timestamp", timestamp, ("logger", "ipc"))
         if fov is not None and not 0.0 < fov <= 360.0:
             raise ParameterError(f"fov must be in (0, 360] degrees, got {fov!r}")
+        if range_max is not None:  # the name every other reader uses
+            if max_range is not None and max_range != range_max:
+                raise ParameterError(
+                    f"max_range {max_range!r} and range_max {range_max!r} differ; give one"
+                )
+            max_range = range_max
         if max_range is not None and not max_range > 0.0:
             raise ParameterError(f"max_range must be positive, got {max_range!r}")
         self._message = message

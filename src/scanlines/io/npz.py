@@ -49,7 +49,7 @@ from typing import IO, Any
 
 import numpy as np
 
-from scanlines.errors import NO_SUCH_FILE, LogFormatError, describe
+from scanlines.errors import NO_SUCH_FILE, LogFormatError, ParameterError, describe
 from scanlines.io.base import (
     DEFAULT_MAX_BEAMS,
     DEFAULT_MAX_RECORD_BYTES,
@@ -110,6 +110,9 @@ class NpzReader(LogReader):
     on_error:
         ``"fail"`` or ``"skip"`` scans whose values are unusable (e.g. a zero
         ``angle_increment`` in one row).
+    range_max:
+        Every scan's largest valid range in metres, whatever the archive holds (no
+        no-return code is then looked for); ``None``: the archive's.
     max_beams, max_record_bytes:
         Limits of one record (:mod:`scanlines.io.base`).
 
@@ -126,6 +129,7 @@ class NpzReader(LogReader):
         self,
         path: str | Path,
         *,
+        range_max: float | None = None,
         on_error: ErrorPolicy = "fail",
         max_beams: int = DEFAULT_MAX_BEAMS,
         max_record_bytes: int = DEFAULT_MAX_RECORD_BYTES,
@@ -133,48 +137,45 @@ class NpzReader(LogReader):
         super().__init__(
             path, on_error=on_error, max_beams=max_beams, max_record_bytes=max_record_bytes
         )
+        if range_max is not None and not range_max > 0.0:
+            raise ParameterError(f"range_max must be positive, got {range_max!r}")
+        #: The ``range_max`` option: every scan's, whatever the archive holds (else None).
+        self.range_max = None if range_max is None else float(range_max)
         self.headers = self._read_headers()
         self.n_scans, self.n_beams = self._check_layout()
         self._verify_data()
         #: Without ``range_max``: the no-return code found in ``ranges`` (else None).
         self.no_return_code: float | None = None
         self._code_beams = 0
-        if "range_max" not in self.headers and "valid" not in self.headers:
+        if (
+            self.range_max is None
+            and "range_max" not in self.headers
+            and "valid" not in self.headers
+        ):
             self.no_return_code, self._code_beams = self._find_no_return_code()
 
     def _find_no_return_code(self) -> tuple[float | None, int]:
         """The largest finite range, when at least :data:`NO_RETURN_SHARE` of all beams
         hold exactly it (a saturation code, not a measurement); and how many do."""
-        top, count = -math.inf, 0
+        largest = LargestRange()
         with self._open_zip() as archive:
             rows = self._rows(archive, "ranges")
             for _ in range(self.n_scans):
-                row = np.asarray(next(rows), dtype=np.float64)
-                finite = row[np.isfinite(row)]
-                if not finite.size:
-                    continue
-                high = float(finite.max())
-                if high > top:
-                    top, count = high, 0
-                if high == top:
-                    count += int(np.count_nonzero(finite == top))
+                largest.add(next(rows))
             rows.close()
-        total = self.n_scans * self.n_beams
-        if count >= 2 and count >= NO_RETURN_SHARE * total and top > 0:
-            return top, count
-        return None, 0
+        return largest.no_return_code()
 
     @property
     def notes(self) -> list[str]:
         """The no-return code read as no return, if one was found."""
         if self.no_return_code is None:
             return []
-        share = self._code_beams / max(self.n_scans * self.n_beams, 1)
-        return [
-            f"no range_max key: {self._code_beams} beams ({share:.1%}) at exactly "
-            f"{self.no_return_code:g} m, the largest range, are read as no return (a "
-            "no-return code such as the SICK 81.83 m); a range_max key in the archive decides"
-        ]
+        total = self.n_scans * self.n_beams
+        decides = "a range_max key in the archive"
+        note = no_return_note(
+            self.no_return_code, self._code_beams, total, "no range_max key", decides
+        )
+        return [note]
 
     # -- layout ---------------------------------------------------------------------------
 
@@ -383,6 +384,8 @@ class NpzReader(LogReader):
         scalars = {k: float(row[k]) if k in row else _DEFAULTS[k] for k in _SCALAR_KEYS}
         if self.no_return_code is not None:
             scalars["range_max"] = no_return_limit(self.no_return_code)
+        if self.range_max is not None:
+            scalars["range_max"] = self.range_max
         try:
             return Scan(
                 ranges,
@@ -395,6 +398,44 @@ class NpzReader(LogReader):
             raise LogFormatError(
                 f"scan {index}: {exc}", path=self.path, field=str(exc).split(" ", 1)[0]
             ) from None
+
+
+class LargestRange:
+    """The largest finite range of a log's rows and how many beams hold exactly it: a
+    no-return code (the SICK 81.83 m) when they are at least :data:`NO_RETURN_SHARE` of all
+    beams. The NPZ and CSV readers both decide by it."""
+
+    def __init__(self) -> None:
+        self.top, self.count, self.beams = -math.inf, 0, 0
+
+    def add(self, row: Any) -> None:
+        """One row of ranges (non-finite values are beams without a return)."""
+        row = np.asarray(row, dtype=np.float64)
+        self.beams += row.size
+        finite = row[np.isfinite(row)]
+        if not finite.size:
+            return
+        high = float(finite.max())
+        if high > self.top:
+            self.top, self.count = high, 0
+        if high == self.top:
+            self.count += int(np.count_nonzero(finite == self.top))
+
+    def no_return_code(self) -> tuple[float | None, int]:
+        """``(code, beams at it)``, or ``(None, 0)`` when the largest range is a range."""
+        if self.count >= 2 and self.count >= NO_RETURN_SHARE * self.beams and self.top > 0:
+            return self.top, self.count
+        return None, 0
+
+
+def no_return_note(code: float, beams: int, total: int, missing: str, decides: str) -> str:
+    """The note of a reader that read a no-return code as no return."""
+    share = beams / max(total, 1)
+    return (
+        f"{missing}: {beams} beams ({share:.1%}) at exactly {code:g} m, the largest "
+        f"range, are read as no return (a no-return code such as the SICK 81.83 m); "
+        f"{decides} decides"
+    )
 
 
 def no_return_limit(code: float) -> float:

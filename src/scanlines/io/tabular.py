@@ -9,7 +9,11 @@ Lines starting with ``#`` are comments. Comments before the first row may
 carry the geometry as ``key=value`` or ``key: value`` pairs, e.g.
 ``# angle_min=-1.5708 angle_increment=0.0087266 range_max=30``; keyword
 options override them. ``angle_min`` and ``angle_increment`` (radians) must
-come from one or the other.
+come from one or the other. Without ``range_max`` from either, the largest
+range, when at least 1 % of all beams hold exactly it, is a no-return code
+(the SICK LMS writes 81.83 m), read as no return as the NPZ reader does
+(:class:`~scanlines.io.npz.LargestRange`; one pass over the file before the
+scans), and :attr:`CsvReader.notes` says so.
 
 An optional header row (the first non-comment row, if it is not numeric) names
 the columns. When its first name is ``timestamp``, ``time``, ``stamp`` or
@@ -38,6 +42,7 @@ from scanlines.io.base import (
     LogReader,
 )
 from scanlines.io.fields import FieldLayout
+from scanlines.io.npz import LargestRange, no_return_limit, no_return_note
 from scanlines.io.text import OverlongLine, iter_lines, parse_floats
 from scanlines.scan import Scan
 
@@ -155,6 +160,47 @@ class CsvReader(LogReader):
         if timestamp_column is None:
             timestamp_column = bool(header) and header[0].lower() in _TIMESTAMP_NAMES
         self.timestamp_column = timestamp_column
+        #: Without ``range_max``: the no-return code found in the ranges (else None).
+        self.no_return_code: float | None = None
+        self._code_beams, self._beams = 0, 0
+        if "range_max" not in geometry:
+            self._find_no_return_code()
+
+    def _find_no_return_code(self) -> None:
+        """As the NPZ reader: the largest range, when at least 1 % of all beams hold
+        exactly it, is a no-return code (the SICK 81.83 m), read as no return (the scans'
+        ``range_max`` just below it). Rows that do not parse are left to the reading."""
+        largest = LargestRange()
+        header_pending = self.header is not None
+        for _, line in iter_lines(self.path, self.max_record_bytes):
+            if isinstance(line, OverlongLine):
+                continue
+            text = line.strip()
+            if not text or text.startswith("#"):
+                continue
+            if header_pending:
+                header_pending = False
+                continue
+            values = _split(text)[1 if self.timestamp_column else 0 :]
+            try:
+                largest.add([float(v) if v else math.nan for v in values])
+            except ValueError:
+                continue
+        self._beams = largest.beams
+        self.no_return_code, self._code_beams = largest.no_return_code()
+        if self.no_return_code is not None:
+            self.range_max = no_return_limit(self.no_return_code)
+
+    @property
+    def notes(self) -> list[str]:
+        """The no-return code read as no return, if one was found."""
+        if self.no_return_code is None:
+            return []
+        decides = "--range-max (or a '# range_max=' comment)"
+        missing = "no range_max given"
+        return [
+            no_return_note(self.no_return_code, self._code_beams, self._beams, missing, decides)
+        ]
 
     def options(self) -> dict[str, Any]:
         """Resolved geometry and column layout."""
@@ -165,6 +211,7 @@ class CsvReader(LogReader):
             "range_min": self.range_min,
             "range_max": self.range_max,
             "timestamp_column": self.timestamp_column,
+            **({"no_return_code": self.no_return_code} if self.no_return_code else {}),
         }
 
     def _read_preamble(self) -> tuple[dict[str, float], list[str] | None]:

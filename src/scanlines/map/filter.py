@@ -43,9 +43,10 @@ Matching, made to refuse rather than pull wrongly:
 * Huber weights (``huber`` standard deviations); the correction is refused if its squared
   Mahalanobis distance from the prediction exceeds ``max_chi_square``.
 
-A scan refused ("did not fit": too few returns on map lines, or a correction inconsistent
-with the prediction) keeps the predicted state and its grown covariance, so the gate widens
-until the map is caught again.
+A scan refused ("did not fit": too few returns on map lines, counting only those whose
+weight did not vanish, as it does for a residual too large to weigh, or a correction
+inconsistent with the prediction) keeps the predicted state and its grown covariance, so the
+gate widens until the map is caught again.
 """
 
 from __future__ import annotations

@@ -154,29 +154,37 @@ def evaluate_map(
     poses=None,
     settings: FusionSettings | None = None,
     every: int = 10,
-    limit: int | None = None,
+    limit: int | slice | None = None,
     align: AlignSettings | None = None,
     track: FilterSettings | None = None,
     source: str | None = None,
+    on_scan: Callable[[str, int], None] | None = None,
 ) -> tuple[MapScore, MapBuild]:
     """Build the map from all scans but every ``every``-th, then score it on those.
 
     ``open_indexed()`` opens the log afresh (a context manager giving a reader with
     ``enumerate()``); the log is read twice, one scan in memory at a time; ``limit``: only
-    its first scans; ``source``: the log's name, for error messages; ``align`` or
-    ``track``: how the map is built (:func:`~scanlines.map.build.build_map`), the held-out
-    scans then also localised the same way.
+    its first ``limit`` scans, or those a slice of scan indices selects; ``source``: the
+    log's name, for error messages; ``align`` or ``track``: how the map is built
+    (:func:`~scanlines.map.build.build_map`), the held-out scans then also localised the
+    same way; ``on_scan(stage, index)``: called for each scan read, ``stage``
+    ``"mapping"`` on the first pass and ``"scoring"`` on the second.
     """
-    from itertools import islice
+    from scanlines.reader_options import select_scans
 
-    def indexed(reader):
-        return reader.enumerate() if limit is None else islice(reader.enumerate(), limit)
+    selection = limit if isinstance(limit, slice) else slice(limit)
+
+    def indexed(reader, stage: str):
+        for index, scan in select_scans(reader.enumerate(), selection):
+            if on_scan is not None:
+                on_scan(stage, index)
+            yield index, scan
 
     with open_indexed() as reader:
         build = build_map(
-            indexed(reader), extractor, poses=poses, settings=settings,
+            indexed(reader, "mapping"), extractor, poses=poses, settings=settings,
             hold_out=lambda index: index % every == 0, align=align, track=track, source=source,
         )  # fmt: skip
     with open_indexed() as reader:
-        score = score_held_out(indexed(reader), build, sigma_at)
+        score = score_held_out(indexed(reader, "scoring"), build, sigma_at)
     return score, build

@@ -37,20 +37,21 @@ import math
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
-from scanlines.errors import ScanlinesError
+from scanlines.errors import NO_SUCH_FILE, ScanlinesError, describe
 from scanlines.geometry.poses import Pose, relative_pose
 from scanlines.map.align import LineSet
 from scanlines.map.build import TrackedPose
 from scanlines.map.export import SIDE_NAMES
 from scanlines.map.filter import INITIAL_SIGMA, FilterSettings, LineMapFilter
-from scanlines.map.frame import LocalFrame
+from scanlines.map.frame import MAX_COORDINATE, MAX_EXTENT, LocalFrame
 from scanlines.map.fusion import BOTH
 from scanlines.map.relocalise import GlobalSearch, SearchSettings
 from scanlines.scan import Scan
+from scanlines.untrusted import UntrustedInput, load_json, quote, read_regular_file
 
 __all__ = ["Localisation", "MapFileError", "localize", "read_line_map"]
 
@@ -64,42 +65,42 @@ class MapFileError(ScanlinesError, ValueError):
     """A line map file that cannot be read."""
 
 
+#: Largest map file read (a map line is about 500 bytes).
+MAX_MAP_BYTES = 1 << 30
+#: How far (metres) a line's ends may lie from its ``(rho, alpha)``: the writer puts them
+#: on it (to 1e-14 m on the Intel excerpt's map); more means one of them was changed.
+END_TOLERANCE = 1e-3
+#: The map lines a file may hold.
+MAX_MAP_LINES = 10_000_000
+
+
 def read_line_map(path: str | Path) -> tuple[LineSet, LocalFrame]:
-    """The lines of a ``.json`` map ``scanlines map`` wrote, in its local frame."""
+    """The lines of a ``.json`` map ``scanlines map`` wrote, in its local frame.
+
+    The file is data to distrust: a regular file of at most :data:`MAX_MAP_BYTES`, nested
+    a few levels deep; every coordinate a finite number (not a boolean) within the limits
+    a map takes (:mod:`scanlines.map.frame`: ``|x|, |y| <= 1e9`` m, ends within 1e5 m of
+    the origin); ``rho`` and ``alpha`` consistent with the ends (within
+    :data:`END_TOLERANCE`); a covariance, where given, 2 x 2, symmetric and positive
+    semi-definite; ``seen_from``, where given, one of the names of
+    :data:`~scanlines.map.export.SIDE_NAMES` (absent: both sides). Anything else is a
+    :class:`MapFileError` of one line naming the file, the line and the field.
+    """
     path = Path(path)
-    try:
-        document = json.loads(path.read_text(encoding="utf-8"))
-    except UnicodeDecodeError as error:
-        raise MapFileError(f"{path}: not a text file ({error.reason})") from None
-    except json.JSONDecodeError as error:
-        raise MapFileError(f"{path}: not JSON ({error.msg}, line {error.lineno})") from None
+    document = _map_document(path)
     if not isinstance(document, dict) or document.get("format") != "scanlines line map":
         raise MapFileError(f"{path}: not a line map (`scanlines map --out MAP.json` writes one)")
-    try:
-        origin = [float(v) for v in document["frame"]["origin"]]
-        frame = LocalFrame(origin[0], origin[1])
-    except (KeyError, TypeError, ValueError, IndexError):
-        raise MapFileError(f"{path}: field frame.origin: not a pair of numbers") from None
+    frame = _map_frame(path, document.get("frame"))
     records = document.get("lines")
     if not isinstance(records, list):
         raise MapFileError(f"{path}: field lines: not a list")
+    if len(records) > MAX_MAP_LINES:
+        raise MapFileError(f"{path}: field lines: more than {MAX_MAP_LINES} lines")
     values = np.zeros((len(records), 6))
     sides = np.full(len(records), BOTH, dtype=np.int8)
     for k, record in enumerate(records):
-        sides[k] = _seen_from(record, path, k)
-        for j, name in enumerate(("start", "end", "rho", "alpha")):
-            try:
-                value = record[name]
-                numbers = [float(v) for v in value] if name in ("start", "end") else [float(value)]
-                if len(numbers) != (2 if name in ("start", "end") else 1):
-                    raise ValueError
-            except (KeyError, TypeError, ValueError):
-                raise MapFileError(
-                    f"{path}: line {k}: field {name}: missing or not a number"
-                ) from None
-            if not all(math.isfinite(v) for v in numbers):
-                raise MapFileError(f"{path}: line {k}: field {name}: not finite")
-            values[k, [0, 1] if j == 0 else [2, 3] if j == 1 else [j + 2]] = numbers
+        values[k] = _map_line(f"{path}: line {k}", record, frame)
+        sides[k] = _seen_from(record, f"{path}: line {k}")
     offset = np.array(frame.origin)
     lines = LineSet(
         values[:, 4], values[:, 5], values[:, 0:2] - offset, values[:, 2:4] - offset, sides
@@ -107,17 +108,119 @@ def read_line_map(path: str | Path) -> tuple[LineSet, LocalFrame]:
     return lines, frame
 
 
-def _seen_from(record, path: Path, k: int) -> int:
-    """The sides map line ``k`` was seen from (field ``seen_from``; a map written before
-    sides were kept has none: both)."""
+def _map_document(path: Path) -> Any:
+    """The JSON document of the map file ``path``, read at a bounded cost."""
+    try:
+        return load_json(read_regular_file(path, MAX_MAP_BYTES))
+    except FileNotFoundError:
+        raise MapFileError(f"{path}: {NO_SUCH_FILE}") from None
+    except OSError as error:
+        raise MapFileError(f"{path}: cannot read the map: {error.strerror}") from None
+    except UntrustedInput as error:
+        raise MapFileError(f"{path}: not a line map: {error}") from None
+    except UnicodeDecodeError as error:
+        raise MapFileError(f"{path}: not a text file ({error.reason})") from None
+    except json.JSONDecodeError as error:
+        raise MapFileError(f"{path}: not JSON ({error.msg}, line {error.lineno})") from None
+    except ValueError as error:  # an integer too long for Python to convert
+        raise MapFileError(f"{path}: not a line map: {describe(error)}") from None
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+def _point(value: Any, where: str) -> tuple[float, float]:
+    """A pair of finite numbers within :data:`MAX_COORDINATE` (booleans are no numbers)."""
+    if not (isinstance(value, list) and len(value) == 2 and all(map(_is_number, value))):
+        raise MapFileError(f"{where}: missing or not a pair of numbers, got {quote(value)}")
+    try:
+        x, y = float(value[0]), float(value[1])
+    except OverflowError:
+        raise MapFileError(f"{where}: not finite") from None
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise MapFileError(f"{where}: not finite")
+    if max(abs(x), abs(y)) > MAX_COORDINATE:
+        raise MapFileError(f"{where}: {quote(value)} is beyond the map's limit |x|, |y| <= 1e9 m")
+    return x, y
+
+
+def _map_frame(path: Path, frame: Any) -> LocalFrame:
+    if not isinstance(frame, dict) or "origin" not in frame:
+        raise MapFileError(f"{path}: field frame.origin: not a pair of numbers")
+    return LocalFrame(*_point(frame["origin"], f"{path}: field frame.origin"))
+
+
+def _map_line(where: str, record: Any, frame: LocalFrame) -> list[float]:
+    """``[x0, y0, x1, y1, rho, alpha]`` of one line record, checked (:func:`read_line_map`)."""
     if not isinstance(record, dict):
-        raise MapFileError(f"{path}: line {k}: not an object")
+        raise MapFileError(f"{where}: not a record of start, end, rho, alpha")
+    ends = []
+    for name in ("start", "end"):
+        x, y = _point(record.get(name), f"{where}: field {name}")
+        far = max(abs(x - frame.x0), abs(y - frame.y0))
+        if far > MAX_EXTENT:
+            raise MapFileError(
+                f"{where}: field {name}: {far:.6g} m from the map's origin, beyond the map's "
+                "limit of 1e5 m"
+            )
+        ends.append((x - frame.x0, y - frame.y0))
+    rho, alpha = (_scalar(record.get(name), f"{where}: field {name}") for name in ("rho", "alpha"))
+    normal = (math.cos(alpha), math.sin(alpha))
+    off = max(abs(normal[0] * x + normal[1] * y - rho) for x, y in ends)
+    if not off <= END_TOLERANCE:
+        raise MapFileError(
+            f"{where}: fields rho, alpha: the line does not pass through its ends (one is "
+            f"{off:.3g} m off it; at most {END_TOLERANCE:g} m)"
+        )
+    if "covariance" in record:
+        _check_covariance(record["covariance"], f"{where}: field covariance")
+    (x0, y0), (x1, y1) = ends
+    return [x0 + frame.x0, y0 + frame.y0, x1 + frame.x0, y1 + frame.y0, rho, alpha]
+
+
+def _scalar(value: Any, where: str) -> float:
+    if not _is_number(value):
+        raise MapFileError(f"{where}: missing or not a number")
+    try:
+        number = float(value)
+    except OverflowError:
+        number = math.inf
+    if not math.isfinite(number):
+        raise MapFileError(f"{where}: not finite")
+    return number
+
+
+def _check_covariance(value: Any, where: str) -> None:
+    """A 2 x 2 matrix (of rho, alpha) of finite numbers, symmetric, positive
+    semi-definite (to rounding)."""
+    shaped = isinstance(value, list) and len(value) == 2
+    if not (shaped and all(isinstance(row, list) and len(row) == 2 for row in value)):
+        raise MapFileError(f"{where}: not a 2 x 2 matrix, got {quote(value)}")
+    if not all(_is_number(v) for row in value for v in row):
+        raise MapFileError(f"{where}: not a 2 x 2 matrix of numbers, got {quote(value)}")
+    try:
+        matrix = np.array(value, dtype=np.float64)
+    except OverflowError:  # an integer beyond a double
+        raise MapFileError(f"{where}: not finite") from None
+    if not np.isfinite(matrix).all():
+        raise MapFileError(f"{where}: not finite")
+    scale = float(np.abs(matrix).max())
+    if abs(matrix[0, 1] - matrix[1, 0]) > 1e-9 * scale:
+        raise MapFileError(f"{where}: not symmetric, got {quote(value)}")
+    if float(np.linalg.eigvalsh(matrix).min()) < -1e-12 * scale:
+        raise MapFileError(f"{where}: not positive semi-definite, got {quote(value)}")
+
+
+def _seen_from(record: dict, where: str) -> int:
+    """The sides a map line was seen from (field ``seen_from``; a map written before sides
+    were kept has none: both)."""
     name = record.get("seen_from", SIDE_NAMES[BOTH])
     for side, known in SIDE_NAMES.items():
-        if name == known:
+        if isinstance(name, str) and name == known:
             return side
     raise MapFileError(
-        f"{path}: line {k}: field seen_from: {name!r} is not one of "
+        f"{where}: field seen_from: {quote(name)} is not one of "
         + ", ".join(repr(v) for v in SIDE_NAMES.values())
     )
 
@@ -143,6 +246,14 @@ class Localisation:
     @property
     def not_fit(self) -> int:
         return sum(1 for t in self.tracked if t.status == "did not fit")
+
+
+def _reporting(indexed: Iterable[tuple[int, Scan]], on_scan: Callable[[int], None] | None):
+    """``indexed``, calling ``on_scan(index)`` as each pair is read."""
+    for index, scan in indexed:
+        if on_scan is not None:
+            on_scan(index)
+        yield index, scan
 
 
 def _from_start(indexed: Iterable[tuple[int, Scan]], t0: float, run: Localisation):
@@ -177,17 +288,20 @@ def localize(
     settings: FilterSettings | None = None,
     initial_sigma: tuple[float, float] = INITIAL_SIGMA,
     search: SearchSettings | None = None,
+    on_scan: Callable[[int], None] | None = None,
 ) -> Localisation:
     """Track ``indexed`` scans on ``lines`` (local ``frame``) from ``initial``: a time
     and a world pose (standard deviations ``initial_sigma``: metres, radians), or ``None``:
     lost from the first scan, found by global localisation (:mod:`scanlines.map.relocalise`,
     ``search`` its settings), as when the filter judges itself lost on the way. ``poses``:
-    each scan's odometry (default: the pose it carries)."""
+    each scan's odometry (default: the pose it carries); ``on_scan(index)``: called for
+    each scan read, skipped ones too."""
     run = Localisation(frame)
     tracker = LineMapFilter(lines, settings)
     state = _SearchState(GlobalSearch(tracker, search), lost=initial is None)
     odometry_of = poses or (lambda index, scan: scan.pose)
     last_odometry: Pose | None = None
+    indexed = _reporting(indexed, on_scan)
     scans = indexed if initial is None else _from_start(indexed, initial[0], run)
     for index, scan in scans:
         odometry = odometry_of(index, scan)

@@ -227,6 +227,7 @@ CLUSTERS: dict[str, Param] = {
         auto_or(CLUSTERING["abd_lambda"].check),
         "ABD: worst incidence angle, degrees, or auto: 10, more on scans coarser than 0.67 deg",
         (radians(), flag("auto_abd_lambda", "auto")),
+        applies=CLUSTERING["abd_lambda"].applies,
     ),
     "denoise": Param(
         "isolated",
@@ -234,9 +235,15 @@ CLUSTERS: dict[str, Param] = {
         "noise rule: isolated | paper | none",
         (coded(DENOISE_CODES),),
     ),
-    "window": with_default(PAPER["window"], 10, "with denoise=paper"),
+    "window": replace(
+        with_default(PAPER["window"], 10, "with denoise=paper"),
+        applies=("denoise", ("paper",), True),
+    ),
     "min_cluster_points": Param(
-        2, integer(1, MAX_COUNT), "isolated denoising: smaller clusters are dropped as noise"
+        2,
+        integer(1, MAX_COUNT),
+        "isolated denoising: smaller clusters are dropped as noise",
+        applies=("denoise", ("isolated",), True),
     ),
 }
 
@@ -249,6 +256,7 @@ SEGMENTS: dict[str, Param] = {
         auto_or(integer(2, 1000)),
         "turn score: points fitted on each side, or auto",
         (KernelField("", _count_or_zero), flag("auto_slope_window", "auto")),
+        applies=("corner_score", ("turn",), True),
     ),
     "dkth_range": Param(
         "auto",
@@ -256,7 +264,10 @@ SEGMENTS: dict[str, Param] = {
         "threshold range (a, b), or auto: the candidates' scores",
         (KernelField("use_grid", _fixed_range),),  # the thresholds: the kernel's grid
     ),
-    "dkth_step": with_default(PAPER["dkth_step"], 0.01, "with a fixed dkth_range"),
+    "dkth_step": replace(
+        with_default(PAPER["dkth_step"], 0.01, "with a fixed dkth_range"),
+        applies=("dkth_range", ("auto",), False),
+    ),
     "max_evaluations": replace(PAPER["max_evaluations"], kernel=None),  # the sweep reads it
     "criterion": Param(
         "bic",
@@ -283,6 +294,7 @@ SEGMENTS: dict[str, Param] = {
         number(low=0.0),
         "merge neighbours whose (rho, alpha) agree within this chi-square (2 dof; covariances "
         "from the noise model and the residuals; 0: off)",
+        applies=("merge", (True,), True),
     ),
     "max_residual": Param(
         0.1,

@@ -58,6 +58,11 @@ from scanlines.steps.returns import Returns
 
 MAX_RHO_BINS = 4096
 """Most rho cells of an accumulator (the cells widen beyond)."""
+MIN_RHO_RESOLUTION = 1e-6
+"""Finest rho cell (m): the points' reach over it is a finite number of cells (a cell of
+5e-324 m made that count infinite); far below any scanner's range noise."""
+MAX_RHO_RESOLUTION = 1e3
+"""Coarsest rho cell (m): every scan's points fall in a few cells."""
 BLOCK_CELLS = 1 << 21
 """Votes computed at once (a block of points times the angles)."""
 
@@ -71,7 +76,9 @@ class Hough(ConsensusMethod):
         segments={
             "max_misses": MAX_MISSES,
             "rho_resolution": Param(
-                0.02, number(low=0.0, low_open=True), "accumulator cell size in rho (m)"
+                0.02,
+                number(low=MIN_RHO_RESOLUTION, high=MAX_RHO_RESOLUTION),
+                "accumulator cell size in rho (m)",
             ),
             "angle_resolution": Param(
                 1.0, number(low=0.05, high=90.0), "accumulator cell size in alpha (deg)"

@@ -61,31 +61,14 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 from scanlines._core import partition_stack
-from scanlines.methods.base import CompiledMethod
+from scanlines.methods.penalised import OBJECTIVE, PenalisedMethod
 from scanlines.params import MAX_METRES, Param, Settings, auto_or, number, optional
 from scanlines.steps.assemble import output_settings
 
-__all__ = ["OBJECTIVE", "Partition"]
-
-OBJECTIVE: dict[str, Param] = {
-    "penalty": Param(
-        50.0, number(low=0.0, high=1e6), "cost of one more segment (nats of likelihood)"
-    ),
-    "clutter_cost": Param(
-        20.0,
-        number(low=0.0, low_open=True, high=1e6),
-        "cost of leaving one return out as clutter (nats)",
-    ),
-    "model_error": Param(
-        0.002,
-        number(low=0.0, high=MAX_METRES),
-        "how far real walls depart from a line (m), added to the range noise in quadrature",
-    ),
-}
-"""The objective's parameters (the ``segments`` settings), shared with ``surfaces``."""
+__all__ = ["Partition"]
 
 
-class Partition(CompiledMethod):
+class Partition(PenalisedMethod):
     """The penalised-likelihood partition of each scan into line segments (module
     docstring)."""
 

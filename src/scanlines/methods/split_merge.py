@@ -54,6 +54,7 @@ References
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import ClassVar
 
 from scanlines._core import split_merge_stack
@@ -71,10 +72,10 @@ class SplitMerge(SplitMethod):
     settings: ClassVar[Settings] = Settings(
         clustering={
             **published_clustering("fixed", "split-and-merge: fixed, max_line_gap"),
-            "jump_distance": Param(
-                0.4,
-                CLUSTERING["jump_distance"].check,
-                "fixed rule: largest neighbour distance, metres (laser_line_extraction "
+            "jump_distance": replace(
+                CLUSTERING["jump_distance"],
+                default=0.4,
+                doc="fixed rule: largest neighbour distance, metres (laser_line_extraction "
                 "max_line_gap)",
             ),
             "outlier_distance": Param(

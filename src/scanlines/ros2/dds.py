@@ -11,6 +11,7 @@ __all__ = [
     "LOOPBACK_CONFIG",
     "RECEIVE_BUFFER",
     "default_qos",
+    "latched_qos",
     "loopback_config",
     "participant",
     "prepare",
@@ -29,7 +30,9 @@ RECEIVE_BUFFER = "8MB"
 def loopback_config(receive_buffer: str | None = RECEIVE_BUFFER) -> str:
     """Cyclone DDS confined to the loopback interface: unicast discovery to 127.0.0.1
     (``lo`` has no multicast), so nothing leaves the machine; asking for a socket receive
-    buffer of ``receive_buffer`` (``None``: Cyclone's default)."""
+    buffer of ``receive_buffer`` (``None``: Cyclone's default). Cyclone still binds its
+    discovery and data receive sockets to every interface (eclipse-cyclonedds #1923): a
+    remote host's datagrams reach them, though it cannot complete discovery (README)."""
     internal = (
         ""
         if receive_buffer is None
@@ -93,6 +96,19 @@ def default_qos(depth: int = 10) -> Any:
     return Qos(
         Policy.Reliability.Reliable(duration(milliseconds=100)),
         Policy.Durability.Volatile,
+        Policy.History.KeepLast(depth),
+    )
+
+
+def latched_qos(depth: int = 1) -> Any:
+    """ROS 2's "latched" profile (``/map``, ``/tf_static``): reliable, transient local, keep
+    last ``depth``: a subscriber that comes later still gets the last ``depth`` messages."""
+    from cyclonedds.core import Policy, Qos
+    from cyclonedds.util import duration
+
+    return Qos(
+        Policy.Reliability.Reliable(duration(milliseconds=100)),
+        Policy.Durability.TransientLocal,
         Policy.History.KeepLast(depth),
     )
 

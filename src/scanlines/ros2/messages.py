@@ -3,7 +3,8 @@
 Each class is a ROS 2 message type: ``typename`` is ROS 2's DDS name for it
 (``pkg::msg::dds_::Name_``), fields in the order of the ``.msg`` file, so the CDR bytes are
 those a ROS 2 node sends and decodes. ``sensor_msgs``, ``std_msgs``, ``geometry_msgs``,
-``builtin_interfaces``, ``visualization_msgs`` and ``tf2_msgs`` follow ROS 2 Humble;
+``builtin_interfaces``, ``visualization_msgs``, ``nav_msgs`` and ``tf2_msgs`` follow ROS 2
+Humble;
 ``LineSegment`` and ``LineSegmentList`` are laser_line_extraction's; ``Segment`` and
 ``ScanFeatures`` are the project's own (:data:`SCANLINES_MSGS`).
 """
@@ -12,7 +13,7 @@ those a ROS 2 node sends and decodes. ``sensor_msgs``, ``std_msgs``, ``geometry_
 from dataclasses import dataclass, field
 
 from cyclonedds.idl import IdlStruct
-from cyclonedds.idl.types import array, float32, float64, int32, sequence, uint8, uint32
+from cyclonedds.idl.types import array, float32, float64, int8, int32, sequence, uint8, uint32
 
 from scanlines.io.feature_messages import FEATURE_MSGS
 
@@ -26,11 +27,16 @@ __all__ = [
     "LaserScan",
     "LineSegment",
     "LineSegmentList",
+    "MapMetaData",
     "Marker",
     "MarkerArray",
     "MeshFile",
+    "OccupancyGrid",
+    "Odometry",
     "Point",
     "Pose",
+    "PoseWithCovariance",
+    "PoseWithCovarianceStamped",
     "Quaternion",
     "ScanFeatures",
     "Segment",
@@ -38,6 +44,8 @@ __all__ = [
     "Time",
     "Transform",
     "TransformStamped",
+    "Twist",
+    "TwistWithCovariance",
     "UVCoordinate",
     "Vector3",
 ]
@@ -185,6 +193,60 @@ class TransformStamped(IdlStruct, typename=_dds("geometry_msgs/msg/TransformStam
 @dataclass
 class TFMessage(IdlStruct, typename=_dds("tf2_msgs/msg/TFMessage")):
     transforms: sequence[TransformStamped] = field(default_factory=list)
+
+
+def _zeros36() -> list[float]:
+    return [0.0] * 36
+
+
+@dataclass
+class PoseWithCovariance(IdlStruct, typename=_dds("geometry_msgs/msg/PoseWithCovariance")):
+    pose: Pose = field(default_factory=Pose)
+    covariance: array[float64, 36] = field(default_factory=_zeros36)
+
+
+@dataclass
+class PoseWithCovarianceStamped(
+    IdlStruct, typename=_dds("geometry_msgs/msg/PoseWithCovarianceStamped")
+):
+    header: Header = field(default_factory=Header)
+    pose: PoseWithCovariance = field(default_factory=PoseWithCovariance)
+
+
+@dataclass
+class Twist(IdlStruct, typename=_dds("geometry_msgs/msg/Twist")):
+    linear: Vector3 = field(default_factory=Vector3)
+    angular: Vector3 = field(default_factory=Vector3)
+
+
+@dataclass
+class TwistWithCovariance(IdlStruct, typename=_dds("geometry_msgs/msg/TwistWithCovariance")):
+    twist: Twist = field(default_factory=Twist)
+    covariance: array[float64, 36] = field(default_factory=_zeros36)
+
+
+@dataclass
+class Odometry(IdlStruct, typename=_dds("nav_msgs/msg/Odometry")):
+    header: Header = field(default_factory=Header)
+    child_frame_id: str = ""
+    pose: PoseWithCovariance = field(default_factory=PoseWithCovariance)
+    twist: TwistWithCovariance = field(default_factory=TwistWithCovariance)
+
+
+@dataclass
+class MapMetaData(IdlStruct, typename=_dds("nav_msgs/msg/MapMetaData")):
+    map_load_time: Time = field(default_factory=Time)
+    resolution: float32 = 0.0
+    width: uint32 = 0
+    height: uint32 = 0
+    origin: Pose = field(default_factory=Pose)
+
+
+@dataclass
+class OccupancyGrid(IdlStruct, typename=_dds("nav_msgs/msg/OccupancyGrid")):
+    header: Header = field(default_factory=Header)
+    info: MapMetaData = field(default_factory=MapMetaData)
+    data: sequence[int8] = field(default_factory=list)
 
 
 #: laser_line_extraction's messages, as its ``msg/`` files define them.

@@ -14,6 +14,7 @@ import re
 from dataclasses import dataclass
 
 from scanlines.errors import ParameterError
+from scanlines.untrusted import quote
 
 __all__ = ["Remap", "expand", "namespace_problem", "node_name_problem", "resolve"]
 
@@ -55,7 +56,7 @@ def _tokens_problem(path: str) -> str | None:
         if not token:
             return "it has an empty token (// or a trailing /)"
         if not _TOKEN.match(token):
-            return f"token {token!r} is not letters, digits and _, not starting with a digit"
+            return f"token {quote(token)} is not letters, digits and _, not starting with a digit"
     return None
 
 
@@ -84,7 +85,7 @@ def expand(name: str, node: str, namespace: str) -> str:
     if problem is None:
         problem = _tokens_problem(expanded[1:]) if expanded != "/" else "it names no topic"
     if problem is not None:
-        raise ParameterError(f"not a ROS 2 topic name: {name!r} ({problem})")
+        raise ParameterError(f"not a ROS 2 topic name: {quote(name)} ({problem})")
     return expanded
 
 

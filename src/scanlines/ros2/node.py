@@ -136,8 +136,24 @@ class LineNode:
         scans = Topic(dp, ros_topic(scan_topic), msg.LaserScan)
         self._reader = DataReader(dp, scans, sensor_data_qos(SCAN_DEPTH))
         self._waitset = WaitSet(dp)
-        mask = SampleState.Any | ViewState.Any | InstanceState.Any
-        self._waitset.attach(ReadCondition(self._reader, mask))
+        self._mask = SampleState.Any | ViewState.Any | InstanceState.Any
+        self._waitset.attach(ReadCondition(self._reader, self._mask))
+        self.localisation = None
+
+    @property
+    def participant(self):
+        """The node's DDS participant."""
+        return self._participant
+
+    def attach(self, localisation) -> None:
+        """Localise every scan too (a :class:`~scanlines.ros2.live.LiveLocalisation` on
+        :attr:`participant`): its pose is published before the scan's lines, and its
+        inputs wake the node as scans do."""
+        from cyclonedds.core import ReadCondition
+
+        for reader in localisation.readers:
+            self._waitset.attach(ReadCondition(reader, self._mask))
+        self.localisation = localisation
 
     @property
     def writers(self) -> dict:
@@ -153,6 +169,8 @@ class LineNode:
         try:
             while time.monotonic() < deadline and (max_scans is None or handled < max_scans):
                 self._waitset.wait(100_000_000)  # 0.1 s: signals and the deadline are seen
+                if self.localisation is not None:
+                    self.localisation.poll()
                 samples = take_serialized(self._reader, SCAN_DEPTH)
                 received = time.perf_counter()
                 if len(samples) == SCAN_DEPTH:
@@ -164,6 +182,8 @@ class LineNode:
                     message = self.decode(data)
                     if message is not None:
                         self.handle(message, received)
+            if self.localisation is not None:
+                self.localisation.drain(1.0)
         finally:
             self.read_dds_status()
         return self.stats
@@ -195,6 +215,8 @@ class LineNode:
             self._say(f"skipped malformed scan ({where}): {error}")
             return False
         try:
+            if self.localisation is not None:
+                self.localisation.on_scan(scan, header, received)
             self._publish(scan, header)
         except Exception as error:  # no scan ends the node; the count and line show it
             self.stats.failed += 1

@@ -18,6 +18,7 @@ from typing import Any
 from scanlines.errors import ParameterError
 from scanlines.ros2.names import expand
 from scanlines.ros2.ros_args import Parameter
+from scanlines.untrusted import clip, quote
 
 __all__ = ["NODE_PARAMETERS", "OPTIONAL_TOPICS", "TOPICS", "NodeOptions", "apply_parameters"]
 
@@ -32,7 +33,14 @@ NODE_PARAMETERS = {
     "marker_array_topic": "the MarkerArray topic (--marker-array-topic)",
     "features_topic": "the ScanFeatures topic (--features-topic)",
     "use_sim_time": "taken, no effect: every output carries its scan's stamp",
+    "map": "a line map to localise on (--map; empty: none)",
+    "odometry": "where the odometry comes from, odom or tf (--odometry)",
+    "global_frame_id": "the map's frame, AMCL's name (--global-frame)",
+    "odom_frame_id": "the odometry's frame, AMCL's name (--odom-frame)",
+    "base_frame_id": "the robot's frame, AMCL's name (--base-frame)",
 }
+#: The live localisation's parameters (strings).
+LIVE = ("map", "odometry", "global_frame_id", "odom_frame_id", "base_frame_id")
 #: The topic parameters, and those an empty name turns off.
 TOPICS = ("topic", "segments_topic", "markers_topic", "marker_array_topic", "features_topic")
 OPTIONAL_TOPICS = ("markers_topic", "marker_array_topic", "features_topic")
@@ -49,6 +57,7 @@ class NodeOptions:
     params: dict[str, Any] = field(default_factory=dict)
     sensor_profile: Path | None = None
     topics: dict[str, str | None] = field(default_factory=dict)
+    live: dict[str, str | None] = field(default_factory=dict)
 
 
 def apply_parameters(options: NodeOptions, values: dict[str, Parameter]) -> NodeOptions:
@@ -63,7 +72,8 @@ def apply_parameters(options: NodeOptions, values: dict[str, Parameter]) -> Node
     from scanlines.methods import method_class
 
     def fail(name: str, reason: str) -> ParameterError:
-        return ParameterError(f"--ros-args: parameter {name} ({values[name].origin}): {reason}")
+        origin = values[name].origin
+        return ParameterError(f"--ros-args: parameter {clip(name)} ({origin}): {reason}")
 
     def text(name: str) -> str | None:
         """A string parameter's value (``None``: not set)."""
@@ -71,7 +81,7 @@ def apply_parameters(options: NodeOptions, values: dict[str, Parameter]) -> Node
             return None
         value = values[name].value
         if not isinstance(value, str):
-            raise fail(name, f"a string, got {value!r}")
+            raise fail(name, f"a string, got {quote(value)}")
         return value
 
     method = text("method")
@@ -93,12 +103,31 @@ def apply_parameters(options: NodeOptions, values: dict[str, Parameter]) -> Node
             raise fail(name, _unknown(name, method, spec))
         method_params[name] = parameter.value
     if "use_sim_time" in values and not isinstance(values["use_sim_time"].value, bool):
-        raise fail("use_sim_time", f"true or false, got {values['use_sim_time'].value!r}")
+        raise fail("use_sim_time", f"true or false, got {quote(values['use_sim_time'].value)}")
     checked = _checked(method, preset, method_params, values, fail)
     profile = text("sensor_profile")
     if profile is not None:
         options = replace(options, sensor_profile=Path(profile) if profile else None)
-    topics = dict(options.topics)
+    topics = _topics(options.topics, text, fail)
+    live = _live(options.live, text, fail)
+    return replace(
+        options,
+        method=method,
+        preset=preset,
+        params={**options.params, **checked},
+        sensor_profile=options.sensor_profile
+        if profile is None
+        else Path(profile)
+        if profile
+        else None,
+        topics=topics,
+        live=live,
+    )
+
+
+def _topics(topics: dict[str, str | None], text, fail) -> dict[str, str | None]:
+    """The node's topics with those set by parameters (``text(name)``), each checked."""
+    topics = dict(topics)
     for name in TOPICS:
         given = text(name)
         if given is None:
@@ -111,18 +140,22 @@ def apply_parameters(options: NodeOptions, values: dict[str, Parameter]) -> Node
         except ParameterError as error:
             raise fail(name, str(error)) from None
         topics[name] = given or None
-    return replace(
-        options,
-        method=method,
-        preset=preset,
-        params={**options.params, **checked},
-        sensor_profile=options.sensor_profile
-        if profile is None
-        else Path(profile)
-        if profile
-        else None,
-        topics=topics,
-    )
+    return topics
+
+
+def _live(live: dict[str, str | None], text, fail) -> dict[str, str | None]:
+    """The live localisation's frames and odometry source with those set by parameters."""
+    live = dict(live)
+    for name in LIVE:
+        given = text(name)
+        if given is None:
+            continue
+        if name == "odometry" and given not in ("odom", "tf"):
+            raise fail(name, f"odom or tf, got {quote(given)}")
+        if not given and name != "map":
+            raise fail(name, "a frame's name, got an empty string")
+        live[name] = given or None
+    return live
 
 
 def _checked(method, preset, params, values, fail) -> dict[str, Any]:

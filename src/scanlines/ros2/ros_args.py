@@ -23,8 +23,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from scanlines.errors import ParameterError
+from scanlines.errors import NO_SUCH_FILE, ParameterError
 from scanlines.ros2.names import Remap, expand, namespace_problem, node_name_problem
+from scanlines.untrusted import UntrustedInput, clip, load_yaml, quote, read_regular_file
 
 __all__ = [
     "DEFAULT_NODE_NAME",
@@ -122,7 +123,8 @@ class RosArgs:
             else:
                 node, name, text = source
                 if node is None or node == self.node:
-                    values[name] = Parameter(_yaml_value(name, text), f"-p {name}:={text}")
+                    origin = f"-p {clip(name)}:={clip(text)}"
+                    values[name] = Parameter(_yaml_value(name, text), origin)
         return values
 
 
@@ -130,7 +132,7 @@ def _rule(flag: str, text: str) -> tuple[str | None, str, str]:
     """``[node:]name:=value`` as its three parts."""
     left, sep, value = text.partition(":=")
     if not sep or not left:
-        raise ParameterError(f"--ros-args: {flag} takes [node:]NAME:=VALUE, got {text!r}")
+        raise ParameterError(f"--ros-args: {flag} takes [node:]NAME:=VALUE, got {quote(text)}")
     node, colon, name = left.rpartition(":")
     return (node if colon else None), name, value
 
@@ -156,7 +158,7 @@ def parse_ros_args(words: list[str]) -> RosArgs:
         takes_value = ("-r", "--remap", "-p", "--param", "--params-file", *_IGNORED_WITH_VALUE)
         if flag not in takes_value:
             raise ParameterError(
-                f"--ros-args: unknown argument {flag!r}; this node takes -r/--remap FROM:=TO, "
+                f"--ros-args: unknown argument {quote(flag)}; this node takes -r/--remap FROM:=TO, "
                 "-p/--param NAME:=VALUE and --params-file FILE (a section ends at --)"
             )
         if not queue:
@@ -195,13 +197,20 @@ def parse_ros_args(words: list[str]) -> RosArgs:
 
 
 def _yaml_value(name: str, text: str) -> Any:
+    """A ``-p`` value read as YAML, at a bounded cost (:func:`~scanlines.untrusted.load_yaml`)."""
     import yaml
 
     try:
-        return yaml.safe_load(text)
+        return load_yaml(text)
+    except UntrustedInput as error:
+        raise ParameterError(
+            f"--ros-args: -p {clip(name)}:={clip(text)}: refused: {error}"
+        ) from None
     except yaml.YAMLError as error:
-        reason = " ".join(str(error).split())
-        raise ParameterError(f"--ros-args: -p {name}:={text}: not a YAML value: {reason}") from None
+        reason = clip(" ".join(str(error).split()), 160)
+        raise ParameterError(
+            f"--ros-args: -p {clip(name)}:={clip(text)}: not a YAML value: {reason}"
+        ) from None
 
 
 def file_parameters(path: Path, node: str) -> tuple[list[tuple[str, Any]], list[str]]:
@@ -217,19 +226,22 @@ def file_parameters(path: Path, node: str) -> tuple[list[tuple[str, Any]], list[
     import yaml
 
     try:
-        with path.open("rb") as handle:
-            data = handle.read(MAX_FILE_BYTES + 1)
+        data = read_regular_file(path, MAX_FILE_BYTES)
+    except FileNotFoundError:
+        raise ParameterError(f"{path}: {NO_SUCH_FILE}") from None
     except OSError as error:
         raise ParameterError(f"{path}: cannot read the parameters file: {error.strerror}") from None
-    if len(data) > MAX_FILE_BYTES:
-        raise ParameterError(f"{path}: larger than {MAX_FILE_BYTES} bytes; not a parameters file")
+    except UntrustedInput as error:
+        raise ParameterError(f"{path}: {error}; not a parameters file") from None
     try:
-        document = yaml.safe_load(data)
+        document = load_yaml(data)
+    except UntrustedInput as error:
+        raise ParameterError(f"{path}: refused: {error}") from None
     except yaml.YAMLError as error:
         mark = getattr(error, "problem_mark", None)
         where = "" if mark is None else f", line {mark.line + 1}"
         reason = getattr(error, "problem", None) or " ".join(str(error).split())
-        raise ParameterError(f"{path}{where}: not valid YAML: {reason}") from None
+        raise ParameterError(f"{path}{where}: not valid YAML: {clip(reason, 160)}") from None
     if document is None:
         return [], []
     if not isinstance(document, Mapping):
@@ -256,13 +268,13 @@ def _walk(
             pattern = "/" + "/".join(k.strip("/") for k in keys)
             entries.append(pattern)
             if not keys or not isinstance(value, Mapping):
-                raise ParameterError(f"{path}: key {'/'.join([*keys, key])}: {_LAYOUT}")
+                raise ParameterError(f"{path}: key {clip('/'.join([*keys, key]))}: {_LAYOUT}")
             if _node_pattern(pattern).match(node):
                 found.extend(_flattened(path, value, ""))
         elif isinstance(value, Mapping):
             _walk(path, value, [*keys, str(key)], node, found, entries)
         else:
-            raise ParameterError(f"{path}: key {'/'.join([*keys, str(key)])}: {_LAYOUT}")
+            raise ParameterError(f"{path}: key {clip('/'.join([*keys, str(key)]))}: {_LAYOUT}")
 
 
 def _node_pattern(pattern: str) -> re.Pattern:

@@ -19,7 +19,7 @@ import numpy as np
 from scanlines.errors import ParameterError
 from scanlines.extraction import ExtractionTable
 from scanlines.extractor import Extractor
-from scanlines.reader_options import ReaderOptions
+from scanlines.reader_options import ReaderOptions, parse_scans, select_scans
 from scanlines.scan import Scan
 from scanlines.sensor.mounting import estimate_mounting
 from scanlines.sensor.profile import (
@@ -37,6 +37,7 @@ __all__ = [
     "extract_chunk",
     "log_profile",
     "measure_profile",
+    "measured_scans",
     "parse_slice",
     "run_log",
     "run_log_to_file",
@@ -44,36 +45,10 @@ __all__ = [
 ]
 
 
-def parse_slice(text: str | None) -> slice:
-    """``"100:200"``, ``":50"``, ``"10:"``, ``"::5"`` or ``"7"`` as a slice of scan indices."""
-    if text is None or text.strip() in ("", ":"):
-        return slice(None)
-    parts = text.split(":")
-    if len(parts) > 3:
-        raise ParameterError(f"--scans takes start:stop[:step], got {text!r}")
-    try:
-        values = [int(p) if p.strip() else None for p in parts]
-    except ValueError:
-        raise ParameterError(f"--scans takes integers start:stop[:step], got {text!r}") from None
-    if len(values) == 1:
-        start = values[0]
-        return slice(start, None if start == -1 else start + 1)
-    if len(values) == 3 and values[2] is not None and values[2] <= 0:
-        raise ParameterError(f"--scans step must be positive, got {text!r}")
-    if any(v is not None and v < 0 for v in values):
-        raise ParameterError(f"--scans takes non-negative indices (the log streams), got {text!r}")
-    return slice(*values)
-
-
-def select(indexed: Iterator[tuple[int, Scan]], scans: slice) -> Iterator[tuple[int, Scan]]:
-    """The scans whose log index falls in ``scans``, stopping early past its end."""
-    start = scans.start or 0
-    step = scans.step or 1
-    for index, scan in indexed:
-        if scans.stop is not None and index >= scans.stop:
-            break
-        if index >= start and (index - start) % step == 0:
-            yield index, scan
+#: ``--scans`` as a slice (:func:`scanlines.reader_options.parse_scans`, one grammar).
+parse_slice = parse_scans
+#: The scans whose log index falls in a slice (:func:`scanlines.reader_options.select_scans`).
+select = select_scans
 
 
 def selected_count(scans_in_file: int | None, scans: slice) -> int | None:
@@ -119,10 +94,22 @@ def run_profile(
         return None, f"sensor profile: {error}; each scan's noise is measured from itself"
     name = getattr(path, "name", str(path))
     return profile, (
-        f"sensor profile: measured from the first {profile.scans} scans of {name} "
+        f"sensor profile: measured from {measured_scans(scans, profile.scans)} of {name} "
         f"(noise {1000 * profile.noise_sigma0:.1f} mm + {100 * profile.noise_per_metre:.2f} % "
         "of range); `scanlines calibrate` saves one for --sensor-profile"
     )
+
+
+def measured_scans(selection: slice, count: int) -> str:
+    """Which scans ``count`` scans measured from the start of ``selection`` are, in words:
+    ``"the first 500 scans"``, ``"scans 100-199"``, ``"50 scans (0, 10, ..., 490)"``."""
+    start, step = selection.start or 0, selection.step or 1
+    if start == 0 and step == 1:
+        return f"the first {count} scans"
+    last = start + (count - 1) * step
+    if step == 1:
+        return f"scans {start}-{last}"
+    return f"{count} scans ({start}, {start + step}, ..., {last})"
 
 
 def mounted_options(

@@ -37,9 +37,14 @@ from typing import Any
 
 import numpy as np
 
-from scanlines.errors import NO_SUCH_FILE, ScanlinesError
 from scanlines.scan import Scan
 from scanlines.sensor.mounting import estimate_mounting
+from scanlines.sensor.profile_file import (
+    PROFILE_FORMAT,
+    ProfileError,
+    checked_fields,
+    read_values,
+)
 from scanlines.steps.noise import (
     MIN_NOISE_SIGMA,
     NoiseLine,
@@ -60,8 +65,6 @@ __all__ = [
     "scan_noise_line",
 ]
 
-PROFILE_FORMAT = "scanlines-sensor-profile/1"
-
 DEFAULT_SCANS = 500
 """Scans a profile is measured from by default (the first of the log)."""
 
@@ -71,10 +74,6 @@ BOOTSTRAP_ROUNDS = 50
 SPIKE_SIGMAS = 6.0
 JUMP = 0.3
 """Range step (m) that counts as a depth jump for the mixed-pixel rate."""
-
-
-class ProfileError(ScanlinesError, ValueError):
-    """A sensor profile file is missing, malformed or unusable."""
 
 
 @dataclass(frozen=True)
@@ -177,48 +176,18 @@ class SensorProfile:
 
     @classmethod
     def from_dict(cls, values: dict[str, Any], where: str = "profile") -> SensorProfile:
-        """A profile from :meth:`to_dict`'s values; :class:`ProfileError` names what is wrong."""
-        if not isinstance(values, dict) or values.get("format") != PROFILE_FORMAT:
-            raise ProfileError(f"{where}: not a sensor profile (format {PROFILE_FORMAT!r})")
-        known = set(cls.__dataclass_fields__)
-        unknown = sorted(set(values) - known - {"format"})
-        if unknown:
-            raise ProfileError(f"{where}: unknown field(s) {', '.join(unknown)}")
-        kwargs = {k: v for k, v in values.items() if k in known}
-        for key in ("noise_sigma0", "noise_per_metre"):
-            if key not in kwargs:
-                raise ProfileError(f"{where}: field {key!r} is missing")
-        for key, value in list(kwargs.items()):
-            if key in ("noise_bins", "no_return_codes", "mounting", "source", "beams", "scans"):
-                continue
-            try:
-                kwargs[key] = float(value)
-            except (TypeError, ValueError):
-                message = f"{where}: field {key!r} must be a number, got {value!r}"
-                raise ProfileError(message) from None
-        if not (kwargs["noise_sigma0"] >= 0 and kwargs["noise_per_metre"] >= 0):
-            raise ProfileError(f"{where}: the noise line must be finite and not negative")
-        if not all(math.isfinite(kwargs[k]) for k in ("noise_sigma0", "noise_per_metre")):
-            raise ProfileError(f"{where}: the noise line must be finite and not negative")
-        try:
-            kwargs["noise_bins"] = tuple(NoiseBin(**b) for b in kwargs.get("noise_bins", ()))
-            mounting = kwargs.get("mounting")
-            kwargs["mounting"] = None if mounting is None else tuple(map(float, mounting))
-        except (TypeError, ValueError) as error:
-            raise ProfileError(f"{where}: {error}") from None
+        """A profile from :meth:`to_dict`'s values; :class:`ProfileError` names what is
+        wrong (:func:`~scanlines.sensor.profile_file.checked_fields`)."""
+        kwargs = checked_fields(values, where, tuple(cls.__dataclass_fields__))
+        kwargs["noise_bins"] = tuple(NoiseBin(*b) for b in kwargs.get("noise_bins", ()))
         return cls(**kwargs)
 
 
 def read_profile(path: str | Path) -> SensorProfile:
-    """The profile saved at ``path`` (:meth:`SensorProfile.save`)."""
-    path = Path(path)
-    try:
-        values = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ProfileError(f"{path}: {NO_SUCH_FILE}") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise ProfileError(f"{path}: cannot read the sensor profile: {error}") from None
-    return SensorProfile.from_dict(values, where=str(path))
+    """The profile saved at ``path`` (:meth:`SensorProfile.save`): a regular JSON file of
+    at most :data:`~scanlines.sensor.profile_file.MAX_PROFILE_BYTES`, nested at most a few
+    levels deep (:func:`~scanlines.sensor.profile_file.read_values`)."""
+    return SensorProfile.from_dict(read_values(path), where=str(path))
 
 
 def as_profile(profile: SensorProfile | str | Path | None) -> SensorProfile | None:
@@ -308,6 +277,13 @@ def noise_samples(scan: Scan) -> tuple[np.ndarray, np.ndarray]:
     """One scan's range-noise samples and the ranges they were taken at (what
     :func:`estimate_profile` pools over scans)."""
     return local_residuals(*_returns_of(scan))
+
+
+def noise_samples_of(ranges, valid, cos, sin) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`noise_samples` of a scan's arrays: its ranges, its mask of beams with a return
+    and its bearing tables relative to beam 0."""
+    returns = valid_returns(ranges, valid, cos, sin)
+    return local_residuals(returns, beam_gaps(returns.index, ranges.shape[0]))
 
 
 def pooled_noise_line(samples: list[np.ndarray], at: list[np.ndarray]) -> NoiseLine | None:

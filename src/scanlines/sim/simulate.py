@@ -65,6 +65,19 @@ def depth_jumps(world: World, edge: np.ndarray, full_circle: bool) -> np.ndarray
     return jump if full_circle else jump[:-1]
 
 
+def _returning_hits(
+    world: World, origin: tuple[float, float], bearings: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The edge each beam hits and its exact range; a beam that hits glass stops there and
+    nothing comes back (edge -1, range inf)."""
+    hits = world.cast(origin, bearings)
+    edge, true_ranges = hits.edge, hits.ranges
+    if not world.edge_returns.all():
+        glass = (edge >= 0) & ~world.edge_returns[np.maximum(edge, 0)]
+        edge, true_ranges = np.where(glass, -1, edge), np.where(glass, np.inf, true_ranges)
+    return edge, true_ranges
+
+
 def simulate(
     world: World,
     sensor: str | SensorSpec = "lms_1deg",
@@ -113,11 +126,7 @@ def simulate(
         spec = spec.with_noise(noise)
     x, y, theta = (float(v) for v in pose)
     angles = spec.angles
-    hits = world.cast((x, y), angles + theta)
-    edge, true_ranges = hits.edge, hits.ranges
-    if not world.edge_returns.all():  # glass: the beam stops there and nothing comes back
-        glass = (edge >= 0) & ~world.edge_returns[np.maximum(edge, 0)]
-        edge, true_ranges = np.where(glass, -1, edge), np.where(glass, np.inf, true_ranges)
+    edge, true_ranges = _returning_hits(world, (x, y), angles + theta)
     circle = spec.full_circle
     measured = apply_noise(
         true_ranges,
@@ -140,13 +149,7 @@ def simulate(
     if not np.array_equal(scan.valid, returned):  # pragma: no cover - internal consistency
         raise AssertionError("simulated returns disagree with Scan.valid")
     truth = compute_truth(
-        world,
-        (x, y, theta),
-        angles,
-        edge,
-        true_ranges,
-        measured.status,
-        full_circle=circle,
-        sigma=spec.noise.effective_sigma,
-    )
+        world, (x, y, theta), angles, edge, true_ranges, measured.status,
+        full_circle=circle, sigma=spec.noise.effective_sigma,
+    )  # fmt: skip
     return SimScan(scan=scan, truth=truth, world=world, sensor=spec, bias_scale=measured.bias_scale)

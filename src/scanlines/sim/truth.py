@@ -238,6 +238,61 @@ def _incidence(world: World, edge: np.ndarray, world_angles: np.ndarray) -> np.n
     return out
 
 
+def _runs_around_events(
+    n_returns: int, run_lengths: np.ndarray, n_events: int, full_circle: bool
+) -> np.ndarray:
+    """The runs before and after each event (none without returns)."""
+    if not n_returns:
+        return np.empty((0, 2), np.intp)
+    return _event_runs(run_lengths, n_events, full_circle)
+
+
+def _hit_points(edge: np.ndarray, r: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """Each beam's exact hit in the sensor frame, NaN where it hits no edge."""
+    with np.errstate(invalid="ignore"):
+        return np.where(
+            (edge >= 0)[:, None], np.column_stack((r * np.cos(theta), r * np.sin(theta))), np.nan
+        ).reshape(len(edge), 2)
+
+
+def _dont_care(
+    world: World,
+    pose: tuple[float, float, float],
+    edge: np.ndarray,
+    r: np.ndarray,
+    theta: np.ndarray,
+    hit_points: np.ndarray,
+    incidence: np.ndarray,
+    returns: np.ndarray,
+    run_starts: np.ndarray,
+    run_lengths: np.ndarray,
+    left: np.ndarray,
+    right: np.ndarray,
+    is_break: np.ndarray,
+    is_corner: np.ndarray,
+    full_circle: bool,
+    sigma: Callable[[np.ndarray], np.ndarray] | None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Which breakpoints and which corners (events ``left``, ``right``) are don't care:
+    junctions; with ``sigma``, also depth steps and turns the noise hides."""
+    n = len(edge)
+    gap = (right - left - 1) % n
+    bp_dont_care = _junction(world, edge[left[is_break]], edge[right[is_break]])
+    bp_dont_care &= gap[is_break] < 2
+    corner_dont_care = np.zeros(int(np.count_nonzero(is_corner)), bool)
+    if sigma is not None and len(returns):
+        lines = _sensor_lines(world, pose)
+        bp_dont_care |= _hidden_step(
+            lines, edge, r, theta, left[is_break], right[is_break], gap[is_break], sigma
+        )
+        side_runs = _side_runs(len(left), full_circle)[is_corner]
+        corner_dont_care = _hidden_turn(
+            world, pose, edge, hit_points, r, incidence, returns, run_starts, run_lengths,
+            side_runs, left[is_corner], right[is_corner], sigma,
+        )  # fmt: skip
+    return bp_dont_care, corner_dont_care
+
+
 def compute_truth(
     world: World,
     pose: tuple[float, float, float],
@@ -249,7 +304,7 @@ def compute_truth(
     full_circle: bool,
     sigma: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> Truth:
-    """Ground truth of one scan from its exact hits and beam statuses.
+    """Ground truth of one scan (a :class:`Truth`) from its exact hits and beam statuses.
 
     Parameters
     ----------
@@ -270,57 +325,32 @@ def compute_truth(
         :meth:`~scanlines.sim.noise.NoiseModel.effective_sigma`); with it, depth
         steps and turns the noise hides are don't care (module docstring). ``None``:
         only junctions are don't care.
-
-    Returns
-    -------
-    Truth
     """
     pose = (float(pose[0]), float(pose[1]), float(pose[2]))
     edge = np.asarray(edge, dtype=np.intp)
     r = np.asarray(true_ranges, dtype=np.float64)
     theta = np.asarray(angles, dtype=np.float64)
     n = len(edge)
-    with np.errstate(invalid="ignore"):
-        hit_points = np.where(
-            (edge >= 0)[:, None], np.column_stack((r * np.cos(theta), r * np.sin(theta))), np.nan
-        ).reshape(n, 2)
+    hit_points = _hit_points(edge, r, theta)
     status = np.asarray(status, dtype=np.int8)
     returns = np.flatnonzero((status == BeamStatus.HIT) & (edge >= 0))
-
     pairs = _classify_pairs(world, returns, edge, n, full_circle)
     event_pos = np.flatnonzero(pairs.kind != _NONE)
     run_starts, run_lengths = _runs(len(returns), event_pos, full_circle)
-    runs = (
-        _event_runs(run_lengths, len(event_pos), full_circle)
-        if len(returns)
-        else np.empty((0, 2), np.intp)
-    )
-
+    runs = _runs_around_events(len(returns), run_lengths, len(event_pos), full_circle)
     kinds = pairs.kind[event_pos]
     is_break, is_corner = kinds == _BREAK, kinds == _CORNER
     left, right = pairs.left[event_pos], pairs.right[event_pos]
-
     corner_beam, vertices = _corner_beams(
         world, pose, edge, hit_points, left[is_corner], right[is_corner]
     )
-
     bp_order = np.argsort(left[is_break], kind="stable")
     c_order = np.argsort(corner_beam, kind="stable")
     incidence = _incidence(world, edge, theta + pose[2])
-    lines = _sensor_lines(world, pose)
-    gap = (right - left - 1) % n
-    bp_dont_care = _junction(world, edge[left[is_break]], edge[right[is_break]])
-    bp_dont_care &= gap[is_break] < 2
-    corner_dont_care = np.zeros(int(np.count_nonzero(is_corner)), bool)
-    if sigma is not None and len(returns):
-        bp_dont_care |= _hidden_step(
-            lines, edge, r, theta, left[is_break], right[is_break], gap[is_break], sigma
-        )
-        side_runs = _side_runs(len(event_pos), full_circle)[is_corner]
-        corner_dont_care = _hidden_turn(
-            world, pose, edge, hit_points, r, incidence, returns, run_starts, run_lengths,
-            side_runs, left[is_corner], right[is_corner], sigma,
-        )  # fmt: skip
+    bp_dont_care, corner_dont_care = _dont_care(
+        world, pose, edge, r, theta, hit_points, incidence, returns, run_starts, run_lengths,
+        left, right, is_break, is_corner, full_circle, sigma,
+    )  # fmt: skip
     return Truth(
         n_beams=n,
         full_circle=bool(full_circle),

@@ -73,9 +73,17 @@ CLUSTERING: dict[str, Param] = {
     "breakpoints": Param(
         "abd", choice(*RULES), "clustering rule: " + ", ".join(RULES), (coded(RULE_CODES),)
     ),
-    "k": Param(3.0, number(low=0.0, low_open=True), "paper rule: D = k rho dtheta (eq. 7)"),
+    "k": Param(
+        3.0,
+        number(low=0.0, low_open=True),
+        "paper rule: D = k rho dtheta (eq. 7)",
+        applies=("breakpoints", ("paper",), True),
+    ),
     "noise_k": Param(
-        3.0, number(low=0.0), "paper/abd: noise margin in sigmas of a range difference"
+        3.0,
+        number(low=0.0),
+        "paper/abd: noise margin in sigmas of a range difference",
+        applies=("breakpoints", ("paper", "abd"), True),
     ),
     "line_k": Param(
         3.0,
@@ -87,10 +95,19 @@ CLUSTERING: dict[str, Param] = {
         number(low=0.0, high=90.0, low_open=True),
         "ABD: worst incidence angle, degrees",
         (radians(),),
+        applies=("breakpoints", ("abd",), True),
     ),
-    "pdbs_c0": Param(0.1, number(low=0.0), "PDBS: constant C0 in metres"),
+    "pdbs_c0": Param(
+        0.1,
+        number(low=0.0),
+        "PDBS: constant C0 in metres",
+        applies=("breakpoints", ("pdbs",), True),
+    ),
     "jump_distance": Param(
-        0.3, number(low=0.0, low_open=True), "fixed rule: largest neighbour distance, metres"
+        0.3,
+        number(low=0.0, low_open=True),
+        "fixed rule: largest neighbour distance, metres",
+        applies=("breakpoints", ("fixed",), True),
     ),
 }
 """The parameters of a clustering rule, shared by every method that clusters."""

@@ -42,8 +42,9 @@ class NoPoses(ParameterError):
 
 
 def methods() -> list[dict[str, Any]]:
-    """Every method with its parameters (default, doc, allowed values, domain) and presets:
-    what the viewer builds its controls from."""
+    """Every method with its parameters (default, doc, allowed values, domain, and when
+    another parameter decides whether it is read: ``applies``) and presets: what the viewer
+    builds its controls from."""
     from scanlines.extractor import method_info, method_names
 
     described = []
@@ -51,12 +52,19 @@ def methods() -> list[dict[str, Any]]:
         info = method_info(name)
         params = [
             {"name": key, "default": p.default, "doc": p.doc, "allowed": p.allowed,
-             "domain": p.domain}
+             "domain": p.domain, "applies": _applies(p.applies)}
             for key, p in info.params.items()
         ]  # fmt: skip
         described.append({"name": name, "doc": info.doc, "params": params,
                           "presets": info.presets})  # fmt: skip
     return described
+
+
+def _applies(rule) -> dict[str, Any] | None:
+    """``{"param", "values", "when_in"}`` of a parameter's ``applies``; ``None``: always read."""
+    if rule is None:
+        return None
+    return {"param": rule[0], "values": list(rule[1]), "when_in": rule[2]}
 
 
 class ViewerSession:
@@ -134,7 +142,8 @@ class ViewerSession:
             "scans": store.count, "finished": store.finished, "error": store.error,
             "poses": store.with_pose, "reader": store.reader_info if store.finished else {},
             "poses_note": poses_note(store.reader_info) if store.with_pose else None,
-            "profile": self._profile_note, "config": self.config.to_dict(),
+            "profile": self._profile_note, "profile_noise": self._profile_noise(),
+            "config": self.config.to_dict(),
             "ready": self.ready.is_set(),
         }  # fmt: skip
 
@@ -150,6 +159,13 @@ class ViewerSession:
             finally:
                 self.ready.set()
                 self.store.resume()
+
+    def _profile_noise(self) -> dict[str, float] | None:
+        """The measured or given profile's noise (as a frame's ``noise``), once known."""
+        profile = self._profile if self._profile_note is not None else None
+        if profile is None:
+            return None
+        return profile.noise._asdict()
 
     def profile(self) -> SensorProfile | None:
         """The sensor profile of the extractions (measured once, on first use)."""

@@ -10,7 +10,8 @@ const COLOURS = { returns: "#3c4043", breakpoint: "#f29900", corner: "#d93025",
 const MARKS = [["breakpoints", COLOURS.breakpoint, "circle"], ["corners", COLOURS.corner, "diamond"],
                ["outliers", COLOURS.outlier, "cross"]];
 // The strokes of the map's lines: the canvas and the legend draw them from this table.
-const STROKES = { map: { colour: "#a9bed3", width: 6 } };
+// Map lines are drawn first (under the scan) and thinner than the scan's segments.
+const STROKES = { map: { colour: "#7f9bb8", width: 1.5 }, segments: { width: 2.5, selected: 5 } };
 const LAYERS = ["returns", "segments", "breakpoints", "corners", "outliers", "sensor", "map"];
 const OFF_AT_START = ["map"];
 const AXIS_FONT_PX = 12;
@@ -100,11 +101,15 @@ class ConfigPanel {
     for (const param of this.method.params) {
       const row = document.createElement("div");
       row.className = "param";
-      row.title = `${param.doc}\nallowed: ${param.allowed}`;
-      row.innerHTML = `<label>${param.name}</label><span class="value"></span>`;
+      row.dataset.param = param.name;
+      row.title = `${param.name}: ${param.doc}\nallowed: ${param.allowed}`;
+      row.innerHTML = `<label><span class="name"></span><small class="doc"></small></label><span class="value"></span>`;
+      row.querySelector(".name").textContent = param.name;
+      row.querySelector(".doc").textContent = shortDoc(param.doc);
       const control = makeControl(param.domain, row.querySelector(".value"), param.name);
       control.write(defaults[param.name]);
       control.row = row;
+      control.applies = param.applies;
       row.addEventListener("input", (event) => this.changed(event, control));
       row.addEventListener("change", (event) => this.changed(event, control));
       this.controls.set(param.name, control);
@@ -114,12 +119,26 @@ class ConfigPanel {
   }
 
   changed(event, control) {
+    this.showApplying();
     if (control.read() === undefined) return;   // not a valid value yet: keep the last frame
     this.markChanged();
     this.onChange(event);
   }
 
+  // Hide the parameters the chosen values make unread (a clustering rule's constants when
+  // another rule is chosen, a switched-off step's options): the server's ``applies``.
+  showApplying() {
+    for (const control of this.controls.values()) {
+      const rule = control.applies;
+      const other = rule ? this.controls.get(rule.param) : null;
+      const value = other ? other.read() : undefined;
+      const held = value !== undefined && rule.values.some((v) => JSON.stringify(v) === JSON.stringify(value));
+      control.row.hidden = value !== undefined && held !== rule.when_in;
+    }
+  }
+
   markChanged() {
+    this.showApplying();
     const overrides = this.overrides();
     for (const [name, control] of this.controls) control.row.classList.toggle("changed", name in overrides);
   }
@@ -165,6 +184,12 @@ class ConfigPanel {
       URL.revokeObjectURL(link.href);
     } catch (error) { showError(error); }
   }
+}
+
+// A parameter's doc, short: its first clause (before "; ", ", or " or " (with").
+function shortDoc(doc) {
+  const first = doc.split(/; |, or | \(with /)[0].trim();
+  return first.length <= 44 ? first : `${first.slice(0, first.lastIndexOf(" ", 42))}…`;
 }
 
 // One parameter's input(s), from its domain: read() gives the typed value, or undefined
@@ -303,7 +328,8 @@ function draw() {
   const frame = state.frame;
   if (!frame) return;
   stats.drawn = { index: frame.index, segments: frame.results.map(() => 0), differences: 0,
-                  layers: Object.fromEntries(LAYERS.map((layer) => [layer, 0])), shapes: {} };
+                  layers: Object.fromEntries(LAYERS.map((layer) => [layer, 0])), shapes: {},
+                  order: [], widths: {} };
   const results = frame.results;
   list.forEach((canvas, k) => {
     const context = canvas.getContext("2d");
@@ -378,8 +404,9 @@ function drawResult(context, frame, result, which, dashed) {
     }
     stats.drawn.segments[which] += 1;
     const selected = state.selected && state.selected.which === which && state.selected.k === k;
-    strokeLine(context, a, b, segmentColour(k), selected ? 5 : 2.5, dashed ? [6, 4] : []);
+    strokeLine(context, a, b, segmentColour(k), selected ? STROKES.segments.selected : STROKES.segments.width, dashed ? [6, 4] : []);
     stats.drawn.layers.segments += 1;
+    drawnNow("segments", STROKES.segments.width);
   });
   const point = (beam) => [frame.x[beam], frame.y[beam]];
   for (const [name, colour, shape] of MARKS) {
@@ -439,7 +466,14 @@ function drawMap(context, pose) {
     strokeLine(context, toScreen(...place(line.start)), toScreen(...place(line.end)), colour, width, []);
     stats.drawn.layers.map += 1;
   }
+  if (state.map.lines.length) drawnNow("map", width);
   stats.drawn.shapes.map = "line";
+}
+
+// The order in which the layers were first drawn (what lies under what) and their widths.
+function drawnNow(layer, width) {
+  if (!stats.drawn.order.includes(layer)) stats.drawn.order.push(layer);
+  stats.drawn.widths[layer] = width;
 }
 
 // World point -> the sensor frame of a scan at ``pose`` (x, y, theta).
@@ -474,7 +508,8 @@ function drawWorld(context) {
   if (!world) return;
   const segments = state.layers.has("segments") ? world.segments : [];
   stats.drawn = { world: world.scans, segments: [segments.length], differences: 0,
-                  layers: Object.fromEntries(LAYERS.map((layer) => [layer, 0])), shapes: {} };
+                  layers: Object.fromEntries(LAYERS.map((layer) => [layer, 0])), shapes: {},
+                  order: [], widths: {} };
   drawMap(context);
   drawReturns(context, world.x, world.y, "#b0b4ba", 1.5);
   if (state.layers.has("sensor")) {
@@ -483,8 +518,9 @@ function drawWorld(context) {
     world.path.forEach((pose, k) => { const [x, y] = toScreen(pose[0], pose[1]); k ? context.lineTo(x, y) : context.moveTo(x, y); });
     context.stroke();
   }
-  segments.forEach((s, k) => strokeLine(context, toScreen(s[0], s[1]), toScreen(s[2], s[3]), segmentColour(k), 2, []));
+  segments.forEach((s, k) => strokeLine(context, toScreen(s[0], s[1]), toScreen(s[2], s[3]), segmentColour(k), STROKES.segments.width, []));
   stats.drawn.layers.segments = segments.length;
+  if (segments.length) drawnNow("segments", STROKES.segments.width);
   drawSensor(context, world.path[world.path.length - 1]);
   drawLegend(1);
 }
@@ -529,7 +565,7 @@ function showFacts() {
     rows.push(["scan (log record)", `${f.index} (${f.record})`],
               ["time", f.timestamp === null ? "-" : `${f.timestamp.toFixed(3)} s`],
               ["beams / returns", `${f.beams} / ${f.returns}`],
-              ["noise (this scan)", f.noise === null ? "-" : `${(1000 * f.noise.sigma0).toFixed(1)} mm + ${(100 * f.noise.per_metre).toFixed(2)} % r`]);
+              ...noiseRows(f.noise));
     if (f.results.length === 0) rows.push(["features", "extracting…"]);
     f.results.forEach((r, i) => {
       const tag = f.results.length === 2 ? ` ${"AB"[i]}` : "";
@@ -543,6 +579,16 @@ function showFacts() {
   }
   $("#facts").innerHTML = rows.map(([what, value, key]) =>
     `<tr><td>${what}</td><td${key ? ` data-fact="${key}"` : ""}>${value}</td></tr>`).join("");
+}
+
+// The noise the extraction uses, named: the sensor profile's when there is one (this
+// scan's own, not used, beside it), else this scan's own.
+function noiseRows(scanNoise) {
+  const text = (n) => n === null || n === undefined ? "-" : `${(1000 * n.sigma0).toFixed(1)} mm + ${(100 * n.per_metre).toFixed(2)} % r`;
+  const profile = state.log && state.log.profile_noise;
+  if (!profile) return [["noise used: this scan's own", text(scanNoise), "noise-used"]];
+  return [["noise used: sensor profile", text(profile), "noise-used"],
+          ["noise of this scan (not used)", text(scanNoise), "noise-scan"]];
 }
 
 function showSelection() {
