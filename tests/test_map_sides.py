@@ -12,7 +12,7 @@ from cli_helpers import scanlines
 from scanlines.map import build_map
 from scanlines.map.align import LineSet
 from scanlines.map.export import write_map
-from scanlines.map.filter import LineMapFilter
+from scanlines.map.filter import FilterSettings, LineMapFilter
 from scanlines.map.fusion import BACK, BOTH, FRONT
 from scanlines.map.localize import MapFileError, read_line_map
 from test_map import view
@@ -87,7 +87,7 @@ def _one_wall(sides: int) -> LineSet:
 @pytest.mark.parametrize(("sides", "matched"), [(BACK, True), (BOTH, True), (FRONT, False)])
 def test_a_return_matches_a_face_only_from_a_side_it_was_seen_from(sides, matched):
     scan = view(BOARD, (0.0, 0.0, 1.2), seed=1, sigma=0.002)  # from below: the back
-    tracker = LineMapFilter(_one_wall(sides))
+    tracker = LineMapFilter(_one_wall(sides), FilterSettings(sides=True))
     tracker.start((0.0, 0.02, 1.2))
     step = tracker.step(scan.points[scan.valid], None)
     assert (step.pairs > 0) == matched
@@ -95,10 +95,8 @@ def test_a_return_matches_a_face_only_from_a_side_it_was_seen_from(sides, matche
         assert step.pose[1] == pytest.approx(0.0, abs=0.005)
 
 
-def test_sides_can_be_ignored():
-    from scanlines.map.filter import FilterSettings
-
+def test_sides_are_ignored_by_default():
     scan = view(BOARD, (0.0, 0.0, 1.2), seed=1, sigma=0.002)
-    tracker = LineMapFilter(_one_wall(FRONT), FilterSettings(sides=False))
+    tracker = LineMapFilter(_one_wall(FRONT))
     tracker.start((0.0, 0.02, 1.2))
     assert tracker.step(scan.points[scan.valid], None).pairs > 0

@@ -103,12 +103,13 @@ def localize_command(
             "this TUM file (the poses `map --align --poses-out` wrote for the map).",
         ),
     ] = None,
-    ignore_sides: Annotated[
+    sides: Annotated[
         bool,
         typer.Option(
-            "--ignore-sides",
-            help="Match returns to map lines whatever side the map saw them from (by default "
-            "a return matches only a wall's face seen from its side).",
+            "--sides",
+            help="Match a return only to a wall's face the map saw from the return's side "
+            "(by default the sides the map keeps are ignored: a wall the map holds only "
+            "from behind still holds the pose).",
         ),
     ] = False,
     overwrite: OverwriteOption = False,
@@ -134,7 +135,7 @@ def localize_command(
         open_log(log, options=options) as reader,
         progress(f"localising {log.name}", reader.scans_in_file) as tick,
     ):
-        settings = FilterSettings(sides=not ignore_sides)
+        settings = FilterSettings(sides=sides)
         run = localize(
             reader.enumerate(), lines, frame, initial, settings=settings, on_scan=tick.scan
         )
