@@ -157,9 +157,9 @@ def map_command(
     prepared = prepare(log, options, poses, min_scans, method, preset, param, config,
                        sensor_profile, scans)  # fmt: skip
     if align:
-        from scanlines.map.build import MAPPING
+        from scanlines.map.tracking import TrackSettings
 
-        prepared["track"] = MAPPING
+        prepared["track"] = TrackSettings()
     build = run_build(log, options, prepared, scans)
     lines = build.line_map.lines()
     meta = map_meta(log, build, prepared)
@@ -317,9 +317,9 @@ def evaluate_map_command(
     from scanlines.cli.progress import progress
     from scanlines.errors import ParameterError
     from scanlines.io import open_log
-    from scanlines.map.build import MAPPING
     from scanlines.map.export import dumps, naming_output
     from scanlines.map.holdout import evaluate_map
+    from scanlines.map.tracking import TrackSettings
     from scanlines.outputs import write_text_atomically
     from scanlines.reader_options import parse_scans
 
@@ -337,7 +337,7 @@ def evaluate_map_command(
         score, build = evaluate_map(
             lambda: open_log(log, options=options), prepared["extractor"], profile.sigma_at,
             poses=prepared["poses"], settings=prepared["settings"], limit=parse_scans(scans),
-            track=MAPPING if align else None, source=str(log),
+            track=TrackSettings() if align else None, source=str(log),
             on_scan=lambda stage, _index: (tick.begin(f"{stage} {log.name}"), tick.scan()),
         )  # fmt: skip
     seconds = time.perf_counter() - started

@@ -211,7 +211,8 @@ def point_to_line_system(
     lever: np.ndarray, normals: np.ndarray, residuals: np.ndarray, huber: float
 ) -> LineSystem:
     """The normal equations of a pose update that brings points onto their lines: the one
-    linearisation of :func:`point_to_line_step` (scan to scan, scan to map).
+    linearisation of :func:`point_to_line_step` (scan to scan, scan to map) and of the map
+    tracker's steps with a prior (:func:`scanlines.map.tracking.track_points`).
 
     A point ``p`` on a line of unit normal ``n`` has the residual ``e = n . p - rho``; a
     small update ``(dx, dy, dtheta)`` turning about a centre ``c`` changes it by

@@ -10,10 +10,10 @@ from typing import Any
 import numpy as np
 
 from scanlines.geometry.transform import points_to_world
-from scanlines.map.align import Alignment, AlignSettings, LineSet, align_scan, nearest_segments
+from scanlines.map.align import AlignSettings, LineSet, align_scan, nearest_segments
 from scanlines.map.build import MapBuild, build_map
-from scanlines.map.filter import FilterSettings, LineMapFilter
 from scanlines.map.fusion import FusionSettings, MapLines
+from scanlines.map.tracking import TrackSettings, track_points
 from scanlines.scan import Scan
 
 __all__ = ["MapScore", "distances_to_lines", "evaluate_map", "loop_lines", "score_held_out"]
@@ -76,11 +76,9 @@ def score_held_out(
     scan aligned to the finished map first, as a robot localising with it would). All of
     it in the map's local frame, where ``build.held_out`` and the lines are."""
     lines = build.line_map.lines()
-    target = LineSet(lines.rho, lines.alpha, lines.start, lines.end, lines.sides)
+    target = LineSet(lines.rho, lines.alpha, lines.start, lines.end)
     locate = None if build.align is None else replace(build.align, damping=1.0)
-    tracker = None
-    if build.track is not None:
-        tracker = LineMapFilter(target, build.track)
+    priors = {t.index: t.covariance for t in build.tracked if t.status == "held out"}
     distances, tolerances, ranges, localised = [], [], [], []
     moved = 0
     for index, scan in indexed:
@@ -92,13 +90,13 @@ def score_held_out(
         distances.append(distances_to_lines(points_to_world(scan.points[valid], pose), lines))
         tolerances.append(np.maximum(3.0 * sigma_at(r), MIN_TOLERANCE))
         ranges.append(r)
-        if locate is not None or tracker is not None:
-            located = (
+        if locate is not None or build.track is not None:
+            fit = (
                 align_scan(scan, pose, target, locate) if locate is not None
-                else _localise(tracker, build.held_state[index], scan.points[valid])
+                else track_points(scan.points[valid], pose, priors[index], target, build.track)
             )  # fmt: skip
-            moved += located.used
-            world = points_to_world(scan.points[valid], located.pose)
+            moved += fit.used
+            world = points_to_world(scan.points[valid], fit.pose)
             localised.append(distances_to_lines(world, lines))
     d, tol, r = (np.concatenate(a) if a else np.zeros(0) for a in (distances, tolerances, ranges))
     near = _localised(localised, tol, moved)
@@ -122,14 +120,6 @@ def score_held_out(
         poses=build.poses,
         **near,
     )
-
-
-def _localise(tracker: LineMapFilter, state, points: np.ndarray) -> Alignment:
-    """A held-out scan localised on the finished map by the filter, from the state the
-    tracking predicted for it (``state``: the state and its covariance)."""
-    tracker.state, tracker.covariance = state[0].copy(), state[1].copy()
-    step = tracker.step(points.astype(np.float64), None)
-    return Alignment(step.pose, step.aligned, step.pairs)
 
 
 def _localised(distances: list[np.ndarray], tolerances: np.ndarray, moved: int) -> dict:
@@ -156,7 +146,7 @@ def evaluate_map(
     every: int = 10,
     limit: int | slice | None = None,
     align: AlignSettings | None = None,
-    track: FilterSettings | None = None,
+    track: TrackSettings | None = None,
     source: str | None = None,
     on_scan: Callable[[str, int], None] | None = None,
 ) -> tuple[MapScore, MapBuild]:
