@@ -9,6 +9,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from cli_helpers import scanlines
 from scanlines import Scan
@@ -18,7 +20,7 @@ from scanlines.geometry.poses import compose, relative_pose
 from scanlines.map import build_map
 from scanlines.map.export import write_map
 from scanlines.map.localize import localize, read_line_map
-from scanlines.map.relocalise import LinePairs, SearchSettings, pose_candidates
+from scanlines.map.relocalise import ExplainedGrid, LinePairs, SearchSettings, pose_candidates
 from test_map import view
 
 #: A room with a shelf, a stub and a pillar: no turn or mirror of it looks the same.
@@ -155,3 +157,17 @@ def test_a_map_too_small_to_fix_a_pose_gives_no_candidate(count):
     settings = SearchSettings()
     rows = np.array([[1.0, 0.0, 1.0, -1.0, 1.0, 1.0], [1.0, math.pi / 2, -1.0, 1.0, 1.0, 1.0]])
     assert len(pose_candidates(rows, lines, LinePairs(lines, settings), settings)) == 0
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.tuples(st.floats(-12, 12), st.floats(-12, 12), st.floats(-7, 7)),
+    st.integers(0, 2**32 - 1),
+)
+def test_the_share_at_one_pose_is_the_share_of_the_many_pose_form(pose, seed):
+    rng = np.random.default_rng(seed)
+    start, end = rng.uniform(-8, 8, (12, 2)), rng.uniform(-8, 8, (12, 2))
+    grid = ExplainedGrid(start, end, 0.05, 0.05)
+    points = rng.uniform(-10, 10, (int(rng.integers(1, 300)), 2))
+    assert grid.share_at(points, pose) == float(grid.shares(points, np.asarray(pose))[0])
+    assert grid.share_at(points[:0], pose) == 0.0
