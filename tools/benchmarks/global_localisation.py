@@ -1,7 +1,8 @@
 """`localize` on a raw log against corrected keyframes: tracking, global localisation, kidnapping.
 
     python tools/benchmarks/global_localisation.py RAW --reference CORRECTED --map MAP.json \
-        --initial-pose T,X,Y,YAW [--parts tracking slices kidnap] [--slices 20 --length 400]
+        --initial-pose T,X,Y,YAW [--parts tracking slices kidnap] [--slices 20 --length 400] \
+        [--sides]
 
 The raw log's scans are read once into memory. Each corrected keyframe is matched to the
 raw scan nearest in time (within 10 ms); a keyframe is *covered* when at least 30 % of that
@@ -32,9 +33,12 @@ from scanlines.geometry.poses import compose, relative_pose
 from scanlines.geometry.transform import points_to_world
 from scanlines.io import open_log
 from scanlines.map.align import nearest_segments
+from scanlines.map.filter import FilterSettings
 from scanlines.map.localize import localize, read_line_map
 
 MATCH = 0.01
+#: The filter's settings of every run (``--sides``).
+SETTINGS = [FilterSettings()]
 COVERED_SHARE, COVERED_DISTANCE = 0.3, 0.05
 
 
@@ -77,7 +81,7 @@ def errors(run, frames, positions):
 
 def tracking(scans, lines, frame, initial, frames, positions):
     started = time.perf_counter()
-    run = localize(iter(scans), lines, frame, initial)
+    run = localize(iter(scans), lines, frame, initial, settings=SETTINGS[0])
     seconds = time.perf_counter() - started
     rows = errors(run, frames, positions)
     d = np.array([r[1] for r in rows])
@@ -108,7 +112,7 @@ def slices(scans, lines, frame, frames, positions, count, length, settle):
     successes, wrong = 0, 0
     for start in slice_starts(frames, count, length, len(scans)):
         part = scans[start : start + length]
-        run = localize(iter(part), lines, frame, None)
+        run = localize(iter(part), lines, frame, None, settings=SETTINGS[0])
         rows = [r for r in errors(run, frames, positions) if start <= r[0] < start + length]
         after = [r for r in rows if r[0] >= start + settle]
         found = next((k for k, t in enumerate(run.tracked) if t.status != "lost"), None)
@@ -137,7 +141,7 @@ def kidnap(scans, lines, frame, initial, frames, positions, at: int):
             return scan.pose
         return compose(compose(before, jump), relative_pose(before, scan.pose))
 
-    run = localize(iter(scans), lines, frame, initial, poses=odometry)
+    run = localize(iter(scans), lines, frame, initial, poses=odometry, settings=SETTINGS[0])
     lost = [a for a in run.lost_at if a >= positions[at]]
     found = [b for b in run.found_at if lost and b > lost[0]]
     rows = errors(run, frames, positions)
@@ -169,10 +173,12 @@ def main() -> None:
     parser.add_argument("--length", type=int, default=400)
     parser.add_argument("--settle", type=int, default=50)
     parser.add_argument("--kidnap", type=int, default=2750)
+    parser.add_argument("--sides", action="store_true", help="as `localize --sides`")
     args = parser.parse_args()
     values = [float(v) for v in args.initial_pose.split(",")]
     initial = (values[0], tuple(values[1:]))
     lines, frame = read_line_map(args.map)
+    SETTINGS[0] = FilterSettings(sides=args.sides)
     with open_log(args.raw) as reader:
         scans = list(reader.enumerate())
     positions = [index for index, _ in scans]
