@@ -32,14 +32,8 @@ import numpy as np
 
 from scanlines.geometry.poses import Pose, compose
 
-__all__ = [
-    "ExplainedGrid",
-    "GlobalSearch",
-    "Hypothesis",
-    "LinePairs",
-    "SearchSettings",
-    "pose_candidates",
-]
+__all__ = ["ExplainedGrid", "GlobalSearch", "Hypothesis", "LinePairs", "SearchSettings",
+           "pose_candidates"]  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -138,19 +132,13 @@ class ExplainedGrid:
         return float(np.mean((self._hits(wx, wy) & along).any(axis=1)))
 
     def share_at(self, points: np.ndarray, pose) -> float:
-        """:meth:`shares` at one ``pose``, the same arithmetic in fewer array operations
-        (once per scan while tracking: the test of being lost)."""
+        """:meth:`shares` at one ``pose`` in fewer array operations (each scan's lost test)."""
         if not len(points):
             return 0.0
-        theta = np.asarray(pose[2], dtype=np.float64).reshape(1, 1)
-        c, s = float(np.cos(theta)[0, 0]), float(np.sin(theta)[0, 0])
+        c, s = (float(f(np.full((1, 1), float(pose[2])))[0, 0]) for f in (np.cos, np.sin))
         x = pose[0] + c * points[:, 0] - s * points[:, 1]
         y = pose[1] + s * points[:, 0] + c * points[:, 1]
-        i = np.floor((x - self.origin[0]) / self.cell).astype(np.int64)
-        j = np.floor((y - self.origin[1]) / self.cell).astype(np.int64)
-        nx, ny = self.bits.shape
-        inside = (i >= 0) & (i < nx) & (j >= 0) & (j < ny)
-        return int(np.count_nonzero(self.bits[i[inside], j[inside]])) / len(points)
+        return int(np.count_nonzero(self._hits(x, y))) / len(points)
 
     def shares(self, points: np.ndarray, poses: np.ndarray) -> np.ndarray:
         """The share of sensor-frame ``points`` (K x 2) explained at each of ``poses``
