@@ -99,6 +99,9 @@ def test_without_an_initial_pose_the_pose_is_found_and_never_reported_wrong(tmp_
     assert run.tracked[0].status == "lost"
     assert run.found_at
     assert run.found_at[0] < 60
+    assert run.lost_at[0] == run.tracked[0].index  # one episode: lost until found
+    assert len(run.lost_at) in (len(run.found_at), len(run.found_at) + 1)
+    assert all(a < b for a, b in zip(run.lost_at, run.found_at, strict=False))
     for record in run.tracked:
         if record.status != "lost":
             distance, turn = _error(run, frame, truth, record)

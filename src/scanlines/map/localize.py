@@ -314,8 +314,10 @@ def localize(
         points = scan.points[scan.valid].astype(np.float64)
         predicted, pose, covariance, status = state.step(scan, points, increment)
         last_odometry = odometry
-        if status in ("lost", "found"):
-            (run.lost_at if status == "lost" else run.found_at).append(index)
+        if status == "lost" and len(run.lost_at) == len(run.found_at):  # once an episode
+            run.lost_at.append(index)
+        elif status == "found":
+            run.found_at.append(index)
         run.tracked.append(
             TrackedPose(index, scan.timestamp, frame.pose(odometry), predicted, pose,
                         covariance, state.status_of(status))
