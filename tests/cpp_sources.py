@@ -83,8 +83,6 @@ def _function_head(head: str) -> tuple[str, str] | None:
     for m in re.finditer(r"(~?[A-Za-z_]\w*|operator\s*\S+?)\s*\(", head):
         if m.group(1) in KEYWORDS or "=" in head[: m.start()]:
             return None
-        if head.count("(", m.end() - 1) > head.count(")", m.end() - 1):
-            return None  # a brace inside the parameters: a default argument's ``{}``
         end = closing(head, m.end() - 1)
         rest = head[end + 1 :].strip()
         # After the parameters: qualifiers, a trailing return type or a constructor's

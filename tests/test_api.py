@@ -37,19 +37,21 @@ def test_import_loads_no_cli_plot_or_bag_dependency():
 
 
 def test_the_first_result_of_every_method_comes_at_once_in_a_fresh_process():
-    """Nothing compiles at run time: the kernels were compiled at install."""
+    """Nothing compiles at run time: the kernels were compiled at install. Measured in
+    processor time of the fresh process, which a busy machine does not stretch as it
+    stretches wall time (a compiler at first call took tens of seconds of it)."""
     code = (
-        "import time; started = time.perf_counter(); "
+        "import time; started = time.process_time(); "
         "import numpy as np, scanlines; "
         "r = 2.0 / np.maximum(np.abs(np.cos(np.linspace(-1, 1, 361))), 0.3); "
         "scan = scanlines.Scan(r, -1.0, 2.0 / 360); "
         "found = [len(scanlines.extract(scan, method=m)) for m in scanlines.method_names()]; "
-        "print(min(found), time.perf_counter() - started)"
+        "print(min(found), time.process_time() - started)"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     fewest, seconds = out.stdout.split()
     assert int(fewest) >= 1
-    assert float(seconds) < 5.0  # 0.2-0.3 s here; a loaded CI machine gets ample room
+    assert float(seconds) < 5.0  # 0.2-0.3 s here
 
 
 def test_unknown_method_lists_the_valid_ones():

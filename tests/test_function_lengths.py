@@ -78,5 +78,5 @@ def test_the_readers_measure_known_functions():
     # a header and a long kernel.
     assert cpp[("cpp/scanlines/core.hpp", "py_mod")] <= 10
     assert cpp[("cpp/scanlines/methods/paper.cpp", "paper_scan")] > 60
-    assert python[("src/scanlines/methods/adaptive.py", "auto_abd_lambda")] > 3
+    assert python[("src/scanlines/methods/adaptive.py", "kernel_arguments")] > 3
     assert len(cpp) > 200

@@ -111,14 +111,16 @@ def test_coordinates_beyond_the_limit_are_refused_in_one_line(tmp_path, offset):
 
 
 def test_a_log_at_1e8_m_maps_as_fast_as_at_the_origin(tmp_path, extractor):
-    """Before: past 120 s and 777 MB."""
+    """Before: past 120 s and 777 MB. Processor time of this process, the two logs
+    interleaved (origin, far, origin), so that a busy machine slows both alike."""
+    paths = [shifted_sample("intel", offset, tmp_path) for offset in (0.0, 1e8, 0.0)]
     seconds = []
-    for offset in (0.0, 1e8):
-        path = shifted_sample("intel", offset, tmp_path)
-        started = time.perf_counter()
+    for path in paths:
+        started = time.process_time()
         mapped(path, extractor).line_map.lines()
-        seconds.append(time.perf_counter() - started)
-    assert seconds[1] < 3 * seconds[0] + 1.0
+        seconds.append(time.process_time() - started)
+    at_origin = min(seconds[0], seconds[2])
+    assert seconds[1] < 3 * at_origin + 1.0, seconds
 
 
 def test_a_pose_or_segment_beyond_the_extent_names_the_source_and_scan():

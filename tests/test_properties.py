@@ -86,8 +86,8 @@ def test_never_fails_and_orders_segments(configuration, scan):
 @settings_fast
 @given(scans())
 def test_every_point_of_a_segment_is_near_its_line(scan):
-    from scanlines.methods.adaptive import residual_tolerances
     from scanlines.sensor.profile import scan_noise_line
+    from step_kernels import residual_tolerances
 
     result = default(scan)
     bound = default.params["max_residual"]

@@ -11,43 +11,36 @@ from hypothesis import strategies as st
 
 from scanlines import Scan, extract
 from scanlines.evaluation.scenes import make_scene
-from scanlines.methods.adaptive import MAX_BRIDGED_SHARE, auto_abd_lambda, sweep_decided
-from scanlines.steps.breakpoints import (
-    RULE_CODES,
-    BreakpointRule,
+from scanlines.methods.adaptive import MAX_BRIDGED_SHARE
+from scanlines.steps.breakpoints import RULE_CODES, BreakpointRule
+from scanlines.steps.fit import PAPER, TLS, RunCost, prefix_moments, run_covariances
+from scanlines.steps.noise import NoiseLine, noise_at, scan_noise
+from scanlines.steps.returns import Returns, beam_gaps
+from scanlines.steps.select import BIC, SSE, threshold_grid
+from scenes import cast, returns_of, scan_of, square_room
+from step_kernels import (
+    auto_abd_lambda,
+    best_level,
+    break_beams,
     break_flags,
-    threshold,
-)
-from scanlines.steps.clusters import break_beams, cluster_bounds
-from scanlines.steps.corners import peak_positions, slope_scores, turn_scores
-from scanlines.steps.denoise import in_between_clusters, isolated_noise, literal_noise, window_means
-from scanlines.steps.fit import (
-    PAPER,
-    TLS,
-    RunCost,
+    cluster_bounds,
+    extend_sweep,
     fit_run,
-    prefix_moments,
-    run_covariances,
-)
-from scanlines.steps.noise import (
-    NoiseLine,
-    noise_at,
+    in_between_clusters,
+    isolated_noise,
+    level_corners,
+    literal_noise,
     offset_power_sums,
     parabola_at_centre,
-    scan_noise,
-)
-from scanlines.steps.returns import Returns, beam_gaps
-from scanlines.steps.select import (
-    BIC,
-    SSE,
-    best_level,
-    extend_sweep,
-    level_corners,
+    peak_positions,
+    slope_scores,
     start_sweep,
+    sweep_decided,
     sweep_levels,
-    threshold_grid,
+    threshold,
+    turn_scores,
+    window_means,
 )
-from scenes import cast, returns_of, scan_of, square_room
 
 
 def rule_of(name="paper", *, k=3.0, noise_margin=0.0, abd_lambda=10.0, pdbs_c0=0.1):
@@ -434,7 +427,8 @@ def test_contiguous_power_sums_are_the_small_integers():
 
 @pytest.mark.parametrize(("turn_sigma", "corners"), [(0.005, 1), (0.05, 0)])
 def test_a_junction_turning_within_the_noise_of_its_lines_is_no_corner(turn_sigma, corners):
-    from scanlines.steps.events import CORNER_SIGMAS, junction_events
+    from scanlines.steps.events import CORNER_SIGMAS
+    from step_kernels import junction_events
 
     # two 1 m pieces of wall meeting at a 4 deg turn, 3 m ahead
     turn = math.radians(4.0)

@@ -6,6 +6,9 @@
 
 #include "arrays.hpp"
 #include "scanlines/methods/adaptive.hpp"
+#include "scanlines/steps/corners.hpp"
+#include "scanlines/steps/denoise.hpp"
+#include "scanlines/steps/fit.hpp"
 #include "scanlines/steps/select.hpp"
 
 namespace scanlines::bind {
@@ -20,18 +23,19 @@ AdaptiveSettings adaptive_settings(const nb::dict& record) {
                setting<bool>(noise, "constant_noise")};
     nb::dict clustering = group(record, "clustering");
     s.clustering = {rule_spec_of(clustering), setting<bool>(clustering, "auto_abd_lambda"),
-                    setting<Index>(clustering, "denoise"), setting<Index>(clustering, "window"),
-                    setting<Index>(clustering, "min_cluster_points")};
+                    setting_in(clustering, "denoise", ISOLATED, NO_DENOISE),
+                    setting_in(clustering, "window", 1, MAX_SETTING_COUNT),
+                    setting_in(clustering, "min_cluster_points", 0, MAX_SETTING_COUNT)};
     nb::dict segments = group(record, "segments");
     auto& g = s.segments;
-    g.corner_score = setting<Index>(segments, "corner_score");
-    g.slope_window = setting<Index>(segments, "slope_window");
+    g.corner_score = setting_in(segments, "corner_score", TURN, DK_SIGNED);
+    g.slope_window = setting_in(segments, "slope_window", 0, MAX_SETTING_COUNT);
     g.auto_slope_window = setting<bool>(segments, "auto_slope_window");
     g.use_grid = setting<bool>(segments, "use_grid");
-    g.max_evaluations = setting<Index>(segments, "max_evaluations");
-    g.criterion = setting<Index>(segments, "criterion");
+    g.max_evaluations = setting_in(segments, "max_evaluations", 0, MAX_SETTING_COUNT);
+    g.criterion = setting_in(segments, "criterion", BIC, SSE);
     g.penalty = setting<double>(segments, "penalty");
-    g.fit = setting<Index>(segments, "fit");
+    g.fit = setting_in(segments, "fit", TLS, PAPER);
     g.shared_corner = setting<bool>(segments, "shared_corner");
     g.merge = setting<bool>(segments, "merge");
     g.merge_chi2 = setting<double>(segments, "merge_chi2");
@@ -53,7 +57,11 @@ void bind_own_steps(nb::module_& m) {
         "sweep_decided",
         [](Sweep& sweep, const CostTuple& cost, bool shared, Index done, Index n_points,
            double sigma, double penalty) {
-            return sweep_decided(sweep, cost_of(cost), shared, done, n_points, sigma, penalty);
+            RunCost run_cost = cost_of(cost);
+            if (static_cast<Index>(sweep.run_end.size()) != run_cost.moments.stride - 1)
+                value_error("the sweep was started on other points than the cost's");
+            expect_between("done", done, 0, sweep.useful);
+            return sweep_decided(sweep, run_cost, shared, done, n_points, sigma, penalty);
         },
         "Extend the sweep until the bic choice is certain: (best level, inserted).");
 }

@@ -5,12 +5,15 @@
 #include <nanobind/ndarray.h>
 
 #include <array>
+#include <cmath>
+#include <limits>
 #include <tuple>
 #include <cstring>
 #include <type_traits>
 #include <utility>
 #include <vector>
 
+#include "checks.hpp"
 #include "scanlines/core.hpp"
 #include "scanlines/steps/assemble.hpp"
 #include "scanlines/steps/breakpoints.hpp"
@@ -93,15 +96,31 @@ inline nb::tuple returns_to_numpy(Returns&& returns) {
 // Moments viewing the Python side's table (5, n + 1): no copy.
 inline Moments moments_of(const In<double, nb::ndim<2>>& table, double ox, double oy) {
     if (table.shape(0) != 5) throw nb::value_error("a moments table has 5 rows");
+    if (table.shape(1) < 1) throw nb::value_error("a moments table has n + 1 columns, got none");
     return Moments(table.data(), static_cast<Index>(table.shape(1)), ox, oy);
+}
+
+// The same, for the n points whose moments the table must hold.
+inline Moments moments_of(const In<double, nb::ndim<2>>& table, double ox, double oy,
+                          std::size_t points) {
+    Moments moments = moments_of(table, ox, oy);
+    expect_length("the moments table's columns", table.shape(1), points + 1,
+                  "n + 1 for the n points");
+    return moments;
 }
 
 // A BreakpointRule as the Python side's named tuple (kind, k, margin_sigmas,
 // tolerance_sigmas, noise, abd_lambda, pdbs_c0, jump_distance) holds it.
 inline BreakpointRule breakpoint_rule_of(const nb::handle& rule) {
+    if (nb::len(rule) != 8)
+        throw nb::value_error("a breakpoint rule has 8 fields (kind, k, margin_sigmas, "
+                              "tolerance_sigmas, noise, abd_lambda, pdbs_c0, jump_distance)");
     auto real = [&](std::size_t i) { return nb::cast<double>(nb::float_(rule[i])); };
     nb::handle noise = rule[4];
-    return {nb::cast<Index>(nb::int_(rule[0])),
+    if (nb::len(noise) != 2) throw nb::value_error("a rule's noise is (sigma0, per_metre)");
+    const Index kind = nb::cast<Index>(nb::int_(rule[0]));
+    expect_between("the rule's kind", kind, NO_RULE, FIXED);
+    return {kind,
             real(1),
             real(2),
             real(3),
@@ -114,7 +133,15 @@ inline BreakpointRule breakpoint_rule_of(const nb::handle& rule) {
 // A RunCost from the moments' table and the noise sums (both empty: the plain error).
 inline RunCost run_cost_of(Index fit, const In<double, nb::ndim<2>>& table, double ox, double oy,
                            const InReals& inv_r2, const InReals& variances) {
-    return {fit, moments_of(table, ox, oy), vector_of(inv_r2), vector_of(variances)};
+    expect_between("fit", fit, TLS, PAPER);
+    Moments moments = moments_of(table, ox, oy);
+    const std::size_t columns = table.shape(1);
+    if (inv_r2.shape(0) != 0 || variances.shape(0) != 0) {
+        expect_length("inv_r2", inv_r2.shape(0), columns, "running sums: n + 1 for n points");
+        expect_length("variances", variances.shape(0), columns,
+                      "running sums: n + 1 for n points");
+    }
+    return {fit, std::move(moments), vector_of(inv_r2), vector_of(variances)};
 }
 
 // The tuples the steps' Python side builds (scanlines.steps: Returns, RunCost with its
@@ -171,23 +198,59 @@ inline Stack stack_of(const In<double, nb::ndim<2>>& ranges, const In<bool, nb::
     if (valid.shape(0) != ranges.shape(0) || valid.shape(1) != ranges.shape(1) ||
         static_cast<Index>(cos.shape(0)) != beams || static_cast<Index>(sin.shape(0)) != beams)
         throw nb::value_error("ranges, valid and the bearing tables disagree in shape");
+    expect_step(step);
+    if (!std::isfinite(angle_min)) throw nb::value_error("angle_min must be finite");
     return {ranges.data(), valid.data(), rows, beams, view(cos), view(sin),
             step, full_circle, angle_min, {noise.first, noise.second}};
 }
 
-// A setting read by name from the settings the method's module passes (Python or numpy
-// numbers alike).
+// A setting read by name from the settings the method's module passes: plain Python numbers
+// (bool for a flag, int for a count or code, float or int for a number), nothing else.
 template <typename T>
 T setting(const nb::dict& settings, const char* name) {
     if (!settings.contains(name)) throw nb::key_error(name);
-    nb::object value = settings[name];
-    if constexpr (std::is_same_v<T, bool>)
-        return PyObject_IsTrue(value.ptr()) == 1;
-    else if constexpr (std::is_integral_v<T>)
-        return nb::cast<T>(nb::int_(value));
-    else
-        return nb::cast<T>(nb::float_(value));
+    PyObject* value = nb::object(settings[name]).ptr();
+    auto wrong = [&](const char* kind) {
+        throw nb::type_error((std::string("setting ") + name + " must be " + kind + ", got " +
+                              Py_TYPE(value)->tp_name)
+                                 .c_str());
+    };
+    if constexpr (std::is_same_v<T, bool>) {
+        if (!PyBool_Check(value)) wrong("a bool");
+        return value == Py_True;
+    } else if constexpr (std::is_integral_v<T>) {
+        if (!PyLong_CheckExact(value)) wrong("an int");
+        int overflow = 0;
+        long long out = PyLong_AsLongLongAndOverflow(value, &overflow);
+        if (overflow != 0) value_error(std::string("setting ") + name + " is out of range");
+        return static_cast<T>(out);
+    } else {
+        if (PyFloat_CheckExact(value)) return PyFloat_AS_DOUBLE(value);
+        if (!PyLong_CheckExact(value)) wrong("a float");
+        double out = PyLong_AsDouble(value);
+        if (out == -1.0 && PyErr_Occurred()) throw nb::python_error();
+        return out;
+    }
 }
+
+// An integer setting in low .. high (a count, window or code).
+inline Index setting_in(const nb::dict& settings, const char* name, Index low, Index high) {
+    Index value = setting<Index>(settings, name);
+    expect_between(name, value, low, high);
+    return value;
+}
+
+// A number setting that must not be NaN (NaN stands for "not given" only where it is read
+// with setting<double>).
+inline double number_setting(const nb::dict& settings, const char* name) {
+    double value = setting<double>(settings, name);
+    if (value != value) value_error(std::string("setting ") + name + " must be a number, got NaN");
+    return value;
+}
+
+// The largest count a setting may give (the most beams a reader accepts, MAX_COUNT in
+// scanlines/params.py, with room).
+constexpr Index MAX_SETTING_COUNT = 1'000'000'000;
 
 // One group of a method's settings record (scanlines.params.Settings.record).
 inline nb::dict group(const nb::dict& record, const char* name) {
@@ -198,21 +261,26 @@ inline nb::dict group(const nb::dict& record, const char* name) {
 // The clustering rule's fields (the shared clustering settings, RuleSpec in
 // scanlines/steps/breakpoints.py), by name.
 inline RuleSpec rule_spec_of(const nb::dict& clustering) {
-    return {setting<Index>(clustering, "breakpoints"), setting<double>(clustering, "k"),
-            setting<double>(clustering, "noise_k"),    setting<double>(clustering, "line_k"),
-            setting<double>(clustering, "abd_lambda"), setting<double>(clustering, "pdbs_c0"),
-            setting<double>(clustering, "jump_distance")};
+    return {setting_in(clustering, "breakpoints", NO_RULE, FIXED),
+            number_setting(clustering, "k"),
+            number_setting(clustering, "noise_k"),
+            number_setting(clustering, "line_k"),
+            setting<double>(clustering, "abd_lambda"),  // NaN: "auto" (the adaptive method's)
+            number_setting(clustering, "pdbs_c0"),
+            number_setting(clustering, "jump_distance")};
 }
 
 // The output settings every method has (output_settings in scanlines/steps/assemble.py).
 inline OutputBounds output_bounds_of(const nb::dict& output) {
-    return {setting<Index>(output, "min_points"), setting<double>(output, "min_length"),
+    return {setting_in(output, "min_points", 0, MAX_SETTING_COUNT),
+            setting<double>(output, "min_length"),
             setting<double>(output, "range_sigma")};
 }
 
 // The shared corner rule's bounds (EVENTS in scanlines/steps/events.py).
 inline CornerBounds corner_bounds_of(const nb::dict& events) {
-    return {setting<Index>(events, "corner_beams"), setting<double>(events, "corner_distance"),
+    return {setting_in(events, "corner_beams", 0, MAX_SETTING_COUNT),
+            setting<double>(events, "corner_distance"),
             setting<double>(events, "corner_angle")};
 }
 

@@ -10,7 +10,7 @@ namespace {
 // The settings record of scanlines/methods/paper.py, group by group.
 PaperSettings paper_settings(const nb::dict& record) {
     nb::dict clustering = group(record, "clustering");
-    return {{setting<Index>(clustering, "window"), setting<double>(clustering, "k")},
+    return {{setting_in(clustering, "window", 1, MAX_SETTING_COUNT), setting<double>(clustering, "k")},
             output_bounds_of(group(record, "output"))};
 }
 

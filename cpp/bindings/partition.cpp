@@ -47,6 +47,7 @@ void bind_partition(nb::module_& m) {
             std::size_t n = x.shape(0);
             if (y.shape(0) != n || sigma.shape(0) != n || opens.shape(0) != n)
                 throw nb::value_error("x, y, sigma and opens must have one length");
+            expect_between("min_points", min_points, 0, MAX_SETTING_COUNT);
             Reals xs(x.data(), x.data() + n), ys(y.data(), y.data() + n);
             Reals sigmas(sigma.data(), sigma.data() + n);
             Flags open_flags(opens.data(), opens.data() + n);

@@ -16,7 +16,7 @@ SplitSettings split_settings(const nb::dict& record) {
     nb::dict clustering = group(record, "clustering"), segments = group(record, "segments");
     return {{rule_spec_of(clustering), optional(clustering, "outlier_distance")},
             {setting<double>(segments, "split_distance"),
-             setting<Index>(segments, "split_reference"), optional(segments, "merge_chi2")},
+             setting_in(segments, "split_reference", CHORD, LINE), optional(segments, "merge_chi2")},
             output_of(group(record, "output"), group(record, "events"))};
 }
 

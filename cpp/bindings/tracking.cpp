@@ -1,5 +1,8 @@
 // Localisation on a line map (scanlines/map/tracking.hpp): one scan's filter step, called by
 // scanlines.map.filter, which builds the grid and documents the settings.
+#include <cmath>
+#include <string>
+
 #include "arrays.hpp"
 #include "scanlines/map/tracking.hpp"
 
@@ -15,7 +18,14 @@ constexpr std::size_t PARAMS = 23;
 TrackParams params_of(const InReals& values) {
     if (values.shape(0) != PARAMS) throw nb::value_error("the filter takes 23 settings");
     const double* v = values.data();
-    auto count = [](double x) { return static_cast<Index>(x); };
+    // A count from the settings' floats: a whole number in 0 .. MAX_SETTING_COUNT.
+    auto count = [&](std::size_t i, const char* name) {
+        double x = v[i];
+        if (!(x >= 0.0 && x <= static_cast<double>(MAX_SETTING_COUNT)) || x != std::floor(x))
+            value_error(std::string("the filter's ") + name + " must be a whole number in 0 .. " +
+                        text(MAX_SETTING_COUNT) + ", got " + std::to_string(x));
+        return static_cast<Index>(x);
+    };
     TrackParams p{};
     p.odometry_floor = v[0];
     p.odometry_per_metre = v[1];
@@ -24,7 +34,7 @@ TrackParams params_of(const InReals& values) {
     p.turn_per_metre = v[4];
     p.drift_walk = v[5];
     p.scale_walk = v[6];
-    p.normal_window = count(v[7]);
+    p.normal_window = count(7, "normal_window");
     p.neighbour_gap = v[8];
     p.flatness = v[9];
     p.normal_cosine = v[10];
@@ -32,13 +42,13 @@ TrackParams params_of(const InReals& values) {
     p.gate_sigmas = v[12];
     p.gate_min = v[13];
     p.gate_max = v[14];
-    p.line_returns = count(v[15]);
+    p.line_returns = count(15, "line_returns");
     p.return_sigma = v[16];
     p.line_sigma = v[17];
     p.huber = v[18];
-    p.iterations = count(v[19]);
+    p.iterations = count(19, "iterations");
     p.tolerance = v[20];
-    p.min_pairs = count(v[21]);
+    p.min_pairs = count(21, "min_pairs");
     p.max_chi_square = v[22];
     p.max_points = 0;
     return p;
@@ -61,8 +71,18 @@ nb::tuple track_scan_binding(const InReals& state, const InTable& covariance,
         start.shape(1) != 2 || end.shape(1) != 2 || sides.shape(0) != lines)
         throw nb::value_error("rho, alpha, start, end and sides must describe the same lines");
     if (shape.shape(0) != 5) throw nb::value_error("the grid's shape is x0, y0, cell, nx, ny");
-    const Index nx = static_cast<Index>(shape.data()[3]), ny = static_cast<Index>(shape.data()[4]);
-    if (nx < 1 || ny < 1 || static_cast<Index>(cell_start.shape(0)) != nx * ny + 1)
+    // The cells nx, ny: whole numbers, the grid no larger than its cell starts.
+    const double cells_x = shape.data()[3], cells_y = shape.data()[4];
+    if (!(cells_x >= 1.0 && cells_y >= 1.0) || cells_x != std::floor(cells_x) ||
+        cells_y != std::floor(cells_y) ||
+        cells_x * cells_y + 1.0 != static_cast<double>(cell_start.shape(0)))
+        throw nb::value_error("the grid has nx * ny + 1 cell starts");
+    if (!std::isfinite(shape.data()[0]) || !std::isfinite(shape.data()[1]) ||
+        !(shape.data()[2] > 0.0) || !std::isfinite(shape.data()[2]))
+        throw nb::value_error("the grid's x0, y0 must be finite and its cell above 0");
+    expect_at_least("max_points", max_points, 0);
+    const Index nx = static_cast<Index>(cells_x), ny = static_cast<Index>(cells_y);
+    if (static_cast<Index>(cell_start.shape(0)) != nx * ny + 1)
         throw nb::value_error("the grid has nx * ny + 1 cell starts");
     // The grid is built once by scanlines.map.filter.LineGrid, which checks it; here only
     // its ends (the kernel skips a cell or line id out of range rather than read past).

@@ -8,8 +8,6 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-import numpy as np
-
 from scanlines.errors import ParameterError
 from scanlines.untrusted import clip, quote
 
@@ -58,10 +56,11 @@ class Check:
 @dataclass(frozen=True, slots=True)
 class KernelField:
     """One field of a kernel's settings record: its name (``""``: the parameter's) and
-    ``encode``, the parameter's resolved value -> the field's numpy scalar."""
+    ``encode``, the parameter's resolved value -> the field's plain Python number (bool, int
+    or float: the compiled kernels read nothing else)."""
 
     name: str
-    encode: Callable[[Any], np.generic]
+    encode: Callable[[Any], bool | int | float]
 
 
 @dataclass(frozen=True, slots=True)
@@ -134,7 +133,7 @@ class Settings:
         return next(group for group, params in self.groups().items() if name in params)
 
     def record(self, params: Mapping[str, Any]) -> dict[str, dict[str, Any]]:
-        """The kernel's settings of resolved ``params``: group -> field -> numpy scalar
+        """The kernel's settings of resolved ``params``: group -> field -> plain Python number
         (:func:`kernel_settings` of each group)."""
         return {group: kernel_settings(spec, params) for group, spec in self.groups().items()}
 
@@ -372,11 +371,11 @@ def _checked(param: Param, name: str, value: Any) -> Any:
         raise ParameterError(str(error), parameter=name) from None
 
 
-def _given(value: Any, scale: float = 1.0) -> np.float64:
+def _given(value: Any, scale: float = 1.0) -> float:
     """A number, ``"auto"`` as NaN (not given) and ``None`` as inf (no bound)."""
     if value == "auto":
-        return np.float64(math.nan)
-    return np.float64(math.inf if value is None else value * scale)
+        return math.nan
+    return math.inf if value is None else float(value * scale)
 
 
 def as_float(name: str = "") -> KernelField:
@@ -391,12 +390,12 @@ def radians(name: str = "") -> KernelField:
 
 def coded(codes: Mapping[Any, int], name: str = "") -> KernelField:
     """A field of a choice, as its code."""
-    return KernelField(name, lambda value: np.int64(codes[value]))
+    return KernelField(name, lambda value: int(codes[value]))
 
 
 def flag(name: str, when: Any) -> KernelField:
     """A boolean field ``name``: whether the value is ``when`` (``"auto"``, ``None``...)."""
-    return KernelField(name, lambda value: np.bool_(value == when))
+    return KernelField(name, lambda value: bool(value == when))
 
 
 def _implied_field(check: Check) -> KernelField:
@@ -406,14 +405,14 @@ def _implied_field(check: Check) -> KernelField:
     if isinstance(inner, Number):
         return as_float()
     if isinstance(check, Integer):
-        return KernelField("", np.int64)
+        return KernelField("", int)
     if isinstance(check, Choice) and all(isinstance(o, bool) for o in check.options):
-        return KernelField("", np.bool_)
+        return KernelField("", bool)
     raise TypeError(f"declare the kernel fields of a parameter of {check.describe()}")
 
 
 def kernel_settings(spec: Mapping[str, Param], params: Mapping[str, Any]) -> dict[str, Any]:
-    """The fields of a kernel's settings record, name -> numpy scalar, as the parameters of
+    """The fields of a kernel's settings record, name -> plain Python number, as the parameters of
     ``spec`` declare them (in their order), of the resolved ``params``."""
     out: dict[str, Any] = {}
     for name, param in spec.items():

@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 
 from scanlines import Extractor, Scan, extract
-from scanlines.steps.fit import paper_run, prefix_moments
+from scanlines.steps.fit import prefix_moments
 from scenes import beam_of, cast, scan_of, square_room
+from step_kernels import paper_run
 
 SIGMA = 0.01  # 1 cm Gaussian range noise
 SEEDS = range(5)

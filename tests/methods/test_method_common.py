@@ -19,12 +19,18 @@ from scanlines.evaluation.metrics import aggregate, score
 from scanlines.evaluation.scores import Summary
 from scanlines.methods.consensus import inlier_runs
 from scanlines.sim import SimScan, random_scene
-from scanlines.steps.events import segment_events
-from scanlines.steps.fit import TLS, fit_many, hesse_difference, prefix_moments
-from scanlines.steps.merge import merge_by_chi_square, pair_chi_squares
+from scanlines.steps.fit import TLS, fit_many, prefix_moments
+from scanlines.steps.merge import pair_chi_squares
 from scanlines.steps.returns import Returns
-from scanlines.steps.split import CHORD, REFERENCE_CODES, chord_distance, split_at_farthest
+from scanlines.steps.split import CHORD, REFERENCE_CODES
 from scenes import beam_of, returns_of, scan_of, square_room
+from step_kernels import (
+    chord_distance,
+    hesse_difference,
+    merge_by_chi_square,
+    segment_events,
+    split_at_farthest,
+)
 from test_properties import check_order, scans
 
 # adaptive and paper (its paper preset as a method, NaN lines and all): their own tests

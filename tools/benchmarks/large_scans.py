@@ -39,9 +39,13 @@ def make_ranges(case: str, beams: int):
     return np.minimum(np.abs(tx), np.abs(ty)) + rng.normal(0.0, 0.01, beams)
 
 
-def measure(method: str, case: str, beams: int) -> dict:
+def measure(method: str, case: str, beams: int, scale: int = 0) -> dict:
     """In this process: one call on a small scan first (the bearing tables, lazy imports),
-    then time one call on the large scan."""
+    then time one call on the large scan.
+
+    With ``scale``, also the scan of ``beams // scale`` beams before and after the large one:
+    ``ratio`` is the large call's processor time over the mean of the small ones', measured
+    in one process (a machine's load slows both alike; linear cost gives ``scale``)."""
     import math
     import resource
     import time
@@ -50,13 +54,23 @@ def measure(method: str, case: str, beams: int) -> dict:
 
     extractor = Extractor(method)
     extractor(Scan(make_ranges("room", 100), angle_min=-math.pi, angle_increment=0.0628))
-    ranges = make_ranges(case, beams)
-    scan = Scan(ranges, angle_min=-math.pi, angle_increment=2 * math.pi / beams, range_max=40.0)
-    started = time.perf_counter()
-    result = extractor(scan)
-    seconds = time.perf_counter() - started
+
+    def timed(n: int):
+        ranges = make_ranges(case, n)
+        scan = Scan(ranges, angle_min=-math.pi, angle_increment=2 * math.pi / n, range_max=40.0)
+        started, cpu = time.perf_counter(), time.process_time()
+        result = extractor(scan)
+        return time.perf_counter() - started, time.process_time() - cpu, result
+
+    small = [timed(beams // scale)[1]] if scale else []
+    seconds, cpu_seconds, result = timed(beams)
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    return {"seconds": seconds, "peak_mb": peak_mb, "segments": len(result.segments)}
+    row = {"seconds": seconds, "peak_mb": peak_mb, "segments": len(result.segments)}
+    if scale:
+        small.append(timed(beams // scale)[1])
+        row["ratio"] = cpu_seconds / max(sum(small) / len(small), 1e-6)
+        row["cpu_seconds"], row["small_cpu_seconds"] = cpu_seconds, small
+    return row
 
 
 def main() -> None:
@@ -66,9 +80,10 @@ def main() -> None:
     parser.add_argument("--case", action="append", choices=CASES)
     parser.add_argument("--timeout", type=float, default=120.0)
     parser.add_argument("--one", nargs=2, help=argparse.SUPPRESS)  # method, case: the child
+    parser.add_argument("--scale", type=int, default=0, help=argparse.SUPPRESS)  # the ratio's
     args = parser.parse_args()
     if args.one:
-        print(json.dumps(measure(args.one[0], args.one[1], args.beams)))
+        print(json.dumps(measure(args.one[0], args.one[1], args.beams, args.scale)))
         return
     from scanlines import method_names
 

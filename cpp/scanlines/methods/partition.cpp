@@ -69,7 +69,7 @@ std::pair<Ints, Ints> partition_optimal_runs(const Reals& x, const Reals& y, con
     Sums sums = weighted_sums(ret, sigma, Reals(x.size(), 1.0), model_error, Flags(x.size(), true));
     const Objective objective{{penalty, clutter_cost, model_error}, min_points,
                               Residual::ALONG_BEAM, false};
-    Runs runs = optimal_runs(sums, opens, objective);
+    Runs runs = optimal_runs(sums, opens, objective, Ints(), Flags());
     return {runs.a, runs.b};
 }
 

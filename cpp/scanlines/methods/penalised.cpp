@@ -274,7 +274,7 @@ Runs two_stage_runs(const Sums& sums, const Flags& opens, const Objective& o) {
     }
     Objective relaxed = o;
     relaxed.penalty = COARSE_PENALTY * o.penalty;
-    Runs blocks = optimal_runs(coarse, coarse_opens, relaxed, at);
+    Runs blocks = optimal_runs(coarse, coarse_opens, relaxed, at, Flags());
     Flags allowed(n + 1, false);
     auto allow = [&](Index p) {
         for (Index q = std::max<Index>(0, p - BOUNDARY_WINDOW);
@@ -287,7 +287,7 @@ Runs two_stage_runs(const Sums& sums, const Flags& opens, const Objective& o) {
     }
     for (Index p = 0; p < n; ++p)
         if (opens[p]) allowed[p] = true;
-    return optimal_runs(sums, opens, o, {}, allowed);
+    return optimal_runs(sums, opens, o, Ints(), allowed);
 }
 
 Partition best_partition(const Returns& ret, const Reals& sigma, const Reals& footprint,
@@ -310,7 +310,8 @@ Partition best_partition(const Returns& ret, const Reals& sigma, const Reals& fo
     Runs runs;
     for (int round = 0; round < ROUNDS; ++round) {
         Sums sums = weighted_sums(ret, sigma, footprint, o.model_error, held);
-        runs = o.two_stage ? two_stage_runs(sums, opens, o) : optimal_runs(sums, opens, o);
+        runs = o.two_stage ? two_stage_runs(sums, opens, o)
+                           : optimal_runs(sums, opens, o, Ints(), Flags());
         // Joined until no two neighbours join: a long wall comes out of the look-back in
         // pieces, and a join of two long pieces can pay where each piece's first did not.
         for (std::size_t before = 0; before != runs.a.size();) {

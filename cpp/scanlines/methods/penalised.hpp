@@ -80,7 +80,7 @@ bool continuous(const Returns& ret, Index p, Index q, Index beams, double step,
 // `at`: the return position of each row of `sums` (empty: row p is return p); `allowed`:
 // the starts a segment longer than a few returns may have (empty: every start).
 Runs optimal_runs(const Sums& sums, const Flags& opens, const Objective& objective,
-                  const Ints& at = {}, const Flags& allowed = {});
+                  const Ints& at, const Flags& allowed);
 
 struct Partition {
     Runs runs;

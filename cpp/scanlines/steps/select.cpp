@@ -12,8 +12,11 @@ constexpr double INF = std::numeric_limits<double>::infinity();
 }
 
 Reals threshold_grid(double low, double high, double step, Index max_evaluations) {
-    Index count = static_cast<Index>(std::floor((high - low) / step + 1e-9)) + 1;
-    count = std::min(count, max_evaluations);
+    // Counted in double: a range of many steps must not overflow the integer.
+    const double steps = std::floor((high - low) / step + 1e-9) + 1.0;
+    Index count = max_evaluations;
+    if (!(steps >= static_cast<double>(max_evaluations)))
+        count = steps > 0.0 ? static_cast<Index>(steps) : 0;
     Reals out(static_cast<std::size_t>(std::max<Index>(count, 0)));
     for (std::size_t i = 0; i < out.size(); ++i) out[i] = low + step * static_cast<double>(i);
     return out;

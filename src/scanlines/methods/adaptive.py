@@ -16,15 +16,15 @@ What it does to each scan, in order (the kernel is C++, ``cpp/scanlines/methods/
    a window of returns on each side, and its peaks as candidates;
 5. the threshold sweep (:mod:`scanlines.steps.select`): every distinct cut the candidates
    allow, the one with the best BIC (each run's error in noise variances), stopped where
-   the choice is certain (:func:`sweep_decided`), then chosen again with the noise scaled
+   the choice is certain (``sweep_decided``), then chosen again with the noise scaled
    to the lines of the first choice (the median ``sqrt(cost / (n - 2))`` of their runs of
    8 points or more);
 6. the segments: cut at the chosen corners, each cut moved by one position where that
    fits better, neighbours merged by the criterion and by a chi-square test of their
-   lines, split where a return leaves the residual bound (:func:`residual_tolerances`),
+   lines, split where a return leaves the residual bound (``residual_tolerances``),
    kept when they hold ``min_points`` returns and are ``min_length`` long;
 7. the corners and jumps between the kept segments
-   (:func:`~scanlines.steps.events.junction_events`: two lines that do not meet near
+   (``junction_events``: two lines that do not meet near
    their ends are a jump; two whose turn is within the noise of their directions meet at
    no corner);
 8. total-least-squares lines with covariances from the noise (:mod:`scanlines.steps.fit`).
@@ -129,10 +129,11 @@ Missing beams: one missing beam is bridged, two or more end a cluster; full-circ
 scans join across the seam.
 
 The method's own steps (those no other method uses) are in its kernel file, not in
-:mod:`scanlines.steps`: ``abd_lambda="auto"`` (:func:`auto_abd_lambda`), the noise scale
-of a first choice, the early stop of the sweep (:func:`sweep_decided`), the refined cuts,
+:mod:`scanlines.steps`: ``abd_lambda="auto"`` (``auto_abd_lambda``), the noise scale
+of a first choice, the early stop of the sweep (``sweep_decided``), the refined cuts,
 the merge by the criterion and the split at the residual bound
-(:func:`residual_tolerances`); those the tests call are bound and wrapped below.
+(``residual_tolerances``); those the tests call are bound in
+:mod:`scanlines._core` (checked there), the package calls none of them directly.
 
 References
 ----------
@@ -152,7 +153,7 @@ import numpy as np
 
 from scanlines import _core
 from scanlines._core import adaptive_stack
-from scanlines.methods.base import CompiledMethod, kernel_values
+from scanlines.methods.base import CompiledMethod
 from scanlines.methods.paper import Paper
 from scanlines.params import (
     MAX_COUNT,
@@ -170,22 +171,17 @@ from scanlines.params import (
     radians,
     with_default,
 )
-from scanlines.steps.arrays import float64s
 from scanlines.steps.assemble import output_settings
 from scanlines.steps.breakpoints import CLUSTERING
 from scanlines.steps.corners import SCORE_CODES, SCORES
 from scanlines.steps.denoise import DENOISE_CODES
-from scanlines.steps.fit import FIT_CODES, FITS, RunCost
-from scanlines.steps.noise import NoiseLine
-from scanlines.steps.select import CRITERIA, CRITERION_CODES, Sweep, threshold_grid
+from scanlines.steps.fit import FIT_CODES, FITS
+from scanlines.steps.select import CRITERIA, CRITERION_CODES, threshold_grid
 
 __all__ = [
     "MAX_BRIDGED_SHARE",
     "SWEEP_CHUNK",
     "Adaptive",
-    "auto_abd_lambda",
-    "residual_tolerances",
-    "sweep_decided",
 ]
 
 
@@ -194,15 +190,15 @@ PAPER = Paper.parameters
 domains from them, and its ``paper`` preset their defaults."""
 
 
-def _count_or_zero(value: Any) -> np.int64:
+def _count_or_zero(value: Any) -> int:
     """An integer, ``"auto"`` as 0 (its flag says so)."""
-    return np.int64(0 if value == "auto" else value)
+    return 0 if value == "auto" else int(value)
 
 
-def _fixed_range(value: Any) -> np.bool_:
+def _fixed_range(value: Any) -> bool:
     """Whether a fixed threshold range (the kernel's ``grid``) replaces the candidates'
     own scores."""
-    return np.bool_(value != "auto")
+    return value != "auto"
 
 
 NOISE: dict[str, Param] = {
@@ -350,7 +346,7 @@ class Adaptive(CompiledMethod):
             low, high = self.params["dkth_range"]
             step, most = self.params["dkth_step"], self.params["max_evaluations"]
             grid = threshold_grid(low, high, step, most)
-        return kernel_values(self.record), grid
+        return self.record, grid
 
     @staticmethod
     def kernel(*arguments):
@@ -361,49 +357,9 @@ class Adaptive(CompiledMethod):
 
 MAX_BRIDGED_SHARE: float = _core.MAX_BRIDGED_SHARE
 """Largest step, as a share of the range, that the incidence bound alone bridges in
-:func:`auto_abd_lambda` (``sin 1 deg / sin 14 deg``, 7.2 %: ``lambda`` = 15 deg at 1 deg
+``auto_abd_lambda`` (``sin 1 deg / sin 14 deg``, 7.2 %: ``lambda`` = 15 deg at 1 deg
 resolution)."""
 
 
-def auto_abd_lambda(step: float) -> float:
-    """ABD's ``lambda`` (radians) for beams ``step`` apart.
-
-    10 deg (Borges and Aldon's: walls up to 80 deg incidence stay one cluster), raised
-    where it would bridge steps of more than :data:`MAX_BRIDGED_SHARE` of the range: on
-    scans coarser than 0.67 deg (15 deg at 1 deg). There, returns on a wall near grazing
-    incidence are many noise sigmas apart, so the line-continuation test keeps such walls
-    whole, while the 10 deg bound would also bridge depth steps of 10 % of the range,
-    which then pass for corners (``docs/decisions/breakpoints.md``). At most 90 deg
-    (scans coarser than 4 deg cannot keep to the share).
-    """
-    return _core.auto_abd_lambda(float(step))
-
-
-def residual_tolerances(r: np.ndarray, noise: NoiseLine, floor: float) -> np.ndarray:
-    """How far each return (at ranges ``r``) may lie from its segment's line: ``floor``
-    (metres), or 5 times the noise sigma at its range where that is more (Gaussian noise
-    puts one return in about 1.7 million farther, so on a noisy sensor the bound cuts at
-    shapes, not at noise)."""
-    return _core.residual_tolerances(float64s(r), tuple(noise), float(floor))
-
-
-#: Candidates :func:`sweep_decided` inserts between two checks of its bound.
+#: Candidates ``sweep_decided`` inserts between two checks of its bound.
 SWEEP_CHUNK = 8
-
-
-def sweep_decided(sweep: Sweep, cost: RunCost, shared: bool, done: int, n_points: int,
-                  sigma: float, penalty: float) -> tuple[int, int]:  # fmt: skip
-    """Extend ``sweep`` (from ``done`` inserted) until the ``"bic"`` choice with noise
-    ``sigma`` is certain; returns ``(best level, inserted)``.
-
-    Under ``"bic"`` the sweep (:func:`~scanlines.steps.select.start_sweep`,
-    :func:`~scanlines.steps.select.extend_sweep`, :data:`SWEEP_CHUNK` candidates at a
-    time) stops as soon as no lower threshold can win: the value of the cut with ``m``
-    candidates is at least ``penalty ln(n) segments[m]`` (its SSE term is not negative)
-    and ``segments`` never falls as thresholds fall, so once that charge alone reaches
-    the best value so far no later cut can win (ties go to the first): the level is the
-    full sweep's, found without inserting the rest.
-    """
-    return _core.sweep_decided(
-        sweep, cost, bool(shared), int(done), int(n_points), float(sigma), float(penalty)
-    )

@@ -42,7 +42,6 @@ __all__ = [
     "Method",
     "cluster_scan",
     "kernel_tuple",
-    "kernel_values",
 ]
 
 NO_CLUSTERING = "none"
@@ -78,8 +77,8 @@ class Method:
 
     @classmethod
     def record_of(cls, params: Mapping[str, Any]) -> dict[str, Any]:
-        """The kernel's settings of resolved ``params``: group -> field -> numpy scalar
-        (a method declaring flat ``parameters``: field -> numpy scalar)."""
+        """The kernel's settings of resolved ``params``: group -> field -> plain Python number
+        (a method declaring flat ``parameters``: field -> such a number)."""
         if cls.settings is None:
             return kernel_settings(cls.parameters, params)
         return cls.settings.record(params)
@@ -137,7 +136,7 @@ class CompiledMethod(Method):
         self.arguments = self.kernel_arguments()
 
     def kernel_arguments(self) -> tuple[Any, ...]:
-        return (kernel_values(self.record),)
+        return (self.record,)
 
     @staticmethod
     def kernel(*args: Any) -> tuple[np.ndarray, ...]:
@@ -156,19 +155,6 @@ class CompiledMethod(Method):
         return self.kernel(
             stack, valid, cos, sin, abs(step), full_circle, angle_min, self.noise, *self.arguments
         )
-
-
-def kernel_values(record: Mapping[str, Any]) -> dict[str, Any]:
-    """A settings record (field name -> numpy scalar, or group -> such a record) as plain
-    Python numbers, the form the compiled kernels read by name."""
-    return {
-        name: kernel_values(value) if isinstance(value, Mapping) else _plain(value)
-        for name, value in record.items()
-    }
-
-
-def _plain(value: Any) -> Any:
-    return value.item() if isinstance(value, np.generic) else value
 
 
 def kernel_tuple(kind: type[NamedTuple], *groups: Mapping[str, Any]):
@@ -245,7 +231,7 @@ def cluster_scan(returns, n_beams, step, full_circle, spec, noise):
     """The returns clustered by the rule of the
     :class:`~scanlines.steps.breakpoints.RuleSpec` ``spec``, its noise from the scan:
     ``(returns, start, end, breakpoints, ring)``
-    (:func:`~scanlines.steps.clusters.cluster_returns`; a ring is anchored by lines of
+    (``cluster_returns``; a ring is anchored by lines of
     five points on each side).
 
     :data:`~scanlines.steps.breakpoints.NO_RULE` makes one cluster of every return (a

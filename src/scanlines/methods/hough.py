@@ -22,7 +22,7 @@ Algorithm (Hough [1]_ in the normal parametrisation of Duda and Hart [2]_; the
    :mod:`scanlines.methods.consensus`;
 5. segments shorter than ``min_length`` are dropped; corners and (on the whole
    scan) breakpoints between consecutive segments by the shared rule of
-   :func:`scanlines.steps.events.segment_events`.
+   ``segment_events``.
 
 Defaults: ``angle_resolution = 1`` deg and ``rho_resolution = 0.02`` m (the cell
 is about the width of the 1-2 cm range noise; a 1 deg error tilts a 2 m wall by

@@ -10,12 +10,12 @@ Horowitz [2]_; as compared by the paper [3]_, sec. 4.3-4.5):
    a cluster closing on itself is first cut at its far corner); if that distance
    exceeds ``split_distance``,
    split there and repeat on both parts
-   (:func:`scanlines.steps.split.split_at_farthest`); the split point joins the part
+   (``split_at_farthest``); the split point joins the part
    whose line it is nearer;
 3. fit each part by total least squares (:mod:`scanlines.steps.fit`), drop parts
    with fewer than ``min_points`` points or shorter than ``min_length``;
 4. corners where consecutive parts of one cluster meet (the shared rule of
-   :func:`scanlines.steps.events.segment_events`); breakpoints from step 1.
+   ``segment_events``); breakpoints from step 1.
 
 Defaults: ``split_distance = 0.1`` m: with the 1-2 cm range noise of indoor
 laser scanners it is 5 to 10 standard deviations, so noise alone rarely splits
@@ -47,8 +47,6 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any, ClassVar
 
-import numpy as np
-
 from scanlines._core import iepf_stack
 from scanlines.methods.base import CompiledMethod
 from scanlines.params import Param, Settings, number
@@ -70,7 +68,7 @@ class SplitMethod(CompiledMethod):
     def record_of(cls, params: Mapping[str, Any]) -> dict[str, Any]:
         """The settings record of the parameters, and the method's ``split_reference``."""
         record = super().record_of(params)
-        record["segments"]["split_reference"] = np.int64(REFERENCE_CODES[cls.reference])
+        record["segments"]["split_reference"] = REFERENCE_CODES[cls.reference]
         return record
 
 

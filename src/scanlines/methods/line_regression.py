@@ -22,7 +22,7 @@ described by Nguyen et al. [2]_):
    every segment is refitted;
 6. segments with fewer than ``min_points`` (5) points or shorter than
    ``min_length`` (0 m) are dropped; corners by the shared rule of
-   :func:`scanlines.steps.events.segment_events`; breakpoints from step 1.
+   ``segment_events``; breakpoints from step 1.
 
 Defaults: ``window = 9``, ``fidelity = 4``, ``range_sigma = 0.02`` m,
 ``merge_chi2 = 6`` (the 95 % point of chi-square with 2 degrees of freedom).

@@ -12,7 +12,7 @@ Nguyen et al. [2]_):
    and the point after it;
 4. segments with fewer than ``min_points`` (5) points or shorter than
    ``min_length`` (0 m) are dropped; corners between consecutive segments of one
-   cluster by the shared rule of :func:`scanlines.steps.events.segment_events`;
+   cluster by the shared rule of ``segment_events``;
    breakpoints from step 1.
 
 Default ``track_distance = 0.1`` m: with 1-2 cm range noise a point of a

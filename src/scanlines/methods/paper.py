@@ -73,7 +73,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from scanlines._core import paper_stack
-from scanlines.methods.base import CompiledMethod, kernel_values
+from scanlines.methods.base import CompiledMethod
 from scanlines.params import MAX_METRES, Param, Settings, float_pair, integer, number
 from scanlines.steps.assemble import output_settings
 from scanlines.steps.breakpoints import CLUSTERING
@@ -114,7 +114,7 @@ class Paper(CompiledMethod):
         """The settings and the thresholds ``dkth`` tried."""
         low, high = self.params["dkth_range"]
         step, most = self.params["dkth_step"], self.params["max_evaluations"]
-        return kernel_values(self.record), threshold_grid(low, high, step, most)
+        return self.record, threshold_grid(low, high, step, most)
 
     @staticmethod
     def kernel(*arguments):

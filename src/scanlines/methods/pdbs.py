@@ -12,11 +12,11 @@ The "PDBS algorithm" the paper compares against [1]_ (sec. 4.3, Fig. 12a and 13a
 2. split every cluster at a fixed threshold, IEPF-style (Duda and Hart [3]_):
    at the point farthest from the chord between the cluster's end points, while
    that distance exceeds ``split_distance`` (0.1 m, as :mod:`~scanlines.methods.iepf`)
-   -- :func:`scanlines.steps.split.split_at_farthest`;
+   -- ``split_at_farthest``;
 3. total-least-squares line per part, parts with fewer than ``min_points`` (5)
    points or shorter than ``min_length`` (0 m) dropped;
 4. corners between consecutive parts of one cluster by the shared rule of
-   :func:`scanlines.steps.events.segment_events`; breakpoints from step 1.
+   ``segment_events``; breakpoints from step 1.
 
 It is :mod:`~scanlines.methods.iepf` with the PDBS clustering rule: the
 threshold grows with range like the beam spacing on a surface facing the sensor

@@ -22,7 +22,7 @@ described by Nguyen et al. [2]_):
    has fewer inliers, or ``max_misses`` lines in a row made no segment;
 6. segments shorter than ``min_length`` are dropped; corners and (on the whole
    scan) breakpoints between consecutive segments by the shared rule of
-   :func:`scanlines.steps.events.segment_events`.
+   ``segment_events``.
 
 The draws come from ``numpy.random.default_rng(seed)``, created anew for every
 scan: one seed gives the same result for the same scan.

@@ -14,7 +14,7 @@ laser_line_extraction [3]_):
 3. split: fit a total-least-squares line to each run, split at the interior
    point farthest from it while that distance exceeds ``split_distance``
    (0.05 m, the package's ``min_split_dist``)
-   (:func:`scanlines.steps.split.split_at_farthest`, reference ``LINE``); the split
+   (``split_at_farthest``, reference ``LINE``); the split
    point joins the part whose line it is nearer, so no point is lost;
 4. filter: runs with fewer than ``min_points`` (9, ``min_line_points``) points or
    shorter than ``min_length`` (0.5 m, ``min_line_length``) are dropped, as the
@@ -27,8 +27,8 @@ laser_line_extraction [3]_):
    ``range_std_dev``) and the angle difference wrapped to ``(-pi, pi]``; the most
    similar pair first, refitted over everything from the first's start to the
    second's end (returns of a dropped fragment between them included), until
-   none passes (:func:`scanlines.steps.merge.merge_by_chi_square`);
-6. corners by the shared rule of :func:`scanlines.steps.events.segment_events`,
+   none passes (``merge_by_chi_square``);
+6. corners by the shared rule of ``segment_events``,
    breakpoints from step 2.
 
 Differences from the package, on purpose: its split drops the point before the

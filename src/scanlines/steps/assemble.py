@@ -2,7 +2,7 @@
 
 :func:`assemble` fits the final runs and expresses lines, end points and events in
 the sensor frame; :func:`finish` is the last stage of every comparison method: drop
-small runs, find the events between the rest (:func:`~scanlines.steps.events.segment_events`)
+small runs, find the events between the rest (``segment_events``)
 and assemble. Both return the tuple :func:`to_extraction` turns into an
 :class:`~scanlines.Extraction`: ``first, last, n_points, lines, covariances,
 breakpoints, corners, outliers``.
@@ -52,7 +52,7 @@ class Output(NamedTuple):
     """What a comparison method keeps and reports: the smallest segment (points,
     metres), the range noise of the covariances (m; NaN: the noise model's) and the
     bounds of the corner rule
-    (:func:`~scanlines.steps.events.segment_events`; beams, metres, radians)."""
+    (``segment_events``; beams, metres, radians)."""
 
     min_points: int
     min_length: float
@@ -132,7 +132,7 @@ def finish(
     """The last stage of every comparison method: drop the runs with fewer than
     ``min_points`` points (two at least) or shorter end to end than ``min_length``, find
     the corners (and breakpoints) between the rest
-    (:func:`~scanlines.steps.events.segment_events`) and :func:`assemble` the result.
+    (``segment_events``) and :func:`assemble` the result.
 
     ``runs`` is ``(a, b, group)``; ``clusters`` is ``(clustered, ring, breakpoints)``:
     whether the breakpoints come from the method's clustering (else they are derived

@@ -41,13 +41,8 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-import numpy as np
-
-from scanlines import _core
 from scanlines.params import Param, choice, coded, number, radians, with_default
-from scanlines.steps.arrays import int64s
 from scanlines.steps.noise import NoiseLine
-from scanlines.steps.returns import Returns
 
 __all__ = [
     "ABD",
@@ -60,9 +55,7 @@ __all__ = [
     "RULE_CODES",
     "BreakpointRule",
     "RuleSpec",
-    "break_flags",
     "published_clustering",
-    "threshold",
 ]
 
 RULES = ("paper", "abd", "pdbs", "fixed")
@@ -163,25 +156,3 @@ class RuleSpec(NamedTuple):
 
 NO_RULE = -1
 """The ``breakpoints`` code of a method that works on the whole scan: cuts at missing beams only."""
-
-
-def threshold(rule: BreakpointRule, r_from: float, r_to: float, gap: int, step: float) -> float:
-    """Largest distance ``D`` between returns ``r_from`` and ``r_to``, ``gap`` beams apart
-    (the rules of the module docstring; the noise margin ``margin_sigmas`` times the
-    noise at ``r_from``)."""
-    return _core.threshold(rule, float(r_from), float(r_to), int(gap), float(step))
-
-
-def break_flags(returns: Returns, gap: np.ndarray, step: float, rule: BreakpointRule):
-    """For each pair of consecutive positions, True where a cluster ends.
-
-    A pair further apart than :func:`threshold` still continues its cluster where the
-    rule's line tolerance is on and the pair continues the line of the pair before and
-    of the pair after: the next return lies within the tolerance (grown with how far it
-    is extrapolated) of the line through the two before it, and the pair's step is at
-    most 2.5 times the shorter neighbouring step plus the tolerance (grazing walls grow
-    their spacing smoothly; a jump does not). Returns on a wall seen at grazing incidence
-    are far apart but collinear and evenly spaced, so a distance threshold alone cuts the
-    wall; a depth jump or a spike is neither.
-    """
-    return _core.break_flags(*returns, int64s(gap), float(step), rule)

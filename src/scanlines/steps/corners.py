@@ -24,42 +24,11 @@ References
 
 from __future__ import annotations
 
-import numpy as np
-
-from scanlines import _core
-from scanlines.steps.arrays import float64s, int64s
-from scanlines.steps.fit import Moments
-
 __all__ = [
     "SCORES",
     "SCORE_CODES",
-    "peak_positions",
-    "slope_scores",
-    "turn_scores",
 ]
 
 SCORES = ("turn", "dk", "dk_signed")
 SCORE_CODES = {name: code for code, name in enumerate(SCORES)}
 TURN, DK, DK_SIGNED = range(3)
-
-
-def slope_scores(r, gap, step: float, start, end, signed: bool) -> np.ndarray:
-    """Eq. 13 at every position (0 where a neighbour lies outside the cluster, or a zero
-    range gives no slope); ``signed`` leaves out the printed absolute values."""
-    return _core.slope_scores(
-        float64s(r), int64s(gap), float(step), int64s(start), int64s(end), signed
-    )
-
-
-def turn_scores(x, y, moments: Moments, start, end, window: int) -> np.ndarray:
-    """Absolute turn (radians) between lines fitted to ``window`` points on each side.
-
-    The line before ``p``, ``[p - w, p]``, is the line after ``p - w``: each run is
-    fitted once, except the shortened ones at a cluster's ends.
-    """
-    return _core.turn_scores(float64s(x), float64s(y), *moments, int64s(start), int64s(end), window)
-
-
-def peak_positions(score, start, end) -> np.ndarray:
-    """Positions ``i`` with ``|s_i| > |s_{i-1}|`` and ``|s_i| > |s_{i+1}|`` inside a cluster."""
-    return _core.peak_positions(float64s(score), int64s(start), int64s(end))

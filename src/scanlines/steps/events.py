@@ -43,16 +43,11 @@ from __future__ import annotations
 from scanlines import _core
 from scanlines.extraction import END_KINDS
 from scanlines.params import Param, integer, number, radians
-from scanlines.steps.arrays import float64s, int64s
-from scanlines.steps.fit import Moments
-from scanlines.steps.returns import Returns
 
 __all__ = [
     "CORNER_SIGMAS",
     "END_KINDS",
     "EVENTS",
-    "junction_events",
-    "segment_events",
 ]
 
 EVENTS: dict[str, Param] = {
@@ -71,57 +66,8 @@ EVENTS: dict[str, Param] = {
         (radians(),),
     ),
 }
-"""Parameters of the shared corner/breakpoint rule (:func:`segment_events`)."""
+"""Parameters of the shared corner/breakpoint rule (``segment_events``)."""
 
 CORNER_SIGMAS: float = _core.CORNER_SIGMAS
 """Standard deviations of the turn by which two segments' lines must turn to meet at a
-corner (:func:`junction_events`)."""
-
-
-def segment_events(
-    returns: Returns, n_beams: int, moments: Moments, a, b, group, clustered: bool,
-    wrap: bool, bounds: tuple[int, float, float],
-):  # fmt: skip
-    """Corners and breakpoints between consecutive segments ``[a, b]`` (module docstring).
-
-    ``clustered``: only segments of one ``group`` can meet and no breakpoints are
-    derived (the method's clustering has them); ``wrap``: the last segment is
-    followed by the first, across the seam. ``bounds`` is ``(corner_beams,
-    corner_distance, corner_angle)`` in beams, metres and radians.
-
-    A corner is reported at the return nearest the lines' intersection among those from
-    ``corner_beams`` positions before the first segment's last return to as many after
-    the second's first; the candidates run on to the widest span between the facing
-    ends of any pair of the scan (how the first, vectorised implementation searched:
-    every published figure of the comparison methods was measured with it).
-
-    Returns ``corners, breakpoints``, sorted distinct beams.
-    """
-    beams, distance, angle = bounds
-    return _core.segment_events(
-        *returns, int(n_beams), *moments, int64s(a), int64s(b), int64s(group), bool(clustered),
-        bool(wrap), int(beams), float(distance), float(angle),
-    )  # fmt: skip
-
-
-def junction_events(
-    returns: Returns, fit: int, moments: Moments, a, b, owner, shared: bool, ring: bool,
-    sigma: float, turn_sigma,
-):  # fmt: skip
-    """Beams of the corners where two kept segments of one cluster meet, and of jumps.
-
-    A shared corner is its shared point; otherwise the point nearer the two
-    lines' intersection among those between the segments. With ``sigma >= 0``,
-    two segments whose lines do not meet near their facing ends (farther than twice
-    the local spacing plus three ``sigma``) are two surfaces at different depths joined
-    by a mixed pixel or a small step: the junction is reported as a breakpoint (the last
-    beam of the first segment). Given ``turn_sigma`` (the standard deviation of each
-    segment's direction; empty: no test), a junction whose lines turn by less than
-    :data:`CORNER_SIGMAS` times the standard deviation of the turn is not a corner: the
-    noise hides it (the rule by which the simulator's truth makes such a turn
-    don't-care).
-    """
-    return _core.junction_events(
-        *returns, int(fit), *moments, int64s(a), int64s(b), int64s(owner), bool(shared),
-        bool(ring), float(sigma), float64s(turn_sigma),
-    )  # fmt: skip
+corner (``junction_events``)."""

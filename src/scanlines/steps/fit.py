@@ -38,9 +38,6 @@ __all__ = [
     "Moments",
     "RunCost",
     "fit_many",
-    "fit_run",
-    "hesse_difference",
-    "paper_run",
     "prefix_moments",
     "run_covariances",
     "run_labels",
@@ -86,34 +83,14 @@ def prefix_moments(x: np.ndarray, y: np.ndarray) -> Moments:
     return Moments(*_core.prefix_moments(x, y))
 
 
-def fit_run(fit: int, moments: Moments, a: int, b: int) -> tuple[float, float, float]:
-    """Line ``(rho, alpha, sse)`` of run ``[a, b]`` by fit code (:data:`TLS` or
-    :data:`PAPER`). The total-least-squares normal comes from the half-angle formulas of
-    the scatter (no trigonometric call); the paper's fit is eq. 15-17 on the five sub-set
-    means of the run, its ``sse`` eq. 14, NaN when the line has no slope. NaN for an
-    empty run."""
-    return _core.fit_run(fit, *moments, a, b)
-
-
 def tls_run(moments: Moments, a: int, b: int) -> tuple[float, float, float]:
     """Total-least-squares line ``(rho, alpha, sse)`` of run ``[a, b]``."""
     return _core.tls_run(*moments, a, b)
 
 
-def paper_run(moments: Moments, a: int, b: int) -> tuple[float, float, float]:
-    """The paper's fit (eq. 15-17) of run ``[a, b]``: ``(rho, alpha, sse)``."""
-    return fit_run(PAPER, moments, a, b)
-
-
 def fit_many(fit: int, moments: Moments, a: np.ndarray, b: np.ndarray):
-    """:func:`fit_run` over runs ``[a[k], b[k]]``: arrays ``rho, alpha, sse``."""
+    """``fit_run`` over runs ``[a[k], b[k]]``: arrays ``rho, alpha, sse``."""
     return _core.fit_many(fit, *moments, int64s(a), int64s(b))
-
-
-def hesse_difference(rho_1: float, alpha_1: float, rho_2: float, alpha_2: float):
-    """``(rho_1 - rho_2, alpha_1 - alpha_2)`` of two Hesse lines, the angle wrapped; of the
-    two forms of a line through the origin, the one with the smaller angle difference."""
-    return _core.hesse_difference(rho_1, alpha_1, rho_2, alpha_2)
 
 
 def run_labels(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -24,10 +24,8 @@ import numpy as np
 
 from scanlines import _core
 from scanlines.steps.arrays import float64s, int64s
-from scanlines.steps.fit import Moments
-from scanlines.steps.returns import Returns
 
-__all__ = ["merge_by_chi_square", "pair_chi_squares"]
+__all__ = ["pair_chi_squares"]
 
 
 def pair_chi_squares(rho, alpha, covariance, first, second) -> np.ndarray:
@@ -35,19 +33,3 @@ def pair_chi_squares(rho, alpha, covariance, first, second) -> np.ndarray:
     return _core.pair_chi_squares(
         float64s(rho), float64s(alpha), float64s(covariance), int64s(first), int64s(second)
     )
-
-
-def merge_by_chi_square(
-    returns: Returns, moments: Moments, a, b, group, sigma, threshold: float, inflate: bool
-):
-    """Merge neighbouring runs of one group while their lines pass the chi-square test.
-
-    The pair with the smallest chi-square below ``threshold`` is merged (the runs
-    and everything between them), refitted, and the test repeated; ``sigma`` is the
-    range noise of each return, ``inflate`` as :func:`~scanlines.steps.fit.run_covariances`
-    takes it. Returns new ``a, b, group`` arrays.
-    """
-    return _core.merge_by_chi_square(
-        *returns, *moments, int64s(a), int64s(b), int64s(group), float64s(sigma), float(threshold),
-        bool(inflate),
-    )  # fmt: skip

@@ -21,7 +21,7 @@ from typing import NamedTuple
 import numpy as np
 
 from scanlines import _core
-from scanlines.steps.arrays import float64s, int64s
+from scanlines.steps.arrays import int64s
 from scanlines.steps.returns import Returns
 
 __all__ = [
@@ -31,8 +31,6 @@ __all__ = [
     "covariance_sigmas",
     "local_residuals",
     "noise_at",
-    "offset_power_sums",
-    "parabola_at_centre",
     "scan_noise",
 ]
 
@@ -66,7 +64,7 @@ def local_residuals(returns: Returns, gap: np.ndarray) -> tuple[np.ndarray, np.n
 
     Each return with three neighbours on each side (no gap of two or more missing beams
     among them) gives the difference between its range and a parabola in the beam index
-    fitted to the window's ranges (:func:`parabola_at_centre`), over the square root of
+    fitted to the window's ranges (``parabola_at_centre``), over the square root of
     ``1 - h`` (``h`` the return's leverage in that fit). Seven points span more than one
     reading of sensors that repeat a range over two or three beams (the URG-04LX logs of
     the Mines robot), where the second difference of ranges reads zero. Along a straight
@@ -99,16 +97,3 @@ def covariance_sigmas(
     """Per-return sigma of the segment covariances: the ``range_sigma`` override where it
     is a number (NaN: not given), else ``noise`` if known, else the scan's own."""
     return _core.covariance_sigmas(float(range_sigma), tuple(noise), *returns, int64s(gap))
-
-
-def offset_power_sums(index: np.ndarray, a: int, b: int, i: int) -> tuple[float, ...]:
-    """Sums of ``t^0 .. t^4`` over the beam offsets ``t = index[p] - index[i]`` of
-    positions ``a..b``."""
-    return _core.offset_power_sums(int64s(index), a, b, i)
-
-
-def parabola_at_centre(index, r, a: int, b: int, i: int, sums) -> tuple[float, float, float]:
-    """Least-squares parabola of ``r`` over the beam offsets ``index - index[i]`` of
-    positions ``a..b`` (``sums``: their :func:`offset_power_sums`): ``(r[i] - fit at i,
-    leverage of i, slope at i per beam)``."""
-    return _core.parabola_at_centre(int64s(index), float64s(r), a, b, i, tuple(sums))

@@ -20,7 +20,6 @@ __all__ = [
     "MAX_BRIDGED_GAP",
     "Returns",
     "beam_gaps",
-    "rotated",
     "valid_returns",
     "without",
 ]
@@ -61,11 +60,6 @@ def beam_gaps(index: np.ndarray, n_beams: int) -> np.ndarray:
     """Beams between consecutive positions (1 = adjacent beams; a rotated full circle
     wraps once)."""
     return np.diff(index) % n_beams
-
-
-def rotated(returns: Returns, shift: int) -> Returns:
-    """``returns`` rotated so that position ``shift`` comes first."""
-    return Returns(*(np.roll(values, -shift) for values in returns))
 
 
 def without(returns: Returns, drop: np.ndarray) -> Returns:

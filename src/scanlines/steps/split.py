@@ -28,41 +28,11 @@ References
 
 from __future__ import annotations
 
-from scanlines import _core
-from scanlines.steps.arrays import float64s, int64s
-from scanlines.steps.fit import Moments
-
 __all__ = [
     "CHORD",
     "LINE",
     "REFERENCE_CODES",
-    "chord_distance",
-    "split_at_farthest",
 ]
 
 CHORD, LINE = 0, 1
 REFERENCE_CODES = {"chord": CHORD, "line": LINE}
-
-
-def chord_distance(x, y, a: int, b: int, p: int) -> float:
-    """Distance of point ``p`` to the chord from point ``a`` to point ``b``.
-
-    The chord is the segment between the two points: a point whose foot lies beyond an
-    end is measured to that end. For a cluster that nearly closes on itself (a room seen
-    all round) the chord is short and its line points anywhere; measured to the segment,
-    the farthest point is the far corner, not an arbitrary point of the side opposite the
-    chord.
-    """
-    return _core.chord_distance(float64s(x), float64s(y), a, b, p)
-
-
-def split_at_farthest(x, y, moments: Moments, a, b, group, threshold: float, reference: int):
-    """Each run ``[a, b]`` (of ``group``) split recursively, depth first (module docstring).
-
-    Returns ``a, b, group`` of the final runs, each input run's parts in order
-    (so sequence order for disjoint runs given in order).
-    """
-    return _core.split_at_farthest(
-        float64s(x), float64s(y), *moments, int64s(a), int64s(b), int64s(group), float(threshold),
-        int(reference),
-    )  # fmt: skip
