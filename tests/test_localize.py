@@ -122,6 +122,15 @@ def test_localize_command_on_the_intel_excerpt(tmp_path):
     # two runs part by up to half a metre before the corridor's end brings them together.
     assert np.mean(distance < 0.05) > 0.5
     assert np.max(distance) < 0.6
+    # With --sides a return matches only a face the map saw from its side: still there.
+    ran = scanlines(
+        "localize", log, "--map", tmp_path / "m.json", "--sides",
+        "--initial-pose", f"{first.timestamp},{x},{y},{yaw}", "--out", tmp_path / "s.tum",
+    )  # fmt: skip
+    assert ran.returncode == 0, ran.stderr
+    sided = load_trajectory(tmp_path / "s.tum")
+    i, j = match_times(sided.times, mapped.times)
+    assert np.median(np.linalg.norm(sided.poses[i, :2] - mapped.poses[j, :2], axis=1)) < 0.02
 
 
 def test_localize_errors_are_one_line(tmp_path):

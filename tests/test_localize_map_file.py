@@ -77,6 +77,9 @@ def test_the_room_map_reads(room, tmp_path):
         ("covariance", [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], "not a 2 x 2 matrix"),
         ("covariance", [[-1.0, 0.0], [0.0, 1.0]], "not positive semi-definite"),
         ("covariance", [[1.0, 0.5], [0.0, 1.0]], "not symmetric"),
+        ("seen_from", "inside", "field seen_from: 'inside' is not one of"),
+        ("seen_from", ["normal side"], "field seen_from: ['normal side'] is not one of"),
+        ("seen_from", True, "field seen_from: True is not one of"),
         ("covariance", [[1.0, False], [False, 1.0]], "not a 2 x 2 matrix of numbers"),
         ("covariance", [[1.0, 0.0], [0.0, "nan"]], "not a 2 x 2 matrix of numbers"),
         ("covariance", [[10**400, 0], [0, 1]], "not finite"),
@@ -86,7 +89,8 @@ def test_the_room_map_reads(room, tmp_path):
     ids=[
         "ends at 1e308", "end far out", "boolean start", "three numbers", "boolean rho",
         "rho 1e308", "alpha off", "3x3 covariance", "negative covariance",
-        "asymmetric covariance", "boolean covariance", "string covariance",
+        "asymmetric covariance", "unknown side", "side in a list", "boolean side",
+        "boolean covariance", "string covariance",
         "covariance beyond a double", "rho beyond a double", "start beyond a double",
     ],
 )  # fmt: skip

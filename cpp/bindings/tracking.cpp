@@ -57,7 +57,8 @@ TrackParams params_of(const InReals& values) {
 nb::tuple track_scan_binding(const InReals& state, const InTable& covariance,
                              const InReals& increment, bool first, const InReals& x,
                              const InReals& y, const InReals& rho, const InReals& alpha,
-                             const InTable& start, const InTable& end, const InReals& shape,
+                             const InTable& start, const InTable& end, const InInts& sides,
+                             const InReals& shape,
                              const InInts& cell_start, const InInts& cell_lines,
                              const InReals& settings, Index max_points) {
     constexpr std::size_t n = TRACK_STATE;
@@ -67,8 +68,8 @@ nb::tuple track_scan_binding(const InReals& state, const InTable& covariance,
     if (x.shape(0) != y.shape(0)) throw nb::value_error("x and y must have one length");
     const std::size_t lines = rho.shape(0);
     if (alpha.shape(0) != lines || start.shape(0) != lines || end.shape(0) != lines ||
-        start.shape(1) != 2 || end.shape(1) != 2)
-        throw nb::value_error("rho, alpha, start and end must describe the same lines");
+        start.shape(1) != 2 || end.shape(1) != 2 || sides.shape(0) != lines)
+        throw nb::value_error("rho, alpha, start, end and sides must describe the same lines");
     if (shape.shape(0) != 5) throw nb::value_error("the grid's shape is x0, y0, cell, nx, ny");
     // The cells nx, ny: whole numbers, the grid no larger than its cell starts.
     const double cells_x = shape.data()[3], cells_y = shape.data()[4];
@@ -98,6 +99,7 @@ nb::tuple track_scan_binding(const InReals& state, const InTable& covariance,
                   view(alpha),
                   View<double>(start.data(), static_cast<Index>(2 * lines)),
                   View<double>(end.data(), static_cast<Index>(2 * lines)),
+                  view(sides),
                   shape.data()[0],
                   shape.data()[1],
                   shape.data()[2],

@@ -247,6 +247,8 @@ TrackStep track_scan(const TrackVector& state, const TrackMatrix& covariance,
                 if (l < 0 || l >= lines) continue;
                 const double lnx = std::cos(grid.alpha[l]), lny = std::sin(grid.alpha[l]);
                 if (std::fabs(nwx * lnx + nwy * lny) < p.normal_cosine) continue;
+                const Index side = lnx * xe[0] + lny * xe[1] > grid.rho[l] ? 1 : 2;
+                if ((grid.sides[l] & side) == 0) continue;
                 const double sx = grid.start[2 * l], sy = grid.start[2 * l + 1];
                 const double abx = grid.end[2 * l] - sx, aby = grid.end[2 * l + 1] - sy;
                 const double apx = wx[k] - sx, apy = wy[k] - sy;

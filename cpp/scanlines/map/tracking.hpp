@@ -19,9 +19,11 @@ using TrackMatrix = std::array<double, TRACK_STATE * TRACK_STATE>;  // row-major
 
 // The map's lines and a uniform grid over them: cell (i, j) (i along x) lists the lines
 // within the grid's reach of the cell, ids cell_lines[cell_start[c] .. cell_start[c + 1]) of
-// cell c = i * ny + j.
+// cell c = i * ny + j. `sides`: the sides each line was seen from (bit 1: the side its normal
+// points to, bit 2: the other); a return matches a line only from a side it was seen from.
 struct LineGrid {
     View<double> rho, alpha, start, end;  // start, end: L x 2, row-major
+    View<Index> sides;
     double x0, y0, cell;
     Index nx, ny;
     View<Index> cell_start, cell_lines;

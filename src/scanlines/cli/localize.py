@@ -44,14 +44,17 @@ INITIAL_POSE_TOLERANCE = 0.05
 
 def initial_pose_of(log: Path, options, given: str | None, source: Path | None):
     """``(t, (x, y, yaw))``: ``--initial-pose``, or the pose of ``--initial-pose-from`` at
-    the time of the log's first scan (the nearest within :data:`INITIAL_POSE_TOLERANCE`)."""
+    the time of the log's first scan (the nearest within :data:`INITIAL_POSE_TOLERANCE`);
+    ``None`` when neither is given (the pose is searched for on the map)."""
     from scanlines.errors import ParameterError
 
-    if (given is None) == (source is None):
+    if given is not None and source is not None:
         raise ParameterError(
             "give one of --initial-pose T,X,Y,YAW or --initial-pose-from POSES.tum (the "
-            "poses `scanlines map LOG --align --poses-out POSES.tum` writes)"
+            "poses `scanlines map LOG --align --poses-out POSES.tum` writes), not both"
         )
+    if given is None and source is None:
+        return None
     if given is not None:
         return parse_initial_pose(given)
     from scanlines.io import open_log
@@ -86,7 +89,9 @@ def localize_command(
             "--initial-pose",
             help="T,X,Y,YAW: where the robot stands (map frame, metres, heading in radians) "
             "at time T (seconds of the log's clock); earlier scans are skipped. A pose of "
-            "the map's trajectory (`map --align --poses-out`), or one read off the map.",
+            "the map's trajectory (`map --align --poses-out`), or one read off the map. "
+            "Without it (nor --initial-pose-from) the pose is searched for on the map "
+            "(global localisation) from the first scan.",
         ),
     ] = None,
     initial_pose_from: Annotated[
@@ -98,6 +103,15 @@ def localize_command(
             "this TUM file (the poses `map --align --poses-out` wrote for the map).",
         ),
     ] = None,
+    sides: Annotated[
+        bool,
+        typer.Option(
+            "--sides",
+            help="Match a return only to a wall's face the map saw from the return's side "
+            "(by default the sides the map keeps are ignored: a wall the map holds only "
+            "from behind still holds the pose).",
+        ),
+    ] = False,
     overwrite: OverwriteOption = False,
     range_max: RangeMaxOption = None,
 ) -> None:
@@ -107,8 +121,9 @@ def localize_command(
     from scanlines.cli.progress import progress
     from scanlines.io import open_log
     from scanlines.map.export import naming_output
+    from scanlines.map.filter import FilterSettings
     from scanlines.map.localize import localize, read_line_map
-    from scanlines.map.tracking import write_tracked
+    from scanlines.map.tracked import write_tracked
 
     options = reader_options(range_max=range_max)
     initial = initial_pose_of(log, options, initial_pose, initial_pose_from)
@@ -120,19 +135,24 @@ def localize_command(
         open_log(log, options=options) as reader,
         progress(f"localising {log.name}", reader.scans_in_file) as tick,
     ):
-        run = localize(reader.enumerate(), lines, frame, initial, on_scan=tick.scan)
+        settings = FilterSettings(sides=sides)
+        run = localize(
+            reader.enumerate(), lines, frame, initial, settings=settings, on_scan=tick.scan
+        )
     seconds = time.perf_counter() - started
     if not run.tracked:
         from scanlines.errors import ParameterError
 
-        raise ParameterError(f"{log}: no scan with a pose at or after time {initial[0]!r}")
+        when = "" if initial is None else f" at or after time {initial[0]!r}"
+        raise ParameterError(f"{log}: no scan with a pose{when}")
     with naming_output(out, "the poses"):
         path, sidecar, _ = write_tracked(run.tracked, frame, out)
     read = len(run.tracked) + run.skipped + run.without_pose
     aligned = sum(1 for t in run.tracked if t.aligned)
     typer.echo(
         f"{len(run.tracked)} scans localised on {len(lines.rho)} map lines ({aligned} aligned), "
-        f"{run.skipped} before time {initial[0]:g} skipped; {read / seconds:.0f} scans/s; "
+        + ("" if initial is None else f"{run.skipped} before time {initial[0]:g} skipped; ")
+        + f"{read / seconds:.0f} scans/s; "
         f"wrote {path} and {sidecar}"
     )
     typer.echo(
@@ -146,5 +166,32 @@ def localize_command(
             "status 'did not fit' in the covariances)",
             err=True,
         )
+    _report_lost(run)
     if run.without_pose:
         typer.echo(f"{run.without_pose} scans carry no odometry pose and were left out", err=True)
+
+
+def _report_lost(run) -> None:
+    """Where the filter was lost and found again (stderr), and its state at the end."""
+    lost = sum(1 for t in run.tracked if t.status == "lost")
+    if not lost and not run.lost_at:
+        return
+    pairs = ", ".join(
+        f"lost at scan {a}" + (f", found at {b}" if b is not None else ", not found")
+        for a, b in _episodes(run.lost_at, run.found_at)
+    )
+    end = "lost" if run.tracked[-1].status == "lost" else "found"
+    typer.echo(
+        f"{lost} scans lost (status 'lost' in the covariances){': ' + pairs if pairs else ''}"
+        f"; {end} at the end",
+        err=True,
+    )
+
+
+def _episodes(lost_at: list[int], found_at: list[int]) -> list[tuple[int, int | None]]:
+    """Each scan the filter declared itself lost with the next scan it was found at."""
+    out = []
+    for a in lost_at:
+        after = [b for b in found_at if b > a]
+        out.append((a, after[0] if after else None))
+    return out

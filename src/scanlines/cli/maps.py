@@ -230,7 +230,7 @@ def _report_tracking(build, summary: dict[str, Any], poses_out: Path | None, clo
     """The summary of a tracked map: how far alignment moved the poses, the scans that did
     not fit (on stderr), and the poses written."""
     from scanlines.map.export import naming_output
-    from scanlines.map.tracking import write_tracked
+    from scanlines.map.tracked import write_tracked
 
     def mm(spread: dict[str, float | None]) -> str:
         m, top = spread["median"], spread["max"]
@@ -329,7 +329,7 @@ def map_meta(log: Path, build, prepared: dict[str, Any]) -> dict[str, Any]:
     extractor = prepared["extractor"]
     tracking = {}
     if build.track is not None:
-        from scanlines.map.tracking import tracking_summary
+        from scanlines.map.tracked import tracking_summary
 
         summary = tracking_summary(build.tracked, build.frame)
         tracking = {"tracking": {**summary, "settings": build.track.to_dict()}}

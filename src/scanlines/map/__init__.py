@@ -13,9 +13,11 @@ Modules: ``fusion`` (association and fusion, :class:`LineMap`), ``poses`` (where
 stood), ``build`` (a log to a map), ``export`` (GeoJSON, SVG, DXF, JSON), ``holdout``
 (the map scored on scans it did not see: ``scanlines eval --map``), ``align`` (a scan
 pulled onto the map from its pose), ``tracking`` (odometry as the prior, each scan aligned:
-``scanlines map --align``), ``localize`` (a log tracked on a saved map:
-``scanlines localize``) and ``filter`` (its filter: the odometry's errors learnt, returns
-matched to map lines through a grid).
+``scanlines map --align``), ``filter`` (the filter of ``scanlines localize``: odometry as
+the prior, its errors learnt, returns matched to map lines through a grid), ``tracked``
+(tracked poses summarised and written),
+``localize`` (a log tracked on a saved map: ``scanlines localize``) and ``relocalise``
+(global localisation: pose hypotheses from a scan's segments, kept when scans agree).
 """
 
 from scanlines.map.build import MapBuild, build_map

@@ -58,12 +58,15 @@ class AlignSettings:
 
 
 class LineSet(NamedTuple):
-    """Map lines as arrays: ``rho, alpha`` (L), ``start, end`` (L x 2)."""
+    """Map lines as arrays: ``rho, alpha`` (L), ``start, end`` (L x 2), and the sides each
+    was seen from (L; :data:`~scanlines.map.fusion.FRONT`, ``BACK`` or ``BOTH``; ``None``:
+    both)."""
 
     rho: np.ndarray
     alpha: np.ndarray
     start: np.ndarray
     end: np.ndarray
+    sides: np.ndarray | None = None
 
 
 class Alignment(NamedTuple):
@@ -86,7 +89,7 @@ def _near(lines: LineSet, world: np.ndarray, margin: float) -> LineSet:
     box_lo = np.minimum(lines.start, lines.end)
     box_hi = np.maximum(lines.start, lines.end)
     keep = np.all((box_lo <= hi) & (box_hi >= lo), axis=1)
-    return LineSet(*(array[keep] for array in lines))
+    return LineSet(*(None if array is None else array[keep] for array in lines))
 
 
 def nearest_segments(

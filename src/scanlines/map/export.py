@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from scanlines.errors import ParameterError
-from scanlines.map.fusion import MapLines
+from scanlines.map.fusion import BACK, BOTH, FRONT, MapLines
 from scanlines.outputs import (
     OutputError,
     check_output,
@@ -94,6 +94,11 @@ def _ezdxf():
     return ezdxf
 
 
+#: How a map file names the sides a line was seen from (``seen_from``): the side its normal
+#: ``(cos alpha, sin alpha)`` points to, the other side, or both.
+SIDE_NAMES = {FRONT: "normal side", BACK: "other side", BOTH: "both sides"}
+
+
 def map_records(lines: MapLines) -> list[dict[str, Any]]:
     """One dict per map line: geometry (``start``, ``end`` in the world frame), estimate
     (``rho``, ``alpha`` in the map's local frame, about ``lines.origin``), covariance and
@@ -114,6 +119,7 @@ def map_records(lines: MapLines) -> list[dict[str, Any]]:
                 "segments": int(lines.segments[k]),
                 "first_scan": int(lines.first_scan[k]),
                 "last_scan": int(lines.last_scan[k]),
+                "seen_from": SIDE_NAMES[BOTH if lines.sides is None else int(lines.sides[k])],
             }
         )
     return records

@@ -32,6 +32,12 @@ Matching, made to refuse rather than pull wrongly:
   heading times range), within ``gate_min`` and ``gate_max``; the candidates come from a
   uniform grid of the map's lines (:func:`line_grid`), so a query looks at the few lines of
   one cell, whatever the map's size;
+* a map line is a wall's face seen from one side or both (:mod:`scanlines.map.fusion`);
+  with ``sides`` a return matches it only from a side it was seen from, so the far face of
+  a thin wall, or a wall the map holds only from behind, does not pull the pose. Off by
+  default: on the raw Intel scans it halves the largest error (0.41 to 0.23 m), on raw
+  Freiburg it raises the RMSE from 53 mm to 0.35 m, where the robot sees walls the map holds
+  only from their other side (docs/MEASUREMENTS.md);
 * a map line met by fewer than ``line_returns`` returns is ignored (a door that moved, a
   corner's few returns);
 * each residual's variance is the return's noise plus ``line_sigma`` squared times the
@@ -56,6 +62,7 @@ import numpy as np
 
 from scanlines.geometry.poses import Pose
 from scanlines.map.align import LineSet
+from scanlines.map.fusion import BOTH
 
 __all__ = ["FilterSettings", "FilterStep", "LineGrid", "LineMapFilter", "line_grid"]
 
@@ -75,7 +82,8 @@ class FilterSettings:
     ``turn_floor`` + ``turn_per_radian`` x turn + ``turn_per_metre`` x distance for the
     heading), the prior of the heading drift (radians per metre) and of the scale error, and
     their random walks per metre driven. ``max_points``: the returns used (evenly
-    subsampled), 0 for all."""
+    subsampled), 0 for all. ``sides``: a return matches only a face seen from its side
+    (False, the default: the sides a map keeps are ignored)."""
 
     odometry_floor: float = 0.005
     odometry_per_metre: float = 0.05
@@ -104,6 +112,7 @@ class FilterSettings:
     min_pairs: int = 10
     max_chi_square: float = 16.27
     max_points: int = 400
+    sides: bool = False
 
     def __post_init__(self) -> None:
         from scanlines.errors import ParameterError
@@ -224,12 +233,24 @@ class LineMapFilter:
 
     def __init__(self, lines: LineSet, settings: FilterSettings | None = None) -> None:
         self.settings = settings or FilterSettings()
-        self.lines = LineSet(*(np.ascontiguousarray(a, dtype=np.float64) for a in lines))
-        self.grid = line_grid(self.lines, self.settings.gate_max)
+        self.use_lines(lines)
         self._values = self.settings.kernel_values()
         self.state: np.ndarray | None = None
         self.covariance: np.ndarray | None = None
         self._first = True
+
+    def use_lines(self, lines: LineSet) -> None:
+        """Match the next scans to ``lines`` (a map that grows: ``scanlines map --align``);
+        lines without ``sides`` are taken as seen from both sides."""
+        sides = lines.sides
+        if sides is None or not self.settings.sides:
+            sides = np.full(len(lines.rho), BOTH)
+        self.lines = LineSet(
+            *(np.ascontiguousarray(a, dtype=np.float64).reshape(-1, *np.shape(a)[1:])
+              for a in lines[:4]),
+            np.ascontiguousarray(sides, dtype=np.int64),
+        )  # fmt: skip
+        self.grid = line_grid(self.lines, self.settings.gate_max)
 
     def start(self, pose: Pose, sigma: tuple[float, float] = INITIAL_SIGMA) -> None:
         """Start (or restart) at the local ``pose`` with standard deviations ``sigma``
@@ -256,7 +277,7 @@ class LineMapFilter:
         state, covariance, predicted, pairs, matched, chi2, status = _core.track_scan(
             self.state, self.covariance, move, self._first or increment is None,
             np.ascontiguousarray(points[:, 0]), np.ascontiguousarray(points[:, 1]),
-            lines.rho, lines.alpha, lines.start, lines.end,
+            lines.rho, lines.alpha, lines.start, lines.end, lines.sides,
             grid.shape, grid.cell_start, grid.cell_lines, self._values,
             self.settings.max_points,
         )  # fmt: skip

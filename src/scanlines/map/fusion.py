@@ -18,6 +18,11 @@ neighbouring scans are alike rather than independent, a line fused from many vie
 known better than the poses that placed it: ``model_sigma_rho``, ``model_sigma_alpha``
 (by default the pose's own sigmas) are added to every gate's covariance, so two pieces of
 one wall, each fused from many scans, still agree.
+
+A line keeps the side its returns came from (:data:`FRONT`: the side its normal
+``(cos alpha, sin alpha)`` points to, where ``x cos(alpha) + y sin(alpha) > rho``;
+:data:`BACK`: the other; both where both were seen): the sensor's side of each segment it
+fused. The two faces of a thin wall are two lines, each seen from its own side.
 """
 
 from __future__ import annotations
@@ -32,7 +37,10 @@ from scanlines.extraction import ALPHA, END_X, END_Y, RHO, START_X, START_Y, Ext
 from scanlines.map.frame import LocalFrame, MapError, check_segments
 from scanlines.map.grid import box_pairs, boxes_of
 
-__all__ = ["FusionSettings", "LineMap", "MapLines"]
+__all__ = ["BACK", "BOTH", "FRONT", "FusionSettings", "LineMap", "MapLines", "side_of"]
+
+#: The sides of a line a sensor saw it from (bits): its normal's side, the other, both.
+FRONT, BACK, BOTH = 1, 2, 3
 
 _CHI2_2DOF = {0.95: 5.991, 0.99: 9.210, 0.999: 13.816}
 
@@ -91,7 +99,8 @@ class MapLines:
     ``(rho, alpha)``; ``start, end``: ``L x 2`` endpoints of the extent in the local frame
     (:attr:`world_start`, :attr:`world_end` in the world); ``scans``, ``returns``: support;
     ``first_scan``, ``last_scan``: log indices of the first and last scan that saw the line;
-    ``segments``: segments fused into it.
+    ``segments``: segments fused into it; ``sides``: the sides it was seen from
+    (:data:`FRONT`, :data:`BACK` or :data:`BOTH`; ``None``: not known, both).
     """
 
     rho: np.ndarray
@@ -105,6 +114,7 @@ class MapLines:
     last_scan: np.ndarray
     segments: np.ndarray
     origin: tuple[float, float] = (0.0, 0.0)
+    sides: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.rho)
@@ -129,6 +139,18 @@ class MapLines:
     @property
     def lengths(self) -> np.ndarray:
         return np.hypot(*(self.end - self.start).T) if len(self) else np.zeros(0)
+
+
+def side_of(rho, alpha, x: float, y: float):
+    """The side (:data:`FRONT` or :data:`BACK`) of lines ``(rho, alpha)`` a sensor at
+    ``(x, y)`` sees them from."""
+    offset = np.cos(alpha) * x + np.sin(alpha) * y - rho
+    return np.where(offset > 0, FRONT, BACK).astype(np.int8)
+
+
+def _swap_sides(sides):
+    """The sides of a line whose normal was turned round."""
+    return ((sides & FRONT) << 1) | ((sides & BACK) >> 1)
 
 
 def _wrap(angle):
@@ -176,6 +198,7 @@ class LineMap:
         self._last = grown(get("_last"), (), np.int64)
         self._fused = grown(get("_fused"), (), np.int64)
         self._box = grown(get("_box"), (4,), np.float64)  # x_min, y_min, x_max, y_max
+        self._sides = grown(get("_sides"), (), np.int8)
 
     def __len__(self) -> int:
         return self._n
@@ -201,14 +224,16 @@ class LineMap:
             raise MapError(f"scan {scan_index}: a segment's line is not finite")
         covariances = np.asarray(world.covariances)[keep] + self._pose_noise(lines, pose)
         n_points = np.asarray(world.n_points)[keep]
+        sides = side_of(lines[:, RHO], lines[:, ALPHA], pose[0], pose[1])
         self.segments_seen += len(lines)
         if len(lines):
             targets = self._associate(lines, covariances)
             for k, target in enumerate(targets):
+                seen = (int(n_points[k]), scan_index, int(sides[k]))
                 if target < 0:
-                    self._append(lines[k], covariances[k], int(n_points[k]), scan_index)
+                    self._append(lines[k], covariances[k], *seen)
                 else:
-                    self._fuse(int(target), lines[k], covariances[k], int(n_points[k]), scan_index)
+                    self._fuse(int(target), lines[k], covariances[k], *seen)
         self._since_merge += 1
         if self._since_merge >= self.settings.merge_every:
             self._since_merge = 0
@@ -276,7 +301,7 @@ class LineMap:
         ok = (d2 <= self.settings.chi2) & (gap <= self.settings.max_gap)
         return np.where(ok, d2, np.inf)
 
-    def _append(self, line, cov, n_points: int, scan_index: int) -> None:
+    def _append(self, line, cov, n_points: int, scan_index: int, side: int) -> None:
         if self._n == len(self._rho):
             self._grow(2 * len(self._rho))
         k = self._n
@@ -286,12 +311,15 @@ class LineMap:
         self._box[k] = boxes_of(self._ends(k)[None], 0.0)[0]
         self._scans[k], self._returns[k], self._fused[k] = 1, n_points, 1
         self._first[k] = self._last[k] = scan_index
+        self._sides[k] = side
 
-    def _fuse(self, k: int, line, cov, n_points: int, scan_index: int) -> None:
+    def _fuse(self, k: int, line, cov, n_points: int, scan_index: int, side: int) -> None:
         rho, alpha = float(line[RHO]), float(line[ALPHA])
         if abs(_wrap(alpha - self._alpha[k])) > math.pi / 2:  # the same line, other normal
             rho, alpha = -rho, float(_wrap(alpha + math.pi))
             cov = cov * np.array([[1.0, -1.0], [-1.0, 1.0]])
+            side = int(_swap_sides(side))
+        self._sides[k] |= side
         ends = np.vstack((self._ends(k), _ends_of(line[None])[0]))
         self._combine(k, rho, alpha, cov)
         self._t[k] = _extent(self._rho[k], self._alpha[k], ends)
@@ -315,6 +343,7 @@ class LineMap:
         if mean[0] < 0:
             mean = np.array([-mean[0], mean[1] + math.pi])
             fused_cov = fused_cov * np.array([[1.0, -1.0], [-1.0, 1.0]])
+            self._sides[k] = _swap_sides(self._sides[k])
         self._rho[k], self._alpha[k] = mean[0], float(_wrap(mean[1]))
         self._cov[k] = (fused_cov + fused_cov.T) / 2
 
@@ -368,9 +397,12 @@ class LineMap:
         """Line ``j`` fused into line ``i`` (``j`` is removed by the caller)."""
         ends = np.vstack((self._ends(i), self._ends(j)))
         rho, alpha, cov = self._rho[j], self._alpha[j], self._cov[j]
+        side = self._sides[j]
         if abs(_wrap(alpha - self._alpha[i])) > math.pi / 2:
             rho, alpha = -rho, float(_wrap(alpha + math.pi))
             cov = cov * np.array([[1.0, -1.0], [-1.0, 1.0]])
+            side = _swap_sides(side)
+        self._sides[i] |= side
         self._combine(i, rho, alpha, cov)
         self._t[i] = _extent(self._rho[i], self._alpha[i], ends)
         self._box[i] = boxes_of(self._ends(i)[None], 0.0)[0]
@@ -387,7 +419,7 @@ class LineMap:
         keep[rows] = False
         n = int(keep.sum())
         for name in ("_rho", "_alpha", "_cov", "_t", "_scans", "_returns", "_first", "_last",
-                     "_fused", "_box"):  # fmt: skip
+                     "_fused", "_box", "_sides"):  # fmt: skip
             array = getattr(self, name)
             array[:n] = array[: self._n][keep]
         self._n = n
@@ -401,11 +433,12 @@ class LineMap:
         self.retired += int(stale.sum())
         self._remove(np.flatnonzero(stale))
 
-    def settled(self, floor: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """``rho, alpha, start, end`` of the lines seen by ``floor`` scans or more so far."""
+    def settled(self, floor: int) -> tuple[np.ndarray, ...]:
+        """``rho, alpha, start, end, sides`` of the lines seen by ``floor`` scans or more so
+        far."""
         keep = np.flatnonzero(self._scans[: self._n] >= floor)
         ends = self._all_ends()[keep]
-        return self._rho[keep], self._alpha[keep], ends[:, 0], ends[:, 1]
+        return self._rho[keep], self._alpha[keep], ends[:, 0], ends[:, 1], self._sides[keep]
 
     def lines(self, min_scans: int | None = None) -> MapLines:
         """The map: lines seen by at least ``min_scans`` scans (default: the settings')."""
@@ -426,6 +459,7 @@ class LineMap:
             last_scan=self._last[keep].copy(),
             segments=self._fused[keep].copy(),
             origin=self.frame.origin,
+            sides=self._sides[keep].copy(),
         )
 
 

@@ -37,7 +37,7 @@ import math
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -45,8 +45,11 @@ from scanlines.errors import NO_SUCH_FILE, ScanlinesError, describe
 from scanlines.geometry.poses import Pose, relative_pose
 from scanlines.map.align import LineSet
 from scanlines.map.build import TrackedPose
+from scanlines.map.export import SIDE_NAMES
 from scanlines.map.filter import INITIAL_SIGMA, FilterSettings, LineMapFilter
 from scanlines.map.frame import MAX_COORDINATE, MAX_EXTENT, LocalFrame
+from scanlines.map.fusion import BOTH
+from scanlines.map.relocalise import GlobalSearch, SearchSettings
 from scanlines.scan import Scan
 from scanlines.untrusted import UntrustedInput, load_json, quote, read_regular_file
 
@@ -79,8 +82,9 @@ def read_line_map(path: str | Path) -> tuple[LineSet, LocalFrame]:
     a map takes (:mod:`scanlines.map.frame`: ``|x|, |y| <= 1e9`` m, ends within 1e5 m of
     the origin); ``rho`` and ``alpha`` consistent with the ends (within
     :data:`END_TOLERANCE`); a covariance, where given, 2 x 2, symmetric and positive
-    semi-definite. Anything else is a :class:`MapFileError` of one line naming the file,
-    the line and the field.
+    semi-definite; ``seen_from``, where given, one of the names of
+    :data:`~scanlines.map.export.SIDE_NAMES` (absent: both sides). Anything else is a
+    :class:`MapFileError` of one line naming the file, the line and the field.
     """
     path = Path(path)
     document = _map_document(path)
@@ -93,10 +97,14 @@ def read_line_map(path: str | Path) -> tuple[LineSet, LocalFrame]:
     if len(records) > MAX_MAP_LINES:
         raise MapFileError(f"{path}: field lines: more than {MAX_MAP_LINES} lines")
     values = np.zeros((len(records), 6))
+    sides = np.full(len(records), BOTH, dtype=np.int8)
     for k, record in enumerate(records):
         values[k] = _map_line(f"{path}: line {k}", record, frame)
+        sides[k] = _seen_from(record, f"{path}: line {k}")
     offset = np.array(frame.origin)
-    lines = LineSet(values[:, 4], values[:, 5], values[:, 0:2] - offset, values[:, 2:4] - offset)
+    lines = LineSet(
+        values[:, 4], values[:, 5], values[:, 0:2] - offset, values[:, 2:4] - offset, sides
+    )
     return lines, frame
 
 
@@ -204,6 +212,19 @@ def _check_covariance(value: Any, where: str) -> None:
         raise MapFileError(f"{where}: not positive semi-definite, got {quote(value)}")
 
 
+def _seen_from(record: dict, where: str) -> int:
+    """The sides a map line was seen from (field ``seen_from``; a map written before sides
+    were kept has none: both)."""
+    name = record.get("seen_from", SIDE_NAMES[BOTH])
+    for side, known in SIDE_NAMES.items():
+        if isinstance(name, str) and name == known:
+            return side
+    raise MapFileError(
+        f"{where}: field seen_from: {quote(name)} is not one of "
+        + ", ".join(repr(v) for v in SIDE_NAMES.values())
+    )
+
+
 @dataclass
 class Localisation:
     """A localisation run: every tracked scan (local frame; ``frame.world_pose`` for the
@@ -218,6 +239,9 @@ class Localisation:
     drift: float = 0.0
     scale: float = 0.0
     lever: tuple[float, float] = (0.0, 0.0)
+    #: The scans at which the filter declared itself lost, and was found again.
+    lost_at: list[int] = field(default_factory=list)
+    found_at: list[int] = field(default_factory=list)
 
     @property
     def not_fit(self) -> int:
@@ -258,40 +282,160 @@ def localize(
     indexed: Iterable[tuple[int, Scan]],
     lines: LineSet,
     frame: LocalFrame,
-    initial: tuple[float, Pose],
+    initial: tuple[float, Pose] | None,
     *,
     poses: Callable[[int, Scan], Pose | None] | None = None,
     settings: FilterSettings | None = None,
     initial_sigma: tuple[float, float] = INITIAL_SIGMA,
+    search: SearchSettings | None = None,
     on_scan: Callable[[int], None] | None = None,
 ) -> Localisation:
     """Track ``indexed`` scans on ``lines`` (local ``frame``) from ``initial``: a time
-    and a world pose (standard deviations ``initial_sigma``: metres, radians). ``poses``:
+    and a world pose (standard deviations ``initial_sigma``: metres, radians), or ``None``:
+    lost from the first scan, found by global localisation (:mod:`scanlines.map.relocalise`,
+    ``search`` its settings), as when the filter judges itself lost on the way. ``poses``:
     each scan's odometry (default: the pose it carries); ``on_scan(index)``: called for
     each scan read, skipped ones too."""
-    t0, start = initial
     run = Localisation(frame)
     tracker = LineMapFilter(lines, settings)
+    state = _SearchState(GlobalSearch(tracker, search), lost=initial is None)
     odometry_of = poses or (lambda index, scan: scan.pose)
     last_odometry: Pose | None = None
-    for index, scan in _from_start(_reporting(indexed, on_scan), t0, run):
+    indexed = _reporting(indexed, on_scan)
+    scans = indexed if initial is None else _from_start(indexed, initial[0], run)
+    for index, scan in scans:
         odometry = odometry_of(index, scan)
         if odometry is None:
             run.without_pose += 1
             continue
-        if last_odometry is None:
-            tracker.start(frame.pose(start), initial_sigma)
-            increment = None
-        else:
-            increment = relative_pose(last_odometry, odometry)
-        step = tracker.step(scan.points[scan.valid], increment)
+        if last_odometry is None and initial is not None:
+            tracker.start(frame.pose(initial[1]), initial_sigma)
+        increment = None if last_odometry is None else relative_pose(last_odometry, odometry)
+        points = scan.points[scan.valid].astype(np.float64)
+        predicted, pose, covariance, status = state.step(scan, points, increment)
         last_odometry = odometry
-        status = "aligned" if step.aligned else "did not fit"
+        if status == "lost" and len(run.lost_at) == len(run.found_at):  # once an episode
+            run.lost_at.append(index)
+        elif status == "found":
+            run.found_at.append(index)
         run.tracked.append(
-            TrackedPose(index, scan.timestamp, frame.pose(odometry), step.predicted, step.pose,
-                        step.covariance, status)
+            TrackedPose(index, scan.timestamp, frame.pose(odometry), predicted, pose,
+                        covariance, state.status_of(status))
         )  # fmt: skip
     if tracker.state is not None:
         run.drift, run.scale = float(tracker.state[3]), float(tracker.state[4])
         run.lever = (float(tracker.state[5]), float(tracker.state[6]))
     return run
+
+
+class _Recovered(NamedTuple):
+    """The filter found again by itself (a winner of its own)."""
+
+    pose: Pose
+    tracker: LineMapFilter
+
+
+#: The covariance reported for a scan localised nowhere yet (no initial pose, none found).
+UNKNOWN = np.diag([1e6, 1e6, math.pi**2])
+
+
+class _SearchState:
+    """The filter with its global search: whether it is lost, the scans of low share."""
+
+    def __init__(self, search: GlobalSearch, lost: bool) -> None:
+        self.search = search
+        self.tracker = search.tracker
+        self.lost = lost
+        self.low = 0
+        self.shares: list[float] = []
+        self.since_proposal = search.settings.propose_every - 1  # the first scan proposes
+        self.lost_for = 0
+
+    def status_of(self, status: str) -> str:
+        """The record's status: ``lost`` on every scan while lost."""
+        return "lost" if self.lost and status != "found" else status
+
+    def step(self, scan: Scan, points: np.ndarray, increment: Pose | None):
+        """The scan through the filter and, while lost, the search: predicted pose, pose,
+        covariance, status (``aligned``, ``did not fit``, ``lost`` the first scan lost,
+        ``found``)."""
+        settings = self.search.settings
+        tracker = self.tracker
+        started = tracker.state is not None
+        was_lost = self.lost
+        if started:
+            step = tracker.step(points, increment)
+            share = self.search.explained(points, step.pose)
+            predicted, pose, covariance = step.predicted, step.pose, step.covariance
+            status = "aligned" if step.aligned else "did not fit"
+        else:
+            share, status = 0.0, "lost"
+            predicted = pose = (0.0, 0.0, 0.0)
+            covariance = UNKNOWN
+        self.shares = [*self.shares[-(settings.agree - 1) :], share]
+        self.low = self.low + 1 if share < settings.lost_share else 0
+        if not self.lost and self.low >= settings.lost_after:
+            self.lost, self.since_proposal, self.lost_for = True, settings.propose_every, 0
+            return predicted, pose, covariance, "lost"
+        if not self.lost:
+            return predicted, pose, covariance, status
+        found = self._search(scan, points, increment, started)
+        if found is not None:
+            return predicted, found.pose, found.tracker.covariance[:3, :3].copy(), "found"
+        if not started and self.search.hypotheses:
+            best = max(self.search.hypotheses, key=lambda h: h.recent(settings.agree))
+            pose = best.pose
+        return predicted, pose, covariance, "lost" if not was_lost else status
+
+    def _near(self) -> Callable[[Pose], bool]:
+        """Whether a pose is within the filter's own uncertainty of its pose."""
+        s = self.search.settings
+        state, covariance = self.tracker.state, self.tracker.covariance
+        assert state is not None
+        assert covariance is not None
+        sigma = math.sqrt(max(np.linalg.eigvalsh(covariance[:2, :2]).max(), 0.0))
+        reach = max(s.near_distance, s.near_sigmas * sigma)
+        turn = max(s.near_angle, s.near_sigmas * math.sqrt(covariance[2, 2]))
+        x, y, theta = (float(v) for v in state[:3])
+
+        def near(pose: Pose) -> bool:
+            return (
+                math.hypot(pose[0] - x, pose[1] - y) <= reach
+                and abs(math.remainder(pose[2] - theta, 2 * math.pi)) <= turn
+            )
+
+        return near
+
+    def _search(self, scan: Scan, points: np.ndarray, increment, started: bool):
+        """One scan of the search while lost: the hypotheses stepped, new ones proposed every
+        few scans; the winner (if any) becomes the filter's state."""
+        search, settings = self.search, self.search.settings
+        search.step(points, increment, tracked=started)
+        own = float(np.mean(self.shares)) if started else 0.0
+        if started and len(self.shares) >= settings.agree and own >= settings.found_share:
+            self.lost, self.low = False, 0  # the filter caught the map again by itself
+            search.clear()
+            return _Recovered(tuple(float(v) for v in self.tracker.state[:3]), self.tracker)
+        self.since_proposal += 1
+        self.lost_for += 1
+        # every few scans at first, then seldom: a long search is an unmapped place
+        every = settings.propose_every_tracked if started else settings.propose_every
+        if started and self.lost_for > settings.patient:
+            every = settings.propose_later
+        if self.since_proposal >= every:
+            self.since_proposal = 0
+            errors = None
+            if started:
+                errors = (self.tracker.state[3:].copy(), self.tracker.covariance[3:, 3:].copy())
+            search.propose(scan, points, errors)
+        winner = search.winner(points, own, self._near if started else None)
+        if winner is None:
+            return None
+        search.settle(winner)
+        self.tracker.state = winner.tracker.state.copy()
+        self.tracker.covariance = winner.tracker.covariance.copy()
+        self.tracker._first = False
+        self.lost, self.low = False, 0
+        self.shares = list(winner.shares[-settings.agree :])
+        search.clear()
+        return winner
