@@ -21,6 +21,8 @@ from cli_helpers import scanlines
 from scanlines.config import load_config
 from scanlines.data import sample
 from scanlines.errors import ParameterError
+from scanlines.methods import method_class
+from scanlines.ros2.dds import ros_topic
 from scanlines.ros2.ros_args import parse_ros_args
 from scanlines.sensor.profile import ProfileError, SensorProfile, read_profile
 from scanlines.sensor.profile_file import MAX_PROFILE_BYTES
@@ -41,6 +43,11 @@ def alias_bomb(levels: int = 8) -> str:
     body = "\n".join(rows)
     tail = f"scanlines:\n  ros__parameters:\n    min_points: *{names[levels - 1]}\n"
     return f"other:\n  ros__parameters:\n{body}\n{tail}"
+
+
+def written(path: Path, text: str) -> Path:
+    path.write_text(text)
+    return path
 
 
 def refused(done, *words: str) -> str:
@@ -125,6 +132,22 @@ def test_a_parameters_file_with_an_anchor_and_its_alias_still_loads(tmp_path):
     values = parse_ros_args(["--params-file", str(path)]).parameters()
     assert values["min_length"].value == 0.2
     assert values["min_points"].value == 7
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda name, folder: load_config(written(folder / "c.toml", f"method = '{name}'\n")),
+        lambda name, folder: method_class(name),
+        lambda name, folder: ros_topic(name + "!"),
+    ],
+    ids=["configuration's method", "method name", "topic name"],
+)
+def test_a_long_name_is_quoted_in_at_most_80_characters(call, tmp_path):
+    with pytest.raises(ParameterError) as caught:
+        call("x" * 1200, tmp_path)
+    assert "x" * QUOTED not in str(caught.value)
+    assert len(str(caught.value)) <= MAX_LINE
 
 
 # -- configuration files (TOML) ------------------------------------------------------------

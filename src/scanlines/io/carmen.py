@@ -47,6 +47,7 @@ from scanlines.io.fields import FieldLayout
 from scanlines.io.numbers import NumberFields, number_fields
 from scanlines.io.text import iter_lines, parse_floats
 from scanlines.scan import Scan
+from scanlines.untrusted import quote
 
 __all__ = [
     "DEFAULT_FOV_DEG",
@@ -258,7 +259,7 @@ class CarmenReader(LogReader):
             return "ignored"
         self._bad_record(
             LogFormatError(
-                f"unknown record name {name!r}; its fields make a {self.message} record, "
+                f"unknown record name {quote(name)}; its fields make a {self.message} record, "
                 "so it is taken as a damaged scan record",
                 path=self.path,
                 record=line_number,

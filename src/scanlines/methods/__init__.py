@@ -22,6 +22,7 @@ from scanlines.methods.pdbs import Pdbs
 from scanlines.methods.ransac import Ransac
 from scanlines.methods.split_merge import SplitMerge
 from scanlines.methods.surfaces import Surfaces
+from scanlines.untrusted import quote
 
 __all__ = [
     "REGISTRY",
@@ -76,4 +77,4 @@ def method_class(name: str) -> type[Method]:
         return REGISTRY[name]
     except (KeyError, TypeError):
         valid = ", ".join(REGISTRY)
-        raise ParameterError(f"unknown method {name!r}; valid: {valid}") from None
+        raise ParameterError(f"unknown method {quote(name)}; valid: {valid}") from None

@@ -6,6 +6,7 @@ import time
 from typing import Any
 
 from scanlines.errors import ParameterError
+from scanlines.untrusted import quote
 
 __all__ = [
     "LOOPBACK_CONFIG",
@@ -74,7 +75,7 @@ def ros_topic(name: str) -> str:
     """The DDS topic of ROS 2 topic ``name``: ``/scan`` and ``scan`` are ``rt/scan``."""
     stripped = name.strip("/")
     if not stripped or any(not (c.isalnum() or c in "_/") for c in stripped):
-        raise ParameterError(f"not a ROS 2 topic name: {name!r}")
+        raise ParameterError(f"not a ROS 2 topic name: {quote(name)}")
     return f"rt/{stripped}"
 
 

@@ -41,6 +41,7 @@ from starlette.staticfiles import StaticFiles
 
 from scanlines.config import ExtractionConfig
 from scanlines.errors import ScanlinesError, one_line
+from scanlines.untrusted import quote
 from scanlines.viewer.session import NoPoses, ViewerSession, methods
 
 __all__ = ["MAX_BODY_BYTES", "BadRequest", "allowed_hosts", "create_app"]
@@ -190,5 +191,5 @@ async def _body(request: Request) -> dict[str, Any]:
 def _field(body: dict[str, Any], name: str, kind: type) -> Any:
     value = body.get(name)
     if not isinstance(value, kind) or isinstance(value, bool):
-        raise BadRequest(f"request field {name!r} must be {kind.__name__}, got {value!r}")
+        raise BadRequest(f"request field {name!r} must be {kind.__name__}, got {quote(value)}")
     return value
