@@ -207,7 +207,7 @@ def test_the_kernel_refuses_arguments_of_the_wrong_shape():
     args = [tracker.state, tracker.covariance, np.zeros(3), True, np.zeros(4), np.zeros(4),
             lines.rho, lines.alpha, lines.start, lines.end, lines.sides, grid.shape,
             grid.cell_start, grid.cell_lines, tracker.settings.kernel_values(), 0]  # fmt: skip
-    _core.track_scan(*args)
+    _core.filter_scan(*args)
     for position, wrong, message in [
         (0, np.zeros(5), "state has 7 values"), (2, np.zeros(2), "increment"),
         (5, np.zeros(3), "one length"), (6, lines.rho[:-1], "same lines"),
@@ -217,7 +217,7 @@ def test_the_kernel_refuses_arguments_of_the_wrong_shape():
         bad = list(args)
         bad[position] = wrong
         with pytest.raises(ValueError, match=message):
-            _core.track_scan(*bad)
+            _core.filter_scan(*bad)
 
 
 def test_settings_out_of_their_domain_are_refused():
