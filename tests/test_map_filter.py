@@ -265,3 +265,14 @@ def test_a_dense_scan_is_subsampled_to_the_settings_points():
             assert step.pairs <= most
         else:
             assert step.pairs > 300
+
+
+def test_a_scan_subsampled_to_one_return_keeps_its_first():
+    """``max_points=1`` keeps the first return (numpy's linspace). Its position was 0 / 0, and
+    the kernel read ``use[2**63]``: a build with ``-D_GLIBCXX_ASSERTIONS`` aborted there."""
+    scan = view(ROOM, (-1.0, 0.5, 0.3), seed=7, sigma=0.003)
+    tracker = LineMapFilter(room_lines(ROOM), FilterSettings(max_points=1))
+    tracker.start((-1.0, 0.5, 0.3))
+    step = tracker.step(scan.points[scan.valid], None)
+    assert step.status == "too few returns on map lines"
+    assert step.pairs <= 1

@@ -191,9 +191,13 @@ ScanReturns scan_returns(View<double> px, View<double> py, const FilterMatrix& c
     if (p.max_points > 0 && r.size() > p.max_points) {
         Ints kept(p.max_points);
         const double span = static_cast<double>(r.use.size() - 1);
-        for (Index k = 0; k < p.max_points; ++k)
-            kept[k] = r.use[static_cast<std::size_t>(std::llround(
-                span * static_cast<double>(k) / static_cast<double>(p.max_points - 1)))];
+        for (Index k = 0; k < p.max_points; ++k) {
+            // One return: the first (numpy's linspace), not 0 / 0.
+            const double at = p.max_points > 1 ? span * static_cast<double>(k) /
+                                                     static_cast<double>(p.max_points - 1)
+                                               : 0.0;
+            kept[k] = r.use[static_cast<std::size_t>(std::llround(at))];
+        }
         r.use.swap(kept);
     }
     const double a = cp[0], b = cp[1], d = cp[N + 1];
