@@ -127,8 +127,8 @@ def _stack_probes(name: str, group: str, bad: dict) -> list[tuple[str, Callable]
     return probes
 
 
-def _track(**changes):
-    """track_scan's arguments for one scan on a one-cell map of two lines, with ``changes``."""
+def _filter(**changes):
+    """filter_scan's arguments for one scan on a one-cell map of two lines, with ``changes``."""
     from scanlines.map.filter import FilterSettings
 
     args = {
@@ -150,7 +150,7 @@ def _track(**changes):
         "max_points": 400,
     }
     args.update(changes)
-    return lambda: _core.track_scan(*args.values())
+    return lambda: _core.filter_scan(*args.values())
 
 
 def _settings_with(position: int, value: float) -> np.ndarray:
@@ -753,23 +753,23 @@ PROBES: dict[str, list[tuple[str, Callable]]] = {
     "surfaces_stack": _stack_probes("surfaces", "output", {"min_points": -4}),
     "iepf_stack": _stack_probes("iepf", "segments", {"split_reference": 5}),
     "split_merge_stack": _stack_probes("split_merge", "clustering", {"breakpoints": -2, "k": NAN}),
-    "track_scan": [
-        ("a count setting NaN", _track(settings=_settings_with(19, NAN))),
-        ("a count setting negative", _track(settings=_settings_with(15, -3.0))),
-        ("a count setting 1e300", _track(settings=_settings_with(21, 1e300))),
-        ("22 settings", _track(settings=_settings_with(0, 0.0)[:22])),
-        ("nx NaN", _track(shape=vec([-10.0, -10.0, 20.0, NAN, 1.0]))),
-        ("nx 1e300", _track(shape=vec([-10.0, -10.0, 20.0, 1e300, 1.0]))),
-        ("cell 0", _track(shape=vec([-10.0, -10.0, 0.0, 1.0, 1.0]))),
-        ("x0 NaN", _track(shape=vec([NAN, -10.0, 20.0, 1.0, 1.0]))),
-        ("cell starts of 2 x 1 cells", _track(cell_start=_ints(0, 1, 2))),
-        ("cell starts past the ids", _track(cell_start=_ints(0, 5))),
-        ("max_points -1", _track(max_points=-1)),
-        ("alpha too short", _track(alpha=vec([0.0]))),
-        ("sides too short", _track(sides=_ints(3))),
-        ("y too short", _track(y=Y[:3].copy())),
-        ("a covariance 6 x 6", _track(covariance=np.eye(6))),
-        ("an increment of 2", _track(first=False, increment=np.zeros(2))),
+    "filter_scan": [
+        ("a count setting NaN", _filter(settings=_settings_with(19, NAN))),
+        ("a count setting negative", _filter(settings=_settings_with(15, -3.0))),
+        ("a count setting 1e300", _filter(settings=_settings_with(21, 1e300))),
+        ("22 settings", _filter(settings=_settings_with(0, 0.0)[:22])),
+        ("nx NaN", _filter(shape=vec([-10.0, -10.0, 20.0, NAN, 1.0]))),
+        ("nx 1e300", _filter(shape=vec([-10.0, -10.0, 20.0, 1e300, 1.0]))),
+        ("cell 0", _filter(shape=vec([-10.0, -10.0, 0.0, 1.0, 1.0]))),
+        ("x0 NaN", _filter(shape=vec([NAN, -10.0, 20.0, 1.0, 1.0]))),
+        ("cell starts of 2 x 1 cells", _filter(cell_start=_ints(0, 1, 2))),
+        ("cell starts past the ids", _filter(cell_start=_ints(0, 5))),
+        ("max_points -1", _filter(max_points=-1)),
+        ("alpha too short", _filter(alpha=vec([0.0]))),
+        ("sides too short", _filter(sides=_ints(3))),
+        ("y too short", _filter(y=Y[:3].copy())),
+        ("a covariance 6 x 6", _filter(covariance=np.eye(6))),
+        ("an increment of 2", _filter(first=False, increment=np.zeros(2))),
     ],
 }
 
@@ -789,7 +789,7 @@ NUMBERS: dict[str, Callable] = {
 }
 # Values the kernels skip by design (documented at their binding): no error, a result.
 SKIPPED: dict[str, Callable] = {
-    "track_scan": _track(cell_lines=_ints(0, 99)),  # a line id past the lines: ignored
+    "filter_scan": _filter(cell_lines=_ints(0, 99)),  # a line id past the lines: ignored
 }
 
 
@@ -817,7 +817,7 @@ def test_a_function_of_numbers_returns_on_nan_and_extremes(name):
 
 
 def test_the_filter_skips_a_line_id_past_the_lines():
-    assert SKIPPED["track_scan"]()[6] in range(8)
+    assert SKIPPED["filter_scan"]()[6] in range(8)
 
 
 @pytest.mark.parametrize(
@@ -832,7 +832,7 @@ def test_the_filter_skips_a_line_id_past_the_lines():
         ),
         lambda: _core.extend_sweep(_sweep(), COST, False, 0, 3),
         lambda: _core.segment_events(*RETURNS, N, *MOMENTS, A2, B2, G2, True, False, 2, 0.5, 0.5),
-        _track(),
+        _filter(),
         *[
             lambda n=n: (lambda k, s, a: k(*s, *a))(*_stack(n))
             for n in ("adaptive", "paper", "partition", "surfaces", "iepf", "split_merge")

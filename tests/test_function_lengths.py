@@ -19,18 +19,11 @@ PACKAGE = REPOSITORY / "src" / "scanlines"
 LONGEST = 80
 
 # Longer functions allowed, by (file relative to the repository, function): each with its
-# reason. The map and geometry code is being reworked elsewhere; drop an entry when its
-# function is cut below the bound.
+# reason.
 ALLOWED = {
     # The paper method as printed: one comment per step with its equation, kept whole.
     ("cpp/scanlines/methods/paper.cpp", "paper_scan"),
-    # The line map's construction: being reworked with the map settings.
-    ("src/scanlines/map/build.py", "build_map"),
-    # The localisation filter's kernel: to be cut into predict / associate / update.
-    ("cpp/scanlines/map/tracking.cpp", "track_scan"),
 }
-# Folders whose functions are allowed for now, being reworked (see ALLOWED).
-ALLOWED_FOLDERS = ("src/scanlines/map/", "src/scanlines/geometry/", "cpp/scanlines/map/")
 
 
 def _python_lengths() -> list[tuple[str, str, int]]:
@@ -52,16 +45,12 @@ def _cpp_lengths() -> list[tuple[str, str, int]]:
     ]
 
 
-def _allowed(path: str, name: str) -> bool:
-    return (path, name) in ALLOWED or path.startswith(ALLOWED_FOLDERS)
-
-
 def test_no_function_is_longer_than_80_lines():
     lengths = _python_lengths() + _cpp_lengths()
     too_long = [
         f"{path}: {name} ({lines} lines)"
         for path, name, lines in lengths
-        if lines > LONGEST and not _allowed(path, name)
+        if lines > LONGEST and (path, name) not in ALLOWED
     ]
     assert not too_long, "longer than 80 lines:\n" + "\n".join(too_long)
 

@@ -207,7 +207,7 @@ def test_the_kernel_refuses_arguments_of_the_wrong_shape():
     args = [tracker.state, tracker.covariance, np.zeros(3), True, np.zeros(4), np.zeros(4),
             lines.rho, lines.alpha, lines.start, lines.end, lines.sides, grid.shape,
             grid.cell_start, grid.cell_lines, tracker.settings.kernel_values(), 0]  # fmt: skip
-    _core.track_scan(*args)
+    _core.filter_scan(*args)
     for position, wrong, message in [
         (0, np.zeros(5), "state has 7 values"), (2, np.zeros(2), "increment"),
         (5, np.zeros(3), "one length"), (6, lines.rho[:-1], "same lines"),
@@ -217,7 +217,7 @@ def test_the_kernel_refuses_arguments_of_the_wrong_shape():
         bad = list(args)
         bad[position] = wrong
         with pytest.raises(ValueError, match=message):
-            _core.track_scan(*bad)
+            _core.filter_scan(*bad)
 
 
 def test_settings_out_of_their_domain_are_refused():
@@ -265,3 +265,14 @@ def test_a_dense_scan_is_subsampled_to_the_settings_points():
             assert step.pairs <= most
         else:
             assert step.pairs > 300
+
+
+def test_a_scan_subsampled_to_one_return_keeps_its_first():
+    """``max_points=1`` keeps the first return (numpy's linspace). Its position was 0 / 0, and
+    the kernel read ``use[2**63]``: a build with ``-D_GLIBCXX_ASSERTIONS`` aborted there."""
+    scan = view(ROOM, (-1.0, 0.5, 0.3), seed=7, sigma=0.003)
+    tracker = LineMapFilter(room_lines(ROOM), FilterSettings(max_points=1))
+    tracker.start((-1.0, 0.5, 0.3))
+    step = tracker.step(scan.points[scan.valid], None)
+    assert step.status == "too few returns on map lines"
+    assert step.pairs <= 1

@@ -12,7 +12,7 @@ void bind_split_methods(nb::module_& m);
 void bind_steps(nb::module_& m);
 void bind_numbers(nb::module_& m);
 void bind_segmentation(nb::module_& m);
-void bind_tracking(nb::module_& m);
+void bind_filter(nb::module_& m);
 }
 
 NB_MODULE(_core, m) {
@@ -36,5 +36,5 @@ NB_MODULE(_core, m) {
     scanlines::bind::bind_steps(m);
     scanlines::bind::bind_numbers(m);
     scanlines::bind::bind_segmentation(m);
-    scanlines::bind::bind_tracking(m);
+    scanlines::bind::bind_filter(m);
 }

@@ -217,7 +217,9 @@ def point_to_line_system(
     A point ``p`` on a line of unit normal ``n`` has the residual ``e = n . p - rho``; a
     small update ``(dx, dy, dtheta)`` turning about a centre ``c`` changes it by
     ``n . (dx, dy) + dtheta (n_y l_x - n_x l_y)``, ``l = p - c`` (``lever``, K x 2). The
-    weights are Huber's (``huber`` metres)."""
+    weights are Huber's (``huber`` metres). The localisation filter's kernel linearises so
+    too (``point_to_line_system`` in ``cpp/scanlines/map/filter.cpp``, each weight over its
+    residual's variance), summing in another order (docs/ARCHITECTURE.md, "Line maps")."""
     a = np.abs(residuals)
     weight = np.where(a <= huber, 1.0, huber / np.maximum(a, 1e-12))
     jac = np.column_stack(

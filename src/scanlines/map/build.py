@@ -132,20 +132,10 @@ def build_map(
 
     if track is not None and align is not None:
         raise ValueError("build_map: give align or track, not both")
-    extractor = extractor or Extractor()
     poses = poses or LogPoses()
-    line_map = LineMap(settings)
-    name, note = getattr(poses, "name", type(poses).__name__), getattr(poses, "note", None)
-    if track is not None:
-        name, note = f"{name} as odometry, each scan tracked on the map so far", None
-    elif align is not None:
-        name, note = f"{name}, aligned to the map so far", None
-    elif note:
-        name = f"{name}, unaligned"
-    build = MapBuild(line_map, poses=name, align=align, pose_note=note, track=track)
-    tracker = None if track is None else OdometryTracker(track)
-    frame: LocalFrame | None = None
-    where = f"{source}: scan" if source else "scan"
+    name, note = _poses_named(poses, align, track)
+    build = MapBuild(LineMap(settings), name, note, align=align, track=track)
+    builder = _Builder(build, extractor or Extractor(), hold_out, on_tracked, source)
     for index, scan in indexed:
         pose = poses(index, scan)
         build.last_index = index
@@ -154,39 +144,86 @@ def build_map(
         if pose is None:
             build.without_pose += 1
             continue
-        check_pose(pose, f"{where} {index}")
-        if frame is None:
-            frame = line_map.frame = frame_at(pose)
-        pose = frame.pose(pose)
-        check_extent(pose, frame, f"{where} {index}")
-        held = hold_out is not None and hold_out(index)
-        if tracker is not None:
-            fit, predicted = _track(tracker, scan, pose, line_map, held)
-            _record(build, index, scan, (pose, predicted), fit, held)
-            check_extent(fit.pose, frame, f"{where} {index}")
-            if held:
-                build.held_out[index] = fit.pose
-            if not build.tracked[-1].mapped:
-                if on_tracked is not None:
-                    on_tracked(build.tracked[-1], scan, None)
-                continue
-            pose = fit.pose
-        elif held:
-            build.held_out[index] = pose
-            continue
-        if align is not None:
-            fit = align_scan(scan, pose, LineSet(*line_map.settled(align.support)), align)
-            pose = fit.pose
-            build.aligned += fit.used
-        extracted = extractor(scan)
-        if on_tracked is not None and tracker is not None:
-            on_tracked(build.tracked[-1], scan, extracted)
-        try:
-            line_map.add(to_world(extracted, pose), index, pose)
-        except MapError as error:
-            raise MapError(f"{source}: {error}" if source else str(error)) from None
-        build.scans += 1
+        builder.add(index, scan, pose)
     return build
+
+
+def _poses_named(poses: PoseSource, align, track) -> tuple[str, str | None]:
+    """What the map's poses are (``MapBuild.poses``) and the pose source's note."""
+    name, note = getattr(poses, "name", type(poses).__name__), getattr(poses, "note", None)
+    if track is not None:
+        return f"{name} as odometry, each scan tracked on the map so far", None
+    if align is not None:
+        return f"{name}, aligned to the map so far", None
+    return (f"{name}, unaligned" if note else name), note
+
+
+class _Builder:
+    """The stages of :func:`build_map` for a scan with a pose: the pose in the map's local
+    frame (the first pose sets it), the pose the scan is mapped at (tracked, aligned or as
+    given; none: held out, or tracked and not mapped), its features fused at it."""
+
+    def __init__(self, build: MapBuild, extractor: Extractor, hold_out, on_tracked, source):
+        self.build, self.extractor = build, extractor
+        self.hold_out, self.on_tracked, self.source = hold_out, on_tracked, source
+        self.tracker = None if build.track is None else OdometryTracker(build.track)
+        self.frame: LocalFrame | None = None
+        self.where = f"{source}: scan" if source else "scan"
+
+    def add(self, index: int, scan: Scan, pose: Pose) -> None:
+        pose = self.local_pose(index, pose)
+        held = self.hold_out is not None and self.hold_out(index)
+        if self.tracker is not None:
+            pose = self.tracked_pose(index, scan, pose, held)
+        elif held:
+            self.build.held_out[index] = pose
+            return
+        if pose is not None:
+            self.fuse(index, scan, self.aligned_pose(scan, pose))
+
+    def local_pose(self, index: int, pose: Pose) -> Pose:
+        """``pose`` (world) in the map's frame, checked."""
+        check_pose(pose, f"{self.where} {index}")
+        if self.frame is None:
+            self.frame = self.build.line_map.frame = frame_at(pose)
+        pose = self.frame.pose(pose)
+        check_extent(pose, self.frame, f"{self.where} {index}")
+        return pose
+
+    def tracked_pose(self, index: int, scan: Scan, pose: Pose, held: bool) -> Pose | None:
+        """The tracked pose of the scan at odometry ``pose``, recorded; ``None`` if it is
+        not mapped."""
+        build = self.build
+        fit, predicted = _track(self.tracker, scan, pose, build.line_map, held)
+        _record(build, index, scan, (pose, predicted), fit, held)
+        check_extent(fit.pose, self.frame, f"{self.where} {index}")
+        if held:
+            build.held_out[index] = fit.pose
+        if not build.tracked[-1].mapped:
+            if self.on_tracked is not None:
+                self.on_tracked(build.tracked[-1], scan, None)
+            return None
+        return fit.pose
+
+    def aligned_pose(self, scan: Scan, pose: Pose) -> Pose:
+        """``pose``, aligned to the map so far if the build aligns."""
+        align = self.build.align
+        if align is None:
+            return pose
+        fit = align_scan(scan, pose, LineSet(*self.build.line_map.settled(align.support)), align)
+        self.build.aligned += fit.used
+        return fit.pose
+
+    def fuse(self, index: int, scan: Scan, pose: Pose) -> None:
+        """The scan's features fused into the map at ``pose``."""
+        extracted = self.extractor(scan)
+        if self.on_tracked is not None and self.tracker is not None:
+            self.on_tracked(self.build.tracked[-1], scan, extracted)
+        try:
+            self.build.line_map.add(to_world(extracted, pose), index, pose)
+        except MapError as error:
+            raise MapError(f"{self.source}: {error}" if self.source else str(error)) from None
+        self.build.scans += 1
 
 
 def _track(tracker: OdometryTracker, scan: Scan, odometry: Pose, line_map: LineMap, held: bool):

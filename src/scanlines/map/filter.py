@@ -274,7 +274,7 @@ class LineMapFilter:
         points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
         grid, lines = self.grid, self.lines
         move = np.zeros(3) if increment is None else np.asarray(increment, dtype=np.float64)
-        state, covariance, predicted, pairs, matched, chi2, status = _core.track_scan(
+        state, covariance, predicted, pairs, matched, chi2, status = _core.filter_scan(
             self.state, self.covariance, move, self._first or increment is None,
             np.ascontiguousarray(points[:, 0]), np.ascontiguousarray(points[:, 1]),
             lines.rho, lines.alpha, lines.start, lines.end, lines.sides,

@@ -1,6 +1,6 @@
-// Localisation on a line map, one scan at a time: an extended Kalman filter whose state is
-// the pose and the odometry's two systematic errors (src/scanlines/map/filter.py documents
-// the model; this is its kernel).
+// The localisation filter's kernel (src/scanlines/map/filter.py documents the model): an
+// extended Kalman filter on a line map, one scan at a time, whose state is the pose and the
+// odometry's systematic errors.
 #pragma once
 
 #include <array>
@@ -13,9 +13,9 @@ namespace scanlines {
 // per metre driven (radians per metre), its distance scale error (a share: 0.02 = 2 % too
 // long), and where the sensor sits in the odometry's frame (x, y metres: the lever that
 // moves the sensor when the robot turns in place).
-constexpr Index TRACK_STATE = 7;
-using TrackVector = std::array<double, TRACK_STATE>;
-using TrackMatrix = std::array<double, TRACK_STATE * TRACK_STATE>;  // row-major
+constexpr Index FILTER_STATE = 7;
+using FilterVector = std::array<double, FILTER_STATE>;
+using FilterMatrix = std::array<double, FILTER_STATE * FILTER_STATE>;  // row-major
 
 // The map's lines and a uniform grid over them: cell (i, j) (i along x) lists the lines
 // within the grid's reach of the cell, ids cell_lines[cell_start[c] .. cell_start[c + 1]) of
@@ -29,7 +29,7 @@ struct LineGrid {
     View<Index> cell_start, cell_lines;
 };
 
-struct TrackParams {
+struct FilterParams {
     // The odometry increment's noise: a floor and a share of the distance (x, y); a floor, a
     // share of the turn and a share per metre driven (theta); the drift's and the scale's
     // random walk per metre driven.
@@ -59,23 +59,23 @@ struct TrackParams {
 
 // What became of a scan: aligned, too few returns near a map line, or a correction too far
 // from the prediction for its covariance.
-enum class TrackStatus : int { aligned = 0, too_few_pairs = 1, inconsistent = 2 };
+enum class FilterStatus : int { aligned = 0, too_few_pairs = 1, inconsistent = 2 };
 
-struct TrackStep {
-    TrackVector state;
-    TrackMatrix covariance;
+struct FilterStep {
+    FilterVector state;
+    FilterMatrix covariance;
     std::array<double, 3> predicted;
     Index pairs;
     Index lines;
     double chi_square;
-    TrackStatus status;
+    FilterStatus status;
 };
 
 // The filter's step for one scan: predict with the odometry `increment` (x, y, theta in the
-// last pose's frame; null: the first scan, no prediction), then update with the scan's
-// returns (x, y in the sensor frame, beam order) on the map.
-TrackStep track_scan(const TrackVector& state, const TrackMatrix& covariance,
-                     const double* increment, View<double> x, View<double> y,
-                     const LineGrid& grid, const TrackParams& params);
+// last pose's frame; null: the first scan, no prediction), then associate the scan's returns
+// (x, y in the sensor frame, beam order) with the map's lines and update.
+FilterStep filter_scan(const FilterVector& state, const FilterMatrix& covariance,
+                       const double* increment, View<double> x, View<double> y,
+                       const LineGrid& grid, const FilterParams& params);
 
 }  // namespace scanlines

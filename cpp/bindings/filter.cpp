@@ -1,10 +1,10 @@
-// Localisation on a line map (scanlines/map/tracking.hpp): one scan's filter step, called by
+// The localisation filter's kernel (scanlines/map/filter.hpp): one scan's step, called by
 // scanlines.map.filter, which builds the grid and documents the settings.
 #include <cmath>
 #include <string>
 
 #include "arrays.hpp"
-#include "scanlines/map/tracking.hpp"
+#include "scanlines/map/filter.hpp"
 
 namespace scanlines::bind {
 
@@ -15,7 +15,7 @@ using InTable = In<double, nb::ndim<2>>;
 // The settings in the order of scanlines.map.filter.FilterSettings.kernel_values().
 constexpr std::size_t PARAMS = 23;
 
-TrackParams params_of(const InReals& values) {
+FilterParams params_of(const InReals& values) {
     if (values.shape(0) != PARAMS) throw nb::value_error("the filter takes 23 settings");
     const double* v = values.data();
     // A count from the settings' floats: a whole number in 0 .. MAX_SETTING_COUNT.
@@ -26,7 +26,7 @@ TrackParams params_of(const InReals& values) {
                         text(MAX_SETTING_COUNT) + ", got " + std::to_string(x));
         return static_cast<Index>(x);
     };
-    TrackParams p{};
+    FilterParams p{};
     p.odometry_floor = v[0];
     p.odometry_per_metre = v[1];
     p.turn_floor = v[2];
@@ -54,14 +54,14 @@ TrackParams params_of(const InReals& values) {
     return p;
 }
 
-nb::tuple track_scan_binding(const InReals& state, const InTable& covariance,
-                             const InReals& increment, bool first, const InReals& x,
-                             const InReals& y, const InReals& rho, const InReals& alpha,
-                             const InTable& start, const InTable& end, const InInts& sides,
-                             const InReals& shape,
-                             const InInts& cell_start, const InInts& cell_lines,
-                             const InReals& settings, Index max_points) {
-    constexpr std::size_t n = TRACK_STATE;
+nb::tuple filter_scan_binding(const InReals& state, const InTable& covariance,
+                              const InReals& increment, bool first, const InReals& x,
+                              const InReals& y, const InReals& rho, const InReals& alpha,
+                              const InTable& start, const InTable& end, const InInts& sides,
+                              const InReals& shape,
+                              const InInts& cell_start, const InInts& cell_lines,
+                              const InReals& settings, Index max_points) {
+    constexpr std::size_t n = FILTER_STATE;
     if (state.shape(0) != n || covariance.shape(0) != n || covariance.shape(1) != n)
         throw nb::value_error("the state has 7 values and its covariance 7 x 7");
     if (increment.shape(0) != 3) throw nb::value_error("an increment is x, y, theta");
@@ -89,10 +89,10 @@ nb::tuple track_scan_binding(const InReals& state, const InTable& covariance,
     const Index total = static_cast<Index>(cell_lines.shape(0));
     if (cell_start.data()[0] != 0 || cell_start.data()[nx * ny] != total)
         throw nb::value_error("the grid's cell starts must run from 0 to its number of ids");
-    TrackParams params = params_of(settings);
+    FilterParams params = params_of(settings);
     params.max_points = max_points;
-    TrackVector s{};
-    TrackMatrix c{};
+    FilterVector s{};
+    FilterMatrix c{};
     for (std::size_t i = 0; i < n; ++i) s[i] = state.data()[i];
     for (std::size_t i = 0; i < n * n; ++i) c[i] = covariance.data()[i];
     LineGrid grid{view(rho),
@@ -107,10 +107,11 @@ nb::tuple track_scan_binding(const InReals& state, const InTable& covariance,
                   ny,
                   view(cell_start),
                   view(cell_lines)};
-    TrackStep step;
+    FilterStep step;
     {
         nb::gil_scoped_release unlocked;
-        step = track_scan(s, c, first ? nullptr : increment.data(), view(x), view(y), grid, params);
+        const double* move = first ? nullptr : increment.data();
+        step = filter_scan(s, c, move, view(x), view(y), grid, params);
     }
     Reals out_state(step.state.begin(), step.state.end());
     Reals out_cov(step.covariance.begin(), step.covariance.end());
@@ -121,8 +122,8 @@ nb::tuple track_scan_binding(const InReals& state, const InTable& covariance,
 
 }  // namespace
 
-void bind_tracking(nb::module_& m) {
-    m.def("track_scan", &track_scan_binding,
+void bind_filter(nb::module_& m) {
+    m.def("filter_scan", &filter_scan_binding,
           "One step of the line-map filter (scanlines.map.filter): predict with the odometry "
           "increment, align the scan's returns to the map's lines.");
 }
