@@ -15,7 +15,10 @@ them; Intel localised on the plain and the tracked map from the tracked poses' f
 (``--initial-pose-from``, also with ``--sides``) and from no pose (global localisation). A
 loop-closing run's JSON says how long its pose graph took (``"seconds"``): that field is
 left out. ``map --align`` sums its normal matrices with numpy's matrix product, whose order
-is the BLAS build's: another BLAS may move the last digits of its covariances.
+is the BLAS build's: another BLAS may move the last digits of its covariances, so a
+record keeps each file's SHA-256 (``compare`` asks for the same bytes) and, beside it in a
+``.npz``, its numbers (the test asks for them to a relative 1e-9, and for the text between
+them exactly).
 """
 
 from __future__ import annotations
@@ -27,6 +30,8 @@ import re
 import sys
 import tempfile
 from pathlib import Path
+
+import numpy as np
 
 from scanlines.data import sample
 
@@ -61,19 +66,62 @@ def run(directory: Path) -> None:
             raise RuntimeError(f"scanlines {' '.join(args)}: exit {ran.returncode}\n{ran.stderr}")
 
 
-def digests(directory: Path) -> dict[str, str]:
-    """The SHA-256 of every file in ``directory`` by name, ``"seconds"`` fields left out."""
+_NUMBER = re.compile(rb"-?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+
+
+def numbers(data: bytes) -> np.ndarray:
+    """Every number of a file's text, in order (``"seconds"`` fields left out)."""
+    return np.array(
+        [float(n) for n in _NUMBER.findall(_SECONDS.sub(b'"seconds": -', data))], dtype=float
+    )
+
+
+def digest(data: bytes) -> dict[str, str]:
+    """A file's SHA-256 and the SHA-256 of its text with every number replaced by ``#``
+    (``"seconds"`` fields left out of both)."""
+    data = _SECONDS.sub(b'"seconds": -', data)
     return {
-        path.name: hashlib.sha256(_SECONDS.sub(b'"seconds": -', path.read_bytes())).hexdigest()
-        for path in sorted(directory.iterdir())
+        "sha256": hashlib.sha256(data).hexdigest(),
+        "text": hashlib.sha256(_NUMBER.sub(b"#", data)).hexdigest(),
     }
 
 
-def current() -> dict[str, str]:
-    """The digests of this checkout's files."""
+def current() -> tuple[dict[str, dict[str, str]], dict[str, np.ndarray]]:
+    """This checkout's files: their digests and their numbers, by name."""
     with tempfile.TemporaryDirectory() as directory:
         run(Path(directory))
-        return digests(Path(directory))
+        files = {path.name: path.read_bytes() for path in sorted(Path(directory).iterdir())}
+    return (
+        {name: digest(data) for name, data in files.items()},
+        {name: numbers(data) for name, data in files.items()},
+    )
+
+
+def beyond_rounding(
+    recorded: tuple[dict, dict], found: tuple[dict, dict], rtol: float = 1e-9
+) -> list[str]:
+    """The files whose text between the numbers differs, or one of whose numbers differs
+    by more than ``rtol`` of itself: what another BLAS's order of summation (the last
+    digits of ``map --align``'s covariances) does not explain."""
+    (texts, values), (found_texts, found_values) = recorded, found
+    return sorted(
+        name
+        for name in texts.keys() | found_texts.keys()
+        if texts.get(name, {}).get("text") != found_texts.get(name, {}).get("text")
+        or values[name].shape != found_values[name].shape
+        or not np.allclose(values[name], found_values[name], rtol=rtol, atol=1e-15)
+    )
+
+
+def read_record(path: Path) -> tuple[dict, dict]:
+    """A record: the digests (``path``, JSON) and the numbers (beside it, ``.npz``)."""
+    with np.load(path.with_suffix(".npz")) as values:
+        return json.loads(path.read_text()), dict(values)
+
+
+def write_record(path: Path, found: tuple[dict, dict]) -> None:
+    path.write_text(json.dumps(found[0], indent=1) + "\n")
+    np.savez_compressed(path.with_suffix(".npz"), **found[1])
 
 
 def main() -> None:
@@ -81,15 +129,23 @@ def main() -> None:
     parser.add_argument("action", choices=("record", "compare"))
     parser.add_argument("path")
     args = parser.parse_args()
+    path = Path(args.path)
     found = current()
     if args.action == "record":
-        Path(args.path).write_text(json.dumps(found, indent=1) + "\n")
-        print(f"recorded {len(found)} files")
+        write_record(path, found)
+        print(f"recorded {len(found[0])} files")
         return
-    recorded = json.loads(Path(args.path).read_text())
-    differ = sorted(n for n in recorded.keys() | found.keys() if recorded.get(n) != found.get(n))
-    print(f"{len(differ)} files differ of {len(recorded)}" + "".join(f"\n  {n}" for n in differ))
-    sys.exit(1 if differ else 0)
+    recorded = read_record(path)
+    names = sorted(recorded[0].keys() | found[0].keys())
+    sha = [(recorded[0].get(n, {}).get("sha256"), found[0].get(n, {}).get("sha256")) for n in names]
+    bytes_differ = [n for n, (old, new) in zip(names, sha, strict=True) if old != new]
+    differ = beyond_rounding(recorded, found)
+    print(
+        f"{len(bytes_differ)} of {len(names)} files differ in their bytes"
+        + "".join(f"\n  {n}" for n in bytes_differ)
+    )
+    print(f"{len(differ)} differ beyond rounding" + "".join(f"\n  {n}" for n in differ))
+    sys.exit(1 if bytes_differ else 0)
 
 
 if __name__ == "__main__":
