@@ -45,7 +45,7 @@ ScanResult partition_scan(View<double> ranges, View<bool> valid, const Stack& se
     if (scan.ret.size() == 0) return empty_result({}, {});
     const Objective objective{s.segments, s.output.min_points, Residual::ALONG_BEAM, false};
     Reals once(scan.ret.r.size(), 1.0);  // every return one observation
-    Partition part = ring_partition(scan, once, n_beams, sensor.step, objective);
+    ScanPartition part = ring_partition(scan, once, n_beams, sensor.step, objective);
     Ints every(scan.ret.r.size());  // left-out returns are pieces of their own here
     for (std::size_t p = 0; p < every.size(); ++p) every[p] = static_cast<Index>(p);
     auto [breakpoints, corners] = events(scan.ret, part, scan.sigma, every, sensor.step,

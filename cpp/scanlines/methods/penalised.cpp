@@ -290,7 +290,7 @@ Runs two_stage_runs(const Sums& sums, const Flags& opens, const Objective& o) {
     return optimal_runs(sums, opens, o, Ints(), allowed);
 }
 
-Partition best_partition(const Returns& ret, const Reals& sigma, const Reals& footprint,
+ScanPartition best_partition(const Returns& ret, const Reals& sigma, const Reals& footprint,
                          Index n_beams, double step, const Objective& o) {
     const Index n = ret.size();
     Ints gap = beam_gaps(ret.index, n_beams);
@@ -368,7 +368,7 @@ Index corner_between(const Returns& ret, const Sums& sums, const Reals& sigma, c
     return to_end <= to_begin ? end : begin;
 }
 
-std::pair<Ints, Ints> events(const Returns& ret, const Partition& part, const Reals& sigma,
+std::pair<Ints, Ints> events(const Returns& ret, const ScanPartition& part, const Reals& sigma,
                              const Ints& positions, double step, ScanShape shape) {
     const Index n = ret.size();
     Ints breakpoints, corners;
@@ -426,9 +426,9 @@ ScanReturns scan_returns(View<double> ranges, View<bool> valid, const Stack& sen
     return out;
 }
 
-Partition ring_partition(ScanReturns& scan, Reals& footprint, Index n_beams, double step,
+ScanPartition ring_partition(ScanReturns& scan, Reals& footprint, Index n_beams, double step,
                          const Objective& objective) {
-    Partition part = best_partition(scan.ret, scan.sigma, footprint, n_beams, step, objective);
+    ScanPartition part = best_partition(scan.ret, scan.sigma, footprint, n_beams, step, objective);
     if (scan.ring && part.runs.a.size() > 1) {
         Index shift = part.runs.b[0] + 1;
         scan.ret = rotated(scan.ret, shift);
@@ -439,7 +439,7 @@ Partition ring_partition(ScanReturns& scan, Reals& footprint, Index n_beams, dou
     return part;
 }
 
-HeldRuns held_runs(const ScanReturns& scan, const Partition& part, const Ints& kept_ids,
+HeldRuns held_runs(const ScanReturns& scan, const ScanPartition& part, const Ints& kept_ids,
                    double range_sigma) {
     Ints position(scan.ret.r.size());
     Index held_count = 0;
@@ -459,7 +459,7 @@ HeldRuns held_runs(const ScanReturns& scan, const Partition& part, const Ints& k
     return out;
 }
 
-Ints left_out(const Returns& ret, const Partition& part) {
+Ints left_out(const Returns& ret, const ScanPartition& part) {
     Ints out;
     for (Index p = 0; p < ret.size(); ++p)
         if (!part.held[p]) out.push_back(ret.index[p]);

@@ -82,7 +82,7 @@ bool continuous(const Returns& ret, Index p, Index q, Index beams, double step,
 Runs optimal_runs(const Sums& sums, const Flags& opens, const Objective& objective,
                   const Ints& at, const Flags& allowed);
 
-struct Partition {
+struct ScanPartition {
     Runs runs;
     Flags held;
     Sums sums;
@@ -91,7 +91,7 @@ struct Partition {
 
 // The best partition of a scan's returns: runs chosen, outliers left out, up to three
 // rounds; footprint: each return's weight in the objective (1: one return, one observation).
-Partition best_partition(const Returns& ret, const Reals& sigma, const Reals& footprint,
+ScanPartition best_partition(const Returns& ret, const Reals& sigma, const Reals& footprint,
                          Index n_beams, double step, const Objective& objective);
 
 // A full circle's returns rotated to start after their widest gap, and whether they close
@@ -114,7 +114,7 @@ struct ScanShape {
 // consecutive returns of `positions` (every return, or the held ones only): a breakpoint
 // at the first of two returns farther apart than a surface can put them, a corner between
 // neighbouring runs whose lines turn and meet (corner_between).
-std::pair<Ints, Ints> events(const Returns& ret, const Partition& part, const Reals& sigma,
+std::pair<Ints, Ints> events(const Returns& ret, const ScanPartition& part, const Reals& sigma,
                              const Ints& positions, double step, ScanShape shape);
 
 // The runs (their numbers) that hold at least min_points returns in their fit and are at least min_length long.
@@ -134,7 +134,7 @@ ScanReturns scan_returns(View<double> ranges, View<bool> valid, const Stack& sen
 
 // The best partition of scan's returns; a closed ring is cut where the first optimum had a
 // boundary and solved again (scan and footprint rotated with it).
-Partition ring_partition(ScanReturns& scan, Reals& footprint, Index n_beams, double step,
+ScanPartition ring_partition(ScanReturns& scan, Reals& footprint, Index n_beams, double step,
                          const Objective& objective);
 
 // The returns held in a fit, the runs `kept` renumbered to them, and their range noise
@@ -144,10 +144,10 @@ struct HeldRuns {
     Ints a, b;
     Reals sigma;
 };
-HeldRuns held_runs(const ScanReturns& scan, const Partition& part, const Ints& kept,
+HeldRuns held_runs(const ScanReturns& scan, const ScanPartition& part, const Ints& kept,
                    double range_sigma);
 
 // The beams of the returns the partition left out.
-Ints left_out(const Returns& ret, const Partition& part);
+Ints left_out(const Returns& ret, const ScanPartition& part);
 
 }  // namespace scanlines::penalised

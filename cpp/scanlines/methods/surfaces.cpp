@@ -142,7 +142,7 @@ ScanResult surfaces_scan(View<double> ranges, View<bool> valid, const Stack& sen
     const Objective objective{s.segments, s.output.min_points, Residual::ALONG_BEAM, true,
                               s.segments.two_stage};
     Reals weights = footprint_weights(scan.ret, sensor.step, s.segments.footprint);
-    Partition part = ring_partition(scan, weights, n_beams, sensor.step, objective);
+    ScanPartition part = ring_partition(scan, weights, n_beams, sensor.step, objective);
     Ints in_fit;  // events between held returns: a return left out inside a surface is none
     for (std::size_t p = 0; p < part.held.size(); ++p)
         if (part.held[p]) in_fit.push_back(static_cast<Index>(p));
