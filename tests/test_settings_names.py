@@ -30,7 +30,7 @@ PASS_THROUGH = (
     "cli",
     "runs",
     "sensor",
-    "params.py",
+    "params",
     "config.py",
     "extractor.py",
     "builtin_methods.py",

@@ -18,7 +18,7 @@ from scanlines.builtin_methods import BUILTIN_METHODS, DEFAULT_METHOD
 from scanlines.errors import ParameterError, ScanError
 from scanlines.extraction import Extraction, ExtractionTable
 from scanlines.methods import REGISTRY, method_class
-from scanlines.params import resolve
+from scanlines.params import param_lines, resolve
 from scanlines.scan import Scan, as_array, valid_returns
 from scanlines.sensor.learned_noise import Geometry, NoiseLearner
 from scanlines.sensor.profile import SensorProfile, as_profile
@@ -62,16 +62,8 @@ class MethodInfo:
         return getattr(self, key)
 
     def __str__(self) -> str:
-        width = max(len(name) for name in self.params)
-        lines = [f"{self.name}: {self.doc}", "", "parameters (default; allowed values):"]
-        group = ""
-        for name, param in self.params.items():
-            if param.group != group:
-                group = param.group
-                lines.append(f" {group}:")
-            lines.append(f"  {name:<{width}}  {param.default!r}; {param.allowed}")
-            lines.append(f"  {'':<{width}}  {param.doc}")
-        lines.append("")
+        rows = [(p.group, name, p.default, p.allowed, p.doc) for name, p in self.params.items()]
+        lines = [f"{self.name}: {self.doc}", "", *param_lines(rows), ""]
         lines.append("presets: " + (", ".join(self.presets) or "none"))
         for preset, values in self.presets.items():
             shown = ", ".join(f"{k}={v!r}" for k, v in values.items())

@@ -12,7 +12,8 @@ each file), and ``tests/test_same_map_outputs.py`` compares against it on every 
 The runs (:data:`RUNS`, in this order, in one directory): the Intel excerpt mapped at its
 log's poses; Intel tracked (``map --align``) with and without its loops closed, and URG with
 them; Intel localised on the plain and the tracked map from the tracked poses' first
-(``--initial-pose-from``, also with ``--sides``) and from no pose (global localisation). A
+(``--initial-pose-from``, also with ``--sides``) and from no pose (global localisation);
+Intel mapped with ``--min-scans 2``; ``eval map`` with and without ``--align``. A
 loop-closing run's JSON says how long its pose graph took (``"seconds"``): that field is
 left out. ``map --align`` sums its normal matrices with numpy's matrix product, whose order
 is the BLAS build's: another BLAS may move the last digits of its covariances, so a
@@ -50,6 +51,9 @@ RUNS = (
      "intel_align_nl.tum", "--sides", "--out", "loc_sides.tum"),
     ("localize", "{intel}", "--map", "intel_map.json", "--out", "loc_global.tum"),
     ("localize", "{intel}", "--map", "intel_align_nl.json", "--out", "loc_global_aligned.tum"),
+    ("map", "{intel}", "--out", "intel_min2.json", "--min-scans", "2"),
+    ("eval", "map", "{intel}", "--align", "--out", "eval_aligned"),
+    ("eval", "map", "{intel}", "--out", "eval_given"),
 )  # fmt: skip
 _SECONDS = re.compile(rb'"seconds": [-+0-9.eE]+')
 
@@ -90,7 +94,11 @@ def current() -> tuple[dict[str, dict[str, str]], dict[str, np.ndarray]]:
     """This checkout's files: their digests and their numbers, by name."""
     with tempfile.TemporaryDirectory() as directory:
         run(Path(directory))
-        files = {path.name: path.read_bytes() for path in sorted(Path(directory).iterdir())}
+        files = {
+            path.relative_to(directory).as_posix(): path.read_bytes()
+            for path in sorted(Path(directory).rglob("*"))
+            if path.is_file()
+        }
     return (
         {name: digest(data) for name, data in files.items()},
         {name: numbers(data) for name, data in files.items()},

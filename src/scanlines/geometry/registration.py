@@ -46,12 +46,15 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass
-from typing import Any, NamedTuple
+from dataclasses import dataclass
+from typing import ClassVar, NamedTuple
 
 import numpy as np
 
+from scanlines.errors import ParameterError
 from scanlines.geometry.poses import IDENTITY, Pose, compose, invert, relative_pose
+from scanlines.params import MAX_COUNT, MAX_METRES, Param, integer, number
+from scanlines.params.tables import Groups, SettingsTable
 from scanlines.scan import Scan
 
 __all__ = [
@@ -78,25 +81,74 @@ def transform_points(points: np.ndarray, pose: Sequence[float]) -> np.ndarray:
     return np.column_stack((c * pts[:, 0] - s * pts[:, 1] + x, s * pts[:, 0] + c * pts[:, 1] + y))
 
 
-@dataclass(frozen=True)
-class IcpSettings:
+class IcpSettings(SettingsTable):
     """The constants of :func:`icp` and :func:`line_target` (metres, radians)."""
 
-    max_distance: float = 0.5
-    min_distance: float = 0.15
-    shrink: float = 0.6
-    huber: float = 0.02
-    inlier_residual: float = 0.05
-    max_iterations: int = 60
-    max_points: int = 400
-    tolerance: float = 1e-5
-    normal_window: int = 3
-    neighbour_radius: float = 0.15
-    max_flatness: float = 0.3
+    groups: ClassVar[Groups] = {
+        "correspondence": {
+            "max_distance": Param(
+                0.5,
+                number(low=0.0, low_open=True, high=MAX_METRES),
+                "the gate of a pair at the start: a source point's nearest target point (m)",
+            ),
+            "min_distance": Param(
+                0.15,
+                number(low=0.0, low_open=True, high=MAX_METRES),
+                "the final gate, where the gate stops shrinking; inliers lie within it (m)",
+            ),
+            "shrink": Param(
+                0.6,
+                number(low=0.0, low_open=True, high=1.0),
+                "the gate's factor each time an update moves less than 1 mm (and 1 mrad)",
+            ),
+        },
+        "fit": {
+            "huber": Param(
+                0.02,
+                number(low=0.0, low_open=True, high=MAX_METRES),
+                "Huber width of the point-to-line residuals (m)",
+            ),
+            "inlier_residual": Param(
+                0.05,
+                number(low=0.0, high=MAX_METRES),
+                "an inlier's point-to-line residual is at most this (m)",
+            ),
+            "max_iterations": Param(60, integer(1, MAX_COUNT), "most Gauss-Newton updates"),
+            "max_points": Param(
+                400, integer(3, MAX_COUNT), "source points used (evenly subsampled)"
+            ),
+            "tolerance": Param(
+                1e-5,
+                number(low=0.0),
+                "an update smaller than this at the final gate ends the fit (m, rad)",
+            ),
+        },
+        "target": {
+            "normal_window": Param(
+                3,
+                integer(1, MAX_COUNT),
+                "valid returns on each side fitted with a return for its line's normal",
+            ),
+            "neighbour_radius": Param(
+                0.15,
+                number(low=0.0, high=MAX_METRES),
+                "those neighbours lie within this, or 3 beam spacings per window step (m)",
+            ),
+            "max_flatness": Param(
+                0.3,
+                number(low=0.0, high=1.0),
+                "a neighbourhood's minor to major spread above this gives no normal",
+            ),
+        },
+    }
 
-    def to_dict(self) -> dict[str, Any]:
-        """The settings by name."""
-        return asdict(self)
+    def check(self) -> None:
+        if self.min_distance > self.max_distance:
+            raise ParameterError(
+                f"IcpSettings.min_distance must be at most max_distance ({self.max_distance:g}), "
+                f"got {self.min_distance:g}",
+                parameter="min_distance",
+            )
 
 
 class LineTarget(NamedTuple):

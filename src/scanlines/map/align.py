@@ -11,14 +11,15 @@ of the normal equations too small) or too few returns meet a line, the log's pos
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
-from typing import Any, NamedTuple
+from typing import ClassVar, NamedTuple
 
 import numpy as np
 
 from scanlines.geometry.poses import Pose
 from scanlines.geometry.registration import point_to_line_step
 from scanlines.geometry.transform import points_to_world
+from scanlines.params import MAX_COUNT, MAX_METRES, MAX_SCANS, Param, integer, number
+from scanlines.params.tables import Groups, SettingsTable
 
 __all__ = [
     "AlignSettings",
@@ -39,22 +40,53 @@ HUBER = 0.02
 LEVER = 1.0
 
 
-@dataclass(frozen=True)
-class AlignSettings:
+class AlignSettings(SettingsTable):
     """The constants of scan-to-map alignment (metres, radians): the bounds of a correction,
     the gate of a return's line, the least constraint per direction, the scans a map line
     needs to be aligned to (``support``), the share of the correction applied (``damping``)."""
 
-    max_shift: float = 0.1
-    max_turn: float = math.radians(2.0)
-    gate: float = 0.1
-    least: float = 0.02
-    iterations: int = 6
-    support: int = 3
-    damping: float = 1.0
-
-    def to_dict(self) -> dict[str, Any]:
-        return asdict(self)
+    groups: ClassVar[Groups] = {
+        "alignment": {
+            "max_shift": Param(
+                0.1,
+                number(low=0.0, high=MAX_METRES),
+                "a larger correction is refused: the log's pose stands (m)",
+            ),
+            "max_turn": Param(
+                math.radians(2.0),
+                number(low=0.0, high=math.pi),
+                "a larger turn is refused: the log's pose stands (rad)",
+            ),
+            "gate": Param(
+                0.1,
+                number(low=0.0, low_open=True, high=MAX_METRES),
+                "a return pairs with the nearest map line within this distance (m)",
+            ),
+            "least": Param(
+                0.02,
+                number(low=0.0),
+                "least constraint of every direction: the normal matrix's smallest "
+                "eigenvalue per pair (turns at a 1 m lever)",
+            ),
+        },
+        "solver": {
+            "iterations": Param(6, integer(1, MAX_COUNT), "most Gauss-Newton steps per scan"),
+        },
+        "map": {
+            "support": Param(
+                3,
+                integer(1, MAX_SCANS),
+                "a map line is aligned to once seen by this many scans",
+            ),
+        },
+        "correction": {
+            "damping": Param(
+                1.0,
+                number(low=0.0, low_open=True, high=1.0),
+                "share of the correction applied to the log's pose",
+            ),
+        },
+    }
 
 
 class LineSet(NamedTuple):

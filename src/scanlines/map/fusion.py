@@ -28,14 +28,25 @@ fused. The two faces of a thin wall are two lines, each seen from its own side.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
-from typing import Any
+from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
 from scanlines.extraction import ALPHA, END_X, END_Y, RHO, START_X, START_Y, Extraction
 from scanlines.map.frame import LocalFrame, MapError, check_segments
 from scanlines.map.grid import box_pairs, boxes_of
+from scanlines.params import (
+    MAX_COUNT,
+    MAX_METRES,
+    MAX_SCANS,
+    KernelField,
+    Param,
+    choice,
+    integer,
+    number,
+)
+from scanlines.params.tables import Groups, SettingsTable
 
 __all__ = ["BACK", "BOTH", "FRONT", "FusionSettings", "LineMap", "MapLines", "side_of"]
 
@@ -45,48 +56,44 @@ FRONT, BACK, BOTH = 1, 2, 3
 _CHI2_2DOF = {0.95: 5.991, 0.99: 9.210, 0.999: 13.816}
 
 
-@dataclass(frozen=True)
-class FusionSettings:
+_METRES, _RADIANS = number(low=0.0, high=MAX_METRES), number(low=0.0, high=math.pi)
+_SCANS, _POINTS = integer(1, MAX_SCANS), integer(2, MAX_COUNT)
+
+
+class FusionSettings(SettingsTable):
     """The constants of association and fusion (metres, radians, scans)."""
 
-    gate: float = 0.99
-    max_gap: float = 0.5
-    min_scans: int = 3
-    min_points: int = 5
-    pose_sigma_xy: float = 0.02
-    pose_sigma_theta: float = math.radians(0.5)
-    model_sigma_rho: float = 0.02
-    model_sigma_alpha: float = math.radians(0.5)
-    retire_after: int = 300
-    merge_every: int = 50
-
-    def __post_init__(self) -> None:
-        from scanlines.errors import ParameterError
-
-        if self.gate not in _CHI2_2DOF:
-            raise ParameterError(f"gate must be one of {sorted(_CHI2_2DOF)}, got {self.gate}")
-        checks = {
-            "max_gap": self.max_gap >= 0,
-            "min_scans": self.min_scans >= 1,
-            "min_points": self.min_points >= 2,
-            "pose_sigma_xy": self.pose_sigma_xy >= 0,
-            "pose_sigma_theta": self.pose_sigma_theta >= 0,
-            "model_sigma_rho": self.model_sigma_rho >= 0,
-            "model_sigma_alpha": self.model_sigma_alpha >= 0,
-            "retire_after": self.retire_after >= 1,
-            "merge_every": self.merge_every >= 1,
-        }
-        for name, ok in checks.items():
-            value = getattr(self, name)
-            if not ok or not math.isfinite(value):
-                raise ParameterError(f"fusion setting {name} out of range: {value!r}")
+    groups: ClassVar[Groups] = {
+        "association": {
+            "gate": Param(
+                0.99,
+                choice(*_CHI2_2DOF),
+                "probability of the chi-square gate (2 dof) a segment and its line pass",
+                kernel=(KernelField("chi2", _CHI2_2DOF.__getitem__),),
+            ),
+            "max_gap": Param(0.5, _METRES, "largest gap along a line to a segment it fuses (m)"),
+        },
+        "support": {
+            "min_scans": Param(3, _SCANS, "lines seen by fewer scans are clutter, dropped"),
+            "min_points": Param(5, _POINTS, "segments of fewer returns are not fused"),
+        },
+        "uncertainty": {
+            "pose_sigma_xy": Param(0.02, _METRES, "a pose's position sigma, its segments' too (m)"),
+            "pose_sigma_theta": Param(math.radians(0.5), _RADIANS, "a pose's heading sigma (rad)"),
+            "model_sigma_rho": Param(0.02, _METRES, "sigma of rho added to every gate (m)"),
+            "model_sigma_alpha": Param(
+                math.radians(0.5), _RADIANS, "sigma of alpha added to every gate (rad)"
+            ),
+        },
+        "upkeep": {
+            "retire_after": Param(300, _SCANS, "clutter unseen for this many scans is retired"),
+            "merge_every": Param(50, _SCANS, "scans between merges of lines that came to agree"),
+        },
+    }
 
     @property
     def chi2(self) -> float:
         return _CHI2_2DOF[self.gate]
-
-    def to_dict(self) -> dict[str, Any]:
-        return asdict(self)
 
 
 @dataclass(frozen=True)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterable
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
@@ -77,7 +77,7 @@ def score_held_out(
     it in the map's local frame, where ``build.held_out`` and the lines are."""
     lines = build.line_map.lines()
     target = LineSet(lines.rho, lines.alpha, lines.start, lines.end)
-    locate = None if build.align is None else replace(build.align, damping=1.0)
+    locate = None if build.align is None else build.align.replace(damping=1.0)
     priors = {t.index: t.covariance for t in build.tracked if t.status == "held out"}
     distances, tolerances, ranges, localised = [], [], [], []
     moved = 0

@@ -26,58 +26,14 @@ from __future__ import annotations
 
 import copy
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from scanlines.geometry.poses import Pose, compose
+from scanlines.map.search_settings import SearchSettings
 
 __all__ = ["ExplainedGrid", "GlobalSearch", "Hypothesis", "LinePairs", "SearchSettings",
            "pose_candidates"]  # fmt: skip
-
-
-@dataclass(frozen=True)
-class SearchSettings:
-    """The constants of global localisation (metres, radians, shares of returns)."""
-
-    near: float = 0.05
-    cell: float = 0.025
-    score_points: int = 60
-    segments: int = 4
-    max_pair_distance: float = 8.0
-    refine_every: int = 2
-    refine_every_tracked: int = 10
-    min_segment: float = 0.6
-    min_line: float = 0.5
-    min_crossing: float = math.radians(30.0)
-    angle_tolerance: float = math.radians(3.0)
-    overlap_slack: float = 0.3
-    candidates: int = 20
-    distinct_distance: float = 0.5
-    distinct_angle: float = math.radians(10.0)
-    max_hypotheses: int = 40
-    drop_share: float = 0.25
-    drop_after: int = 5
-    agree: int = 10
-    found_share: float = 0.6
-    agree_far: int = 20
-    found_share_far: float = 0.6
-    near_distance: float = 1.0
-    near_angle: float = math.radians(15.0)
-    near_sigmas: float = 3.0
-    clearance: float = 0.3
-    reach: float = 10.0
-    max_crossed: float = 0.2
-    checks: int = 3
-    margin: float = 0.1
-    lost_share: float = 0.25
-    lost_after: int = 10
-    propose_every: int = 5
-    propose_every_tracked: int = 10
-    propose_later: int = 50
-    patient: int = 30
-    sigma_xy: float = 0.1
-    sigma_theta: float = math.radians(3.0)
 
 
 class ExplainedGrid:

@@ -23,8 +23,7 @@ this 0.226 m (docs/MEASUREMENTS.md, "One tracker"). :func:`tracking_summary` and
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
-from typing import Any, NamedTuple
+from typing import ClassVar, NamedTuple
 
 import numpy as np
 
@@ -33,6 +32,8 @@ from scanlines.geometry.registration import point_to_line_system
 from scanlines.geometry.transform import points_to_world
 from scanlines.map.align import HUBER, MIN_PAIRS, LineSet, _near, _subsample, nearest_segments
 from scanlines.map.tracked import tracking_summary, write_tracked
+from scanlines.params import MAX_COUNT, MAX_METRES, MAX_SCANS, Param, integer, number
+from scanlines.params.tables import Groups, SettingsTable
 
 __all__ = [
     "OdometryTracker",
@@ -44,29 +45,77 @@ __all__ = [
 ]
 
 
-@dataclass(frozen=True)
-class TrackSettings:
+class TrackSettings(SettingsTable):
     """The constants of tracking (metres, radians): the association gate, the largest
     correction of a prediction, the share of returns that must meet a line, the odometry
     increment's noise (a floor plus a share of the distance and the turn), the residual
     variance's floor, the Gauss-Newton steps and the step (metres, radians) at which they
     stop, the scans a map line needs before it is aligned to (``support``)."""
 
-    gate: float = 0.15
-    max_shift: float = 0.3
-    max_turn: float = math.radians(10.0)
-    min_share: float = 0.3
-    odometry_floor: float = 0.01
-    odometry_turn_floor: float = math.radians(0.5)
-    odometry_per_metre: float = 0.1
-    odometry_per_radian: float = 0.1
-    sigma_floor: float = 0.005
-    iterations: int = 10
-    tolerance: float = 1e-6
-    support: int = 3
-
-    def to_dict(self) -> dict[str, Any]:
-        return asdict(self)
+    groups: ClassVar[Groups] = {
+        "alignment": {
+            "gate": Param(
+                0.15,
+                number(low=0.0, low_open=True, high=MAX_METRES),
+                "a return meets a map line within this distance (m)",
+            ),
+            "max_shift": Param(
+                0.3,
+                number(low=0.0, high=MAX_METRES),
+                "a larger correction of the prediction is refused (m)",
+            ),
+            "max_turn": Param(
+                math.radians(10.0),
+                number(low=0.0, high=math.pi),
+                "a larger turn of the prediction is refused (rad)",
+            ),
+            "min_share": Param(
+                0.3,
+                number(low=0.0, high=1.0),
+                "share of the scan's returns that must meet a map line",
+            ),
+        },
+        "prior": {
+            "odometry_floor": Param(
+                0.01,
+                number(low=0.0, low_open=True, high=MAX_METRES),
+                "an increment's position sigma when standing still (m)",
+            ),
+            "odometry_turn_floor": Param(
+                math.radians(0.5),
+                number(low=0.0, low_open=True, high=math.pi),
+                "an increment's heading sigma when standing still (rad)",
+            ),
+            "odometry_per_metre": Param(
+                0.1,
+                number(low=0.0),
+                "position sigma added per metre driven (m/m)",
+            ),
+            "odometry_per_radian": Param(
+                0.1,
+                number(low=0.0),
+                "heading sigma added per radian turned, and a tenth of it per metre driven",
+            ),
+        },
+        "solver": {
+            "sigma_floor": Param(
+                0.005,
+                number(low=0.0, low_open=True, high=MAX_METRES),
+                "floor of the residuals' sigma that weighs the returns against the prior (m)",
+            ),
+            "iterations": Param(10, integer(1, MAX_COUNT), "most Gauss-Newton steps per scan"),
+            "tolerance": Param(
+                1e-6, number(low=0.0), "a smaller step (m, rad) ends the Gauss-Newton steps"
+            ),
+        },
+        "map": {
+            "support": Param(
+                3,
+                integer(1, MAX_SCANS),
+                "a map line is aligned to once seen by this many scans",
+            ),
+        },
+    }
 
     def increment_covariance(self, increment: Pose) -> np.ndarray:
         """The prior covariance (x, y, theta) of an odometry ``increment``."""

@@ -1,4 +1,4 @@
-"""Parameter specifications: defaults, validation and presets shared by all methods."""
+"""Parameter specifications: defaults, validation and presets of the methods and settings tables."""
 
 from __future__ import annotations
 
@@ -16,6 +16,7 @@ __all__ = [
     "MAX_COUNT",
     "MAX_METRES",
     "MAX_NUMBER",
+    "MAX_SCANS",
     "Check",
     "KernelField",
     "Param",
@@ -31,6 +32,7 @@ __all__ = [
     "number",
     "optional",
     "param_applies",
+    "param_lines",
     "radians",
     "resolve",
     "with_default",
@@ -152,6 +154,9 @@ MAX_METRES = 1e6
 #: Bound of a number parameter that declares no narrower one: far beyond any distance
 #: (m), multiple of a noise sigma or chi-square that means anything.
 MAX_NUMBER = 1e6
+#: Upper bound of a count of scans (a setting "after so many scans"; 1e12 scans is 30 years
+#: of a laser at 1 kHz, so a caller may give it to mean "never").
+MAX_SCANS = 10**12
 
 
 def _real(name: str, value: Any, kind: str = "a number") -> float:
@@ -420,3 +425,18 @@ def kernel_settings(spec: Mapping[str, Param], params: Mapping[str, Any]) -> dic
         for kernel_field in fields:
             out[kernel_field.name or name] = kernel_field.encode(params[name])
     return out
+
+
+def param_lines(rows: list[tuple[str, str, Any, str, str]], what: str = "parameters") -> list[str]:
+    """Parameters as the lines of a table, group by group: ``rows`` of ``(group, name,
+    default, allowed values, doc)`` (:func:`~scanlines.method_info`, :class:`SettingsTable`)."""
+    width = max((len(name) for _, name, *_ in rows), default=0)
+    lines = [f"{what} (default; allowed values):"]
+    shown = ""
+    for group, name, default, allowed, doc in rows:
+        if group != shown:
+            shown = group
+            lines.append(f" {group}:")
+        lines.append(f"  {name:<{width}}  {default!r}; {allowed}")
+        lines.append(f"  {'':<{width}}  {doc}")
+    return lines
