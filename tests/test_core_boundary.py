@@ -164,6 +164,13 @@ def _settings_with(position: int, value: float) -> np.ndarray:
 SHORT = GAP[:-1]  # a gap array one short
 
 #: Binding name -> its hostile calls (label, call).
+XY3, E3 = np.ones((3, 2)), np.zeros(3)  # point_to_line_system's lever, normals, residuals
+
+
+def _point_to_line(lever=XY3, normals=XY3, residuals=E3, huber=1.0) -> Callable:
+    return lambda: _core.point_to_line_system(lever, normals, residuals, huber)
+
+
 PROBES: dict[str, list[tuple[str, Callable]]] = {
     "prefix_moments": [("y shorter", lambda: _core.prefix_moments(X, Y[:-1]))],
     "fit_many": [
@@ -770,6 +777,13 @@ PROBES: dict[str, list[tuple[str, Callable]]] = {
         ("y too short", _filter(y=Y[:3].copy())),
         ("a covariance 6 x 6", _filter(covariance=np.eye(6))),
         ("an increment of 2", _filter(first=False, increment=np.zeros(2))),
+    ],
+    "point_to_line_system": [
+        ("lever shorter", _point_to_line(lever=np.zeros((2, 2)))),
+        ("normals K x 3", _point_to_line(normals=np.zeros((3, 3)))),
+        ("residuals longer", _point_to_line(residuals=vec([0.0] * 4))),
+        ("huber NaN", _point_to_line(huber=NAN)),
+        ("huber negative", _point_to_line(huber=-1.0)),
     ],
 }
 

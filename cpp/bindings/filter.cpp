@@ -5,6 +5,7 @@
 
 #include "arrays.hpp"
 #include "scanlines/map/filter.hpp"
+#include "scanlines/map/point_to_line.hpp"
 
 namespace scanlines::bind {
 
@@ -120,12 +121,36 @@ nb::tuple filter_scan_binding(const InReals& state, const InTable& covariance,
                           step.pairs, step.lines, step.chi_square, static_cast<int>(step.status));
 }
 
+// The normal equations of K points on their lines (point_to_line.hpp) with unit variance:
+// lever and normals K x 2, residuals K; huber in metres.
+nb::tuple point_to_line_system_binding(const InTable& lever, const InTable& normals,
+                                       const InReals& residuals, double huber) {
+    const std::size_t k = residuals.shape(0);
+    if (lever.shape(0) != k || normals.shape(0) != k || lever.shape(1) != 2 ||
+        normals.shape(1) != 2)
+        throw nb::value_error("lever and normals must be K x 2 for K residuals");
+    if (!(huber >= 0.0)) throw nb::value_error("huber must be >= 0");
+    LineSystem system{};
+    {
+        nb::gil_scoped_release unlocked;
+        const double *l = lever.data(), *n = normals.data(), *e = residuals.data();
+        for (std::size_t i = 0; i < k; ++i)
+            add_point_to_line(system, n[2 * i], n[2 * i + 1], l[2 * i], l[2 * i + 1], e[i], 1.0,
+                              huber);
+    }
+    Reals h(system.h, system.h + 9), g(system.g, system.g + 3);
+    return nb::make_tuple(to_numpy(std::move(h), {3, 3}), to_numpy(std::move(g)), system.cost);
+}
+
 }  // namespace
 
 void bind_filter(nb::module_& m) {
     m.def("filter_scan", &filter_scan_binding,
           "One step of the line-map filter (scanlines.map.filter): predict with the odometry "
           "increment, align the scan's returns to the map's lines.");
+    m.def("point_to_line_system", &point_to_line_system_binding,
+          "The normal equations of a pose update that brings points onto their lines "
+          "(scanlines.geometry.registration.point_to_line_system).");
 }
 
 }  // namespace scanlines::bind

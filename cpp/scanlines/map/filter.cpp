@@ -1,5 +1,7 @@
 #include "scanlines/map/filter.hpp"
 
+#include "scanlines/map/point_to_line.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -286,20 +288,8 @@ void associate(const FilterVector& xe, const ScanReturns& r, const LineGrid& gri
         if (a.per_line[t] >= p.line_returns) ++a.lines;
 }
 
-// The normal equations of a pose update that brings the matched returns onto their lines:
-// J' W J (h: 3 x 3, row-major), J' W e (g) and the pairs whose weight did not vanish (a
-// residual of 1e308 m). The linearisation of scanlines.geometry.registration's
-// point_to_line_system: a return w on a line of unit normal n has the residual
-// e = n . w - rho, and an update (dx, dy, dtheta) about the pose's position c changes it by
-// n . (dx, dy) + dtheta (n_y l_x - n_x l_y), l = w - c. Each weight is Huber's (`huber`
-// standard deviations) over the residual's variance: the return's own and its line's,
-// shared by the returns on it (numpy's has unit variance: its Huber width in metres).
-struct LineSystem {
-    double h[9];
-    double g[3];
-    Index weighted;
-};
-
+// The normal equations of the matched returns on their lines (point_to_line.hpp), each
+// pair's variance its return's own and its line's, shared by the returns on it.
 LineSystem point_to_line_system(const FilterVector& xe, const Association& a,
                                 const LineGrid& grid, const FilterParams& p) {
     LineSystem out{};
@@ -308,18 +298,9 @@ LineSystem point_to_line_system(const FilterVector& xe, const Association& a,
         if (l < 0 || a.per_line[l] < p.line_returns) continue;
         const double lnx = std::cos(grid.alpha[l]), lny = std::sin(grid.alpha[l]);
         const double e = lnx * a.wx[k] + lny * a.wy[k] - grid.rho[l];
-        const double jt = lny * (a.wx[k] - xe[0]) - lnx * (a.wy[k] - xe[1]);
         const double var = p.return_sigma * p.return_sigma +
                            static_cast<double>(a.per_line[l]) * p.line_sigma * p.line_sigma;
-        const double z = std::fabs(e) / std::sqrt(var);
-        const double w = (z <= p.huber ? 1.0 : p.huber / z) / var;
-        if (!(w > 0.0 && std::isfinite(w * e))) continue;
-        ++out.weighted;
-        const double j[3] = {lnx, lny, jt};
-        for (int r = 0; r < 3; ++r) {
-            out.g[r] += j[r] * w * e;
-            for (int s = 0; s < 3; ++s) out.h[r * 3 + s] += j[r] * w * j[s];
-        }
+        add_point_to_line(out, lnx, lny, a.wx[k] - xe[0], a.wy[k] - xe[1], e, var, p.huber);
     }
     return out;
 }

@@ -51,6 +51,7 @@ from typing import ClassVar, NamedTuple
 
 import numpy as np
 
+from scanlines import _core
 from scanlines.errors import ParameterError
 from scanlines.geometry.poses import IDENTITY, Pose, compose, invert, relative_pose
 from scanlines.params import MAX_COUNT, MAX_METRES, Param, integer, number
@@ -269,19 +270,17 @@ def point_to_line_system(
     A point ``p`` on a line of unit normal ``n`` has the residual ``e = n . p - rho``; a
     small update ``(dx, dy, dtheta)`` turning about a centre ``c`` changes it by
     ``n . (dx, dy) + dtheta (n_y l_x - n_x l_y)``, ``l = p - c`` (``lever``, K x 2). The
-    weights are Huber's (``huber`` metres). The localisation filter's kernel linearises so
-    too (``point_to_line_system`` in ``cpp/scanlines/map/filter.cpp``, each weight over its
-    residual's variance), summing in another order (docs/ARCHITECTURE.md, "Line maps")."""
-    a = np.abs(residuals)
-    weight = np.where(a <= huber, 1.0, huber / np.maximum(a, 1e-12))
-    jac = np.column_stack(
-        (normals[:, 0], normals[:, 1], normals[:, 1] * lever[:, 0] - normals[:, 0] * lever[:, 1])
+    weights are Huber's (``huber`` metres); a pair whose weighted residual is not finite is
+    left out. One compiled routine (``cpp/scanlines/map/point_to_line.hpp``) linearises for
+    this function and for the localisation filter's kernel, which weighs each pair over its
+    residual's variance."""
+    normal, gradient, weighted_sse = _core.point_to_line_system(
+        np.asarray(lever, dtype=np.float64).reshape(-1, 2),
+        np.asarray(normals, dtype=np.float64).reshape(-1, 2),
+        np.asarray(residuals, dtype=np.float64).reshape(-1),
+        float(huber),
     )
-    return LineSystem(
-        jac.T @ (weight[:, None] * jac),
-        jac.T @ (weight * residuals),
-        float(np.sum(weight * residuals**2)),
-    )
+    return LineSystem(normal, gradient, weighted_sse)
 
 
 def point_to_line_step(
