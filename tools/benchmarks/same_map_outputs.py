@@ -7,7 +7,7 @@ or check that this checkout writes the recorded ones byte for byte.
 For a change that must not change a map, a trajectory or a covariance (a re-housing of
 ``map/`` or of the filter's kernel): record with the version before the change, then compare
 with the version after. ``tests/records/map_outputs.json`` is such a record (the SHA-256 of
-each file), and ``tests/test_same_map_outputs.py`` compares against it on every test run.
+each file), and ``tests/map/test_same_map_outputs.py`` compares against it on every test run.
 
 The runs (:data:`RUNS`, in this order, in one directory): the Intel excerpt mapped at its
 log's poses; Intel tracked (``map --align``) with and without its loops closed, and URG with

@@ -17,7 +17,7 @@ from pathlib import Path
 
 from tools.benchmarks import same_map_outputs
 
-RECORD = Path(__file__).parent / "records" / "map_outputs.json"
+RECORD = Path(__file__).parents[1] / "records" / "map_outputs.json"
 
 
 def test_every_file_is_the_same():
