@@ -139,7 +139,7 @@ def _filter(**changes):
         "x": X.copy(),
         "y": Y.copy(),
         "rho": vec([2.0, 0.0]),
-        "alpha": vec([0.0, math.pi / 2]),
+        "normal": _core.line_normals(vec([0.0, math.pi / 2])),
         "start": vec([[2.0, -1.0], [2.0, 0.0]]),
         "end": vec([[2.0, 0.0], [0.0, 0.0]]),
         "sides": _ints(3, 3),
@@ -765,7 +765,8 @@ PROBES: dict[str, list[tuple[str, Callable]]] = {
         ("cell starts of 2 x 1 cells", _filter(cell_start=_ints(0, 1, 2))),
         ("cell starts past the ids", _filter(cell_start=_ints(0, 5))),
         ("max_points -1", _filter(max_points=-1)),
-        ("alpha too short", _filter(alpha=vec([0.0]))),
+        ("normal too short", _filter(normal=_core.line_normals(vec([0.0])))),
+        ("normal of 1 column", _filter(normal=vec([[1.0], [0.0]]))),
         ("sides too short", _filter(sides=_ints(3))),
         ("y too short", _filter(y=Y[:3].copy())),
         ("a covariance 6 x 6", _filter(covariance=np.eye(6))),
@@ -786,6 +787,7 @@ NUMBERS: dict[str, Callable] = {
     "residual_tolerances": lambda: _core.residual_tolerances(vec([NAN, -1.0, 1e308]), NOISE, NAN),
     "literal_noise": lambda: _core.literal_noise(np.zeros(0)),
     "read_fields": lambda: _core.read_fields(b"\x00\xff 1e999999 -" + b"9" * 5000),
+    "line_normals": lambda: _core.line_normals(vec([NAN, -1e308, 1e308, 0.0])),
 }
 # Values the kernels skip by design (documented at their binding): no error, a result.
 SKIPPED: dict[str, Callable] = {

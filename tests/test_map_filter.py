@@ -205,13 +205,13 @@ def test_the_kernel_refuses_arguments_of_the_wrong_shape():
     tracker.start((0.0, 0.0, 0.0))
     grid, lines = tracker.grid, tracker.lines
     args = [tracker.state, tracker.covariance, np.zeros(3), True, np.zeros(4), np.zeros(4),
-            lines.rho, lines.alpha, lines.start, lines.end, lines.sides, grid.shape,
+            lines.rho, tracker.normals, lines.start, lines.end, lines.sides, grid.shape,
             grid.cell_start, grid.cell_lines, tracker.settings.kernel_values(), 0]  # fmt: skip
     _core.filter_scan(*args)
     for position, wrong, message in [
         (0, np.zeros(5), "state has 7 values"), (2, np.zeros(2), "increment"),
         (5, np.zeros(3), "one length"), (6, lines.rho[:-1], "same lines"),
-        (10, lines.sides[:-1], "same lines"),
+        (7, tracker.normals[:-1], "same lines"), (10, lines.sides[:-1], "same lines"),
         (12, grid.cell_start[:-1], "cell starts"), (14, np.zeros(5), "23 settings"),
     ]:  # fmt: skip
         bad = list(args)

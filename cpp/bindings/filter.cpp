@@ -56,7 +56,7 @@ FilterParams params_of(const InReals& values) {
 
 nb::tuple filter_scan_binding(const InReals& state, const InTable& covariance,
                               const InReals& increment, bool first, const InReals& x,
-                              const InReals& y, const InReals& rho, const InReals& alpha,
+                              const InReals& y, const InReals& rho, const InTable& normal,
                               const InTable& start, const InTable& end, const InInts& sides,
                               const InReals& shape,
                               const InInts& cell_start, const InInts& cell_lines,
@@ -67,9 +67,10 @@ nb::tuple filter_scan_binding(const InReals& state, const InTable& covariance,
     if (increment.shape(0) != 3) throw nb::value_error("an increment is x, y, theta");
     if (x.shape(0) != y.shape(0)) throw nb::value_error("x and y must have one length");
     const std::size_t lines = rho.shape(0);
-    if (alpha.shape(0) != lines || start.shape(0) != lines || end.shape(0) != lines ||
-        start.shape(1) != 2 || end.shape(1) != 2 || sides.shape(0) != lines)
-        throw nb::value_error("rho, alpha, start, end and sides must describe the same lines");
+    if (normal.shape(0) != lines || start.shape(0) != lines || end.shape(0) != lines ||
+        normal.shape(1) != 2 || start.shape(1) != 2 || end.shape(1) != 2 ||
+        sides.shape(0) != lines)
+        throw nb::value_error("rho, normal, start, end and sides must describe the same lines");
     if (shape.shape(0) != 5) throw nb::value_error("the grid's shape is x0, y0, cell, nx, ny");
     // The cells nx, ny: whole numbers, the grid no larger than its cell starts.
     const double cells_x = shape.data()[3], cells_y = shape.data()[4];
@@ -96,7 +97,7 @@ nb::tuple filter_scan_binding(const InReals& state, const InTable& covariance,
     for (std::size_t i = 0; i < n; ++i) s[i] = state.data()[i];
     for (std::size_t i = 0; i < n * n; ++i) c[i] = covariance.data()[i];
     LineGrid grid{view(rho),
-                  view(alpha),
+                  View<double>(normal.data(), static_cast<Index>(2 * lines)),
                   View<double>(start.data(), static_cast<Index>(2 * lines)),
                   View<double>(end.data(), static_cast<Index>(2 * lines)),
                   view(sides),
@@ -120,12 +121,24 @@ nb::tuple filter_scan_binding(const InReals& state, const InTable& covariance,
                           step.pairs, step.lines, step.chi_square, static_cast<int>(step.status));
 }
 
+nb::object line_normals_binding(const InReals& alpha) {
+    Reals normal;
+    {
+        nb::gil_scoped_release unlocked;
+        normal = line_normals(view(alpha));
+    }
+    return to_numpy(std::move(normal), {alpha.shape(0), 2});
+}
+
 }  // namespace
 
 void bind_filter(nb::module_& m) {
     m.def("filter_scan", &filter_scan_binding,
           "One step of the line-map filter (scanlines.map.filter): predict with the odometry "
           "increment, align the scan's returns to the map's lines.");
+    m.def("line_normals", &line_normals_binding,
+          "The unit normals (cos, sin) of lines at angles alpha (L x 2), as filter_scan takes "
+          "them.");
 }
 
 }  // namespace scanlines::bind

@@ -232,7 +232,7 @@ Index nearest_line(double wx, double wy, double nwx, double nwy, double gate,
     for (Index e = from; e < to; ++e) {
         const Index l = grid.cell_lines[e];
         if (l < 0 || l >= lines) continue;
-        const double lnx = std::cos(grid.alpha[l]), lny = std::sin(grid.alpha[l]);
+        const double lnx = grid.normal[2 * l], lny = grid.normal[2 * l + 1];
         if (std::fabs(nwx * lnx + nwy * lny) < p.normal_cosine) continue;
         const Index side = lnx * xe[0] + lny * xe[1] > grid.rho[l] ? 1 : 2;
         if ((grid.sides[l] & side) == 0) continue;
@@ -306,7 +306,7 @@ LineSystem point_to_line_system(const FilterVector& xe, const Association& a,
     for (std::size_t k = 0; k < a.line_of.size(); ++k) {
         const Index l = a.line_of[k];
         if (l < 0 || a.per_line[l] < p.line_returns) continue;
-        const double lnx = std::cos(grid.alpha[l]), lny = std::sin(grid.alpha[l]);
+        const double lnx = grid.normal[2 * l], lny = grid.normal[2 * l + 1];
         const double e = lnx * a.wx[k] + lny * a.wy[k] - grid.rho[l];
         const double jt = lny * (a.wx[k] - xe[0]) - lnx * (a.wy[k] - xe[1]);
         const double var = p.return_sigma * p.return_sigma +
@@ -418,6 +418,15 @@ void accept(FilterVector xe, const FilterVector& xp, const FilterMatrix& info,
 }
 
 }  // namespace
+
+Reals line_normals(View<double> alpha) {
+    Reals normal(static_cast<std::size_t>(2 * alpha.size));
+    for (Index l = 0; l < alpha.size; ++l) {
+        normal[2 * l] = std::cos(alpha[l]);
+        normal[2 * l + 1] = std::sin(alpha[l]);
+    }
+    return normal;
+}
 
 FilterStep filter_scan(const FilterVector& state, const FilterMatrix& covariance,
                        const double* increment, View<double> px, View<double> py,

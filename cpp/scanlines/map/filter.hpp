@@ -21,8 +21,9 @@ using FilterMatrix = std::array<double, FILTER_STATE * FILTER_STATE>;  // row-ma
 // within the grid's reach of the cell, ids cell_lines[cell_start[c] .. cell_start[c + 1]) of
 // cell c = i * ny + j. `sides`: the sides each line was seen from (bit 1: the side its normal
 // points to, bit 2: the other); a return matches a line only from a side it was seen from.
+// `normal`: each line's unit normal (cos alpha, sin alpha), as line_normals gives it.
 struct LineGrid {
-    View<double> rho, alpha, start, end;  // start, end: L x 2, row-major
+    View<double> rho, normal, start, end;  // normal, start, end: L x 2, row-major
     View<Index> sides;
     double x0, y0, cell;
     Index nx, ny;
@@ -70,6 +71,10 @@ struct FilterStep {
     double chi_square;
     FilterStatus status;
 };
+
+// The unit normals (cos, sin) of lines at angles `alpha`, L x 2 row-major: worked out once
+// per map, not for each return's candidate lines.
+Reals line_normals(View<double> alpha);
 
 // The filter's step for one scan: predict with the odometry `increment` (x, y, theta in the
 // last pose's frame; null: the first scan, no prediction), then associate the scan's returns

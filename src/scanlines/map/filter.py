@@ -245,12 +245,15 @@ class LineMapFilter:
         sides = lines.sides
         if sides is None or not self.settings.sides:
             sides = np.full(len(lines.rho), BOTH)
+        from scanlines import _core
+
         self.lines = LineSet(
             *(np.ascontiguousarray(a, dtype=np.float64).reshape(-1, *np.shape(a)[1:])
               for a in lines[:4]),
             np.ascontiguousarray(sides, dtype=np.int64),
         )  # fmt: skip
         self.grid = line_grid(self.lines, self.settings.gate_max)
+        self.normals = _core.line_normals(self.lines.alpha)
 
     def start(self, pose: Pose, sigma: tuple[float, float] = INITIAL_SIGMA) -> None:
         """Start (or restart) at the local ``pose`` with standard deviations ``sigma``
@@ -277,7 +280,7 @@ class LineMapFilter:
         state, covariance, predicted, pairs, matched, chi2, status = _core.filter_scan(
             self.state, self.covariance, move, self._first or increment is None,
             np.ascontiguousarray(points[:, 0]), np.ascontiguousarray(points[:, 1]),
-            lines.rho, lines.alpha, lines.start, lines.end, lines.sides,
+            lines.rho, self.normals, lines.start, lines.end, lines.sides,
             grid.shape, grid.cell_start, grid.cell_lines, self._values,
             self.settings.max_points,
         )  # fmt: skip
