@@ -226,7 +226,7 @@ def test_the_near_grid_finds_the_lines_the_wide_grid_finds(seed, offset, sigma):
         second = filt.step(scan.points[scan.valid], (0.01, 0.0, 0.002))
         steps.append((first, second))
     for ours, theirs in zip(*steps, strict=True):
-        assert ours.status == theirs.status and ours.pairs == theirs.pairs
+        assert (ours.status, ours.pairs) == (theirs.status, theirs.pairs)
         assert ours.state.tobytes() == theirs.state.tobytes()
         assert ours.state_covariance.tobytes() == theirs.state_covariance.tobytes()
 
