@@ -207,7 +207,7 @@ def line_grid(lines: LineSet, reach: float, cell: float = CELL) -> LineGrid:
 
 
 #: The most (line, cell) pairs :func:`line_grid` tests at once (memory, not results).
-GRID_BATCH = 1 << 18
+GRID_BATCH = 1 << 15
 
 
 def _batches(sizes: np.ndarray, most: int):
