@@ -139,13 +139,17 @@ def _filter(**changes):
         "x": X.copy(),
         "y": Y.copy(),
         "rho": vec([2.0, 0.0]),
-        "alpha": vec([0.0, math.pi / 2]),
+        "normal": _core.line_normals(vec([0.0, math.pi / 2])),
         "start": vec([[2.0, -1.0], [2.0, 0.0]]),
         "end": vec([[2.0, 0.0], [0.0, 0.0]]),
         "sides": _ints(3, 3),
         "shape": vec([-10.0, -10.0, 20.0, 1.0, 1.0]),
         "cell_start": _ints(0, 2),
         "cell_lines": _ints(0, 1),
+        "near_shape": vec([-10.0, -10.0, 20.0, 1.0, 1.0]),
+        "near_cell_start": _ints(0, 2),
+        "near_cell_lines": _ints(0, 1),
+        "near_reach": 0.2,
         "settings": FilterSettings().kernel_values(),
         "max_points": 400,
     }
@@ -771,8 +775,15 @@ PROBES: dict[str, list[tuple[str, Callable]]] = {
         ("x0 NaN", _filter(shape=vec([NAN, -10.0, 20.0, 1.0, 1.0]))),
         ("cell starts of 2 x 1 cells", _filter(cell_start=_ints(0, 1, 2))),
         ("cell starts past the ids", _filter(cell_start=_ints(0, 5))),
+        ("near nx NaN", _filter(near_shape=vec([-10.0, -10.0, 20.0, NAN, 1.0]))),
+        ("near cell NaN", _filter(near_shape=vec([-10.0, -10.0, NAN, 1.0, 1.0]))),
+        ("near cell starts of 2 x 1 cells", _filter(near_cell_start=_ints(0, 1, 2))),
+        ("near cell starts past the ids", _filter(near_cell_start=_ints(0, 5))),
+        ("near_reach NaN", _filter(near_reach=NAN)),
+        ("near_reach -1", _filter(near_reach=-1.0)),
         ("max_points -1", _filter(max_points=-1)),
-        ("alpha too short", _filter(alpha=vec([0.0]))),
+        ("normal too short", _filter(normal=_core.line_normals(vec([0.0])))),
+        ("normal of 1 column", _filter(normal=vec([[1.0], [0.0]]))),
         ("sides too short", _filter(sides=_ints(3))),
         ("y too short", _filter(y=Y[:3].copy())),
         ("a covariance 6 x 6", _filter(covariance=np.eye(6))),
@@ -800,10 +811,12 @@ NUMBERS: dict[str, Callable] = {
     "residual_tolerances": lambda: _core.residual_tolerances(vec([NAN, -1.0, 1e308]), NOISE, NAN),
     "literal_noise": lambda: _core.literal_noise(np.zeros(0)),
     "read_fields": lambda: _core.read_fields(b"\x00\xff 1e999999 -" + b"9" * 5000),
+    "line_normals": lambda: _core.line_normals(vec([NAN, -1e308, 1e308, 0.0])),
 }
 # Values the kernels skip by design (documented at their binding): no error, a result.
 SKIPPED: dict[str, Callable] = {
     "filter_scan": _filter(cell_lines=_ints(0, 99)),  # a line id past the lines: ignored
+    "filter_scan near": _filter(near_cell_lines=_ints(-1, 99)),  # the same in the near grid
 }
 
 
@@ -832,6 +845,7 @@ def test_a_function_of_numbers_returns_on_nan_and_extremes(name):
 
 def test_the_filter_skips_a_line_id_past_the_lines():
     assert SKIPPED["filter_scan"]()[6] in range(8)
+    assert SKIPPED["filter_scan near"]()[6] in range(8)
 
 
 @pytest.mark.parametrize(

@@ -55,41 +55,55 @@ FilterParams params_of(const InReals& values) {
     return p;
 }
 
+// A grid of shape (x0, y0, cell, nx, ny) and its cells, checked as far as the kernel reads it.
+// `name`: the grid's name in the errors.
+CellGrid cells_of(const char* name, const InReals& shape, const InInts& cell_start,
+                  const InInts& cell_lines) {
+    const std::string grid = std::string("the ") + name + " grid";
+    if (shape.shape(0) != 5) value_error(grid + "'s shape is x0, y0, cell, nx, ny");
+    // The cells nx, ny: whole numbers, the grid no larger than its cell starts.
+    const double* v = shape.data();
+    const double cells_x = v[3], cells_y = v[4];
+    if (!(cells_x >= 1.0 && cells_y >= 1.0) || cells_x != std::floor(cells_x) ||
+        cells_y != std::floor(cells_y) ||
+        cells_x * cells_y + 1.0 != static_cast<double>(cell_start.shape(0)))
+        value_error(grid + " has nx * ny + 1 cell starts");
+    if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !(v[2] > 0.0) || !std::isfinite(v[2]))
+        value_error(grid + "'s x0, y0 must be finite and its cell above 0");
+    const Index nx = static_cast<Index>(cells_x), ny = static_cast<Index>(cells_y);
+    if (static_cast<Index>(cell_start.shape(0)) != nx * ny + 1)
+        value_error(grid + " has nx * ny + 1 cell starts");
+    // The grid is built once by scanlines.map.filter.LineGrid, which checks it; here only
+    // its ends (the kernel skips a cell or line id out of range rather than read past).
+    const Index total = static_cast<Index>(cell_lines.shape(0));
+    if (cell_start.data()[0] != 0 || cell_start.data()[nx * ny] != total)
+        value_error(grid + "'s cell starts must run from 0 to its number of ids");
+    return {v[0], v[1], v[2], nx, ny, view(cell_start), view(cell_lines)};
+}
+
 nb::tuple filter_scan_binding(const InReals& state, const InTable& covariance,
                               const InReals& increment, bool first, const InReals& x,
-                              const InReals& y, const InReals& rho, const InReals& alpha,
+                              const InReals& y, const InReals& rho, const InTable& normal,
                               const InTable& start, const InTable& end, const InInts& sides,
-                              const InReals& shape,
-                              const InInts& cell_start, const InInts& cell_lines,
-                              const InReals& settings, Index max_points) {
+                              const InReals& shape, const InInts& cell_start,
+                              const InInts& cell_lines, const InReals& near_shape,
+                              const InInts& near_cell_start, const InInts& near_cell_lines,
+                              double near_reach, const InReals& settings, Index max_points) {
     constexpr std::size_t n = FILTER_STATE;
     if (state.shape(0) != n || covariance.shape(0) != n || covariance.shape(1) != n)
         throw nb::value_error("the state has 7 values and its covariance 7 x 7");
     if (increment.shape(0) != 3) throw nb::value_error("an increment is x, y, theta");
     if (x.shape(0) != y.shape(0)) throw nb::value_error("x and y must have one length");
     const std::size_t lines = rho.shape(0);
-    if (alpha.shape(0) != lines || start.shape(0) != lines || end.shape(0) != lines ||
-        start.shape(1) != 2 || end.shape(1) != 2 || sides.shape(0) != lines)
-        throw nb::value_error("rho, alpha, start, end and sides must describe the same lines");
-    if (shape.shape(0) != 5) throw nb::value_error("the grid's shape is x0, y0, cell, nx, ny");
-    // The cells nx, ny: whole numbers, the grid no larger than its cell starts.
-    const double cells_x = shape.data()[3], cells_y = shape.data()[4];
-    if (!(cells_x >= 1.0 && cells_y >= 1.0) || cells_x != std::floor(cells_x) ||
-        cells_y != std::floor(cells_y) ||
-        cells_x * cells_y + 1.0 != static_cast<double>(cell_start.shape(0)))
-        throw nb::value_error("the grid has nx * ny + 1 cell starts");
-    if (!std::isfinite(shape.data()[0]) || !std::isfinite(shape.data()[1]) ||
-        !(shape.data()[2] > 0.0) || !std::isfinite(shape.data()[2]))
-        throw nb::value_error("the grid's x0, y0 must be finite and its cell above 0");
+    if (normal.shape(0) != lines || start.shape(0) != lines || end.shape(0) != lines ||
+        normal.shape(1) != 2 || start.shape(1) != 2 || end.shape(1) != 2 ||
+        sides.shape(0) != lines)
+        throw nb::value_error("rho, normal, start, end and sides must describe the same lines");
+    const CellGrid wide = cells_of("wide", shape, cell_start, cell_lines);
+    const CellGrid near = cells_of("near", near_shape, near_cell_start, near_cell_lines);
+    if (!(near_reach >= 0.0) || !std::isfinite(near_reach))
+        value_error("near_reach must be a finite distance >= 0, got " + std::to_string(near_reach));
     expect_at_least("max_points", max_points, 0);
-    const Index nx = static_cast<Index>(cells_x), ny = static_cast<Index>(cells_y);
-    if (static_cast<Index>(cell_start.shape(0)) != nx * ny + 1)
-        throw nb::value_error("the grid has nx * ny + 1 cell starts");
-    // The grid is built once by scanlines.map.filter.LineGrid, which checks it; here only
-    // its ends (the kernel skips a cell or line id out of range rather than read past).
-    const Index total = static_cast<Index>(cell_lines.shape(0));
-    if (cell_start.data()[0] != 0 || cell_start.data()[nx * ny] != total)
-        throw nb::value_error("the grid's cell starts must run from 0 to its number of ids");
     FilterParams params = params_of(settings);
     params.max_points = max_points;
     FilterVector s{};
@@ -97,17 +111,13 @@ nb::tuple filter_scan_binding(const InReals& state, const InTable& covariance,
     for (std::size_t i = 0; i < n; ++i) s[i] = state.data()[i];
     for (std::size_t i = 0; i < n * n; ++i) c[i] = covariance.data()[i];
     LineGrid grid{view(rho),
-                  view(alpha),
+                  View<double>(normal.data(), static_cast<Index>(2 * lines)),
                   View<double>(start.data(), static_cast<Index>(2 * lines)),
                   View<double>(end.data(), static_cast<Index>(2 * lines)),
                   view(sides),
-                  shape.data()[0],
-                  shape.data()[1],
-                  shape.data()[2],
-                  nx,
-                  ny,
-                  view(cell_start),
-                  view(cell_lines)};
+                  wide,
+                  near,
+                  near_reach};
     FilterStep step;
     {
         nb::gil_scoped_release unlocked;
@@ -142,6 +152,15 @@ nb::tuple point_to_line_system_binding(const InTable& lever, const InTable& norm
     return nb::make_tuple(to_numpy(std::move(h), {3, 3}), to_numpy(std::move(g)), system.cost);
 }
 
+nb::object line_normals_binding(const InReals& alpha) {
+    Reals normal;
+    {
+        nb::gil_scoped_release unlocked;
+        normal = line_normals(view(alpha));
+    }
+    return to_numpy(std::move(normal), {alpha.shape(0), 2});
+}
+
 }  // namespace
 
 void bind_filter(nb::module_& m) {
@@ -151,6 +170,9 @@ void bind_filter(nb::module_& m) {
     m.def("point_to_line_system", &point_to_line_system_binding,
           "The normal equations of a pose update that brings points onto their lines "
           "(scanlines.geometry.registration.point_to_line_system).");
+    m.def("line_normals", &line_normals_binding,
+          "The unit normals (cos, sin) of lines at angles alpha (L x 2), as filter_scan takes "
+          "them.");
 }
 
 }  // namespace scanlines::bind

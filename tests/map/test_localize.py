@@ -144,3 +144,19 @@ def test_localize_errors_are_one_line(tmp_path):
     assert ran.returncode == 2
     assert ran.stderr.strip().count("\n") == 0
     assert "none.json" in ran.stderr
+
+
+@pytest.mark.parametrize("name", ["intel", "freiburg", "urg"])
+def test_the_returns_localize_reads_are_the_scans_points(name):
+    """localize's returns, bearings' cosines and sines kept from scan to scan: each scan's
+    valid points, byte for byte."""
+    from scanlines.map.localize import _Returns
+
+    returns_of = _Returns()
+    with open_log(sample(name)) as reader:
+        scans = [scan for _, scan in reader.enumerate()]
+    scans.append(Scan([1.0, np.nan, 2.0], -0.5, 0.5))  # other bearings
+    for scan in scans:
+        ours, theirs = returns_of(scan), scan.points[scan.valid].astype(np.float64)
+        assert ours.tobytes() == theirs.tobytes()
+        assert ours.shape == theirs.shape

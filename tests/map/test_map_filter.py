@@ -198,21 +198,57 @@ def test_a_far_correction_is_refused_as_inconsistent():
     assert step.chi_square > 4.0
 
 
+def _clutter(seed: int, count: int) -> list:
+    """``count`` short walls at random places and angles in ROOM (seeded)."""
+    rng = np.random.default_rng(seed)
+    walls = []
+    for _ in range(count):
+        (x, y), angle, length = rng.uniform((-3.5, -2.5), (3.5, 2.5)), rng.uniform(0, 3.2), 0.4
+        walls.append(((x, y), (x + length * math.cos(angle), y + length * math.sin(angle))))
+    return walls
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(0, 10**6), st.floats(0.0, 0.3), st.floats(0.0, 0.2))
+def test_the_near_grid_finds_the_lines_the_wide_grid_finds(seed, offset, sigma):
+    """Returns of small gates looked up in the near grid: the same steps, bit for bit, as with
+    the wide grid alone (a near grid that no gate fits)."""
+    walls = ROOM + _clutter(seed, 40)
+    pose = (0.3, -0.2, 0.1)
+    scan = view(walls, pose, seed=seed % 1000)
+    tracker = LineMapFilter(room_lines(walls))
+    wide_only = LineMapFilter(room_lines(walls))
+    wide_only.near_grid = wide_only.near_grid._replace(reach=-0.0)
+    steps = []
+    for filt in (tracker, wide_only):
+        filt.start((pose[0] + offset, pose[1] - offset, pose[2]), (0.02 + sigma, 0.01 + sigma))
+        first = filt.step(scan.points[scan.valid], None)
+        second = filt.step(scan.points[scan.valid], (0.01, 0.0, 0.002))
+        steps.append((first, second))
+    for ours, theirs in zip(*steps, strict=True):
+        assert (ours.status, ours.pairs) == (theirs.status, theirs.pairs)
+        assert ours.state.tobytes() == theirs.state.tobytes()
+        assert ours.state_covariance.tobytes() == theirs.state_covariance.tobytes()
+
+
 def test_the_kernel_refuses_arguments_of_the_wrong_shape():
     from scanlines import _core
 
     tracker = LineMapFilter(room_lines(ROOM))
     tracker.start((0.0, 0.0, 0.0))
-    grid, lines = tracker.grid, tracker.lines
+    grid, near, lines = tracker.grid, tracker.near_grid, tracker.lines
     args = [tracker.state, tracker.covariance, np.zeros(3), True, np.zeros(4), np.zeros(4),
-            lines.rho, lines.alpha, lines.start, lines.end, lines.sides, grid.shape,
-            grid.cell_start, grid.cell_lines, tracker.settings.kernel_values(), 0]  # fmt: skip
+            lines.rho, tracker.normals, lines.start, lines.end, lines.sides, grid.shape,
+            grid.cell_start, grid.cell_lines, near.shape, near.cell_start, near.cell_lines,
+            near.reach, tracker.settings.kernel_values(), 0]  # fmt: skip
     _core.filter_scan(*args)
     for position, wrong, message in [
         (0, np.zeros(5), "state has 7 values"), (2, np.zeros(2), "increment"),
         (5, np.zeros(3), "one length"), (6, lines.rho[:-1], "same lines"),
-        (10, lines.sides[:-1], "same lines"),
-        (12, grid.cell_start[:-1], "cell starts"), (14, np.zeros(5), "23 settings"),
+        (7, tracker.normals[:-1], "same lines"), (10, lines.sides[:-1], "same lines"),
+        (12, grid.cell_start[:-1], "wide grid has nx"),
+        (15, near.cell_start[:-1], "near grid has nx"), (17, math.nan, "near_reach"),
+        (18, np.zeros(5), "23 settings"),
     ]:  # fmt: skip
         bad = list(args)
         bad[position] = wrong

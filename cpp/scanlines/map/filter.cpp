@@ -220,21 +220,22 @@ ScanReturns scan_returns(View<double> px, View<double> py, const FilterMatrix& c
 // estimate's position xe; -1: none. Cell and line ids out of range are skipped.
 Index nearest_line(double wx, double wy, double nwx, double nwy, double gate,
                    const FilterVector& xe, const LineGrid& grid, const FilterParams& p) {
-    const double ci = std::floor((wx - grid.x0) / grid.cell);
-    const double cj = std::floor((wy - grid.y0) / grid.cell);
-    if (!(ci >= 0.0 && cj >= 0.0 && ci < static_cast<double>(grid.nx) &&
-          cj < static_cast<double>(grid.ny)))
+    const CellGrid& cells = gate <= grid.near_reach ? grid.near : grid.wide;
+    const double ci = std::floor((wx - cells.x0) / cells.cell);
+    const double cj = std::floor((wy - cells.y0) / cells.cell);
+    if (!(ci >= 0.0 && cj >= 0.0 && ci < static_cast<double>(cells.nx) &&
+          cj < static_cast<double>(cells.ny)))
         return -1;
-    const Index c = static_cast<Index>(ci) * grid.ny + static_cast<Index>(cj);
+    const Index c = static_cast<Index>(ci) * cells.ny + static_cast<Index>(cj);
     const Index lines = grid.rho.size;
-    const Index from = std::max<Index>(grid.cell_start[c], 0);
-    const Index to = std::min(grid.cell_start[c + 1], grid.cell_lines.size);
+    const Index from = std::max<Index>(cells.cell_start[c], 0);
+    const Index to = std::min(cells.cell_start[c + 1], cells.cell_lines.size);
     double best = gate * gate;
     Index found = -1;
     for (Index e = from; e < to; ++e) {
-        const Index l = grid.cell_lines[e];
+        const Index l = cells.cell_lines[e];
         if (l < 0 || l >= lines) continue;
-        const double lnx = std::cos(grid.alpha[l]), lny = std::sin(grid.alpha[l]);
+        const double lnx = grid.normal[2 * l], lny = grid.normal[2 * l + 1];
         if (std::fabs(nwx * lnx + nwy * lny) < p.normal_cosine) continue;
         const Index side = lnx * xe[0] + lny * xe[1] > grid.rho[l] ? 1 : 2;
         if ((grid.sides[l] & side) == 0) continue;
@@ -296,7 +297,7 @@ LineSystem point_to_line_system(const FilterVector& xe, const Association& a,
     for (std::size_t k = 0; k < a.line_of.size(); ++k) {
         const Index l = a.line_of[k];
         if (l < 0 || a.per_line[l] < p.line_returns) continue;
-        const double lnx = std::cos(grid.alpha[l]), lny = std::sin(grid.alpha[l]);
+        const double lnx = grid.normal[2 * l], lny = grid.normal[2 * l + 1];
         const double e = lnx * a.wx[k] + lny * a.wy[k] - grid.rho[l];
         const double var = p.return_sigma * p.return_sigma +
                            static_cast<double>(a.per_line[l]) * p.line_sigma * p.line_sigma;
@@ -399,6 +400,15 @@ void accept(FilterVector xe, const FilterVector& xp, const FilterMatrix& info,
 }
 
 }  // namespace
+
+Reals line_normals(View<double> alpha) {
+    Reals normal(static_cast<std::size_t>(2 * alpha.size));
+    for (Index l = 0; l < alpha.size; ++l) {
+        normal[2 * l] = std::cos(alpha[l]);
+        normal[2 * l + 1] = std::sin(alpha[l]);
+    }
+    return normal;
+}
 
 FilterStep filter_scan(const FilterVector& state, const FilterMatrix& covariance,
                        const double* increment, View<double> px, View<double> py,

@@ -17,16 +17,25 @@ constexpr Index FILTER_STATE = 7;
 using FilterVector = std::array<double, FILTER_STATE>;
 using FilterMatrix = std::array<double, FILTER_STATE * FILTER_STATE>;  // row-major
 
-// The map's lines and a uniform grid over them: cell (i, j) (i along x) lists the lines
-// within the grid's reach of the cell, ids cell_lines[cell_start[c] .. cell_start[c + 1]) of
-// cell c = i * ny + j. `sides`: the sides each line was seen from (bit 1: the side its normal
-// points to, bit 2: the other); a return matches a line only from a side it was seen from.
-struct LineGrid {
-    View<double> rho, alpha, start, end;  // start, end: L x 2, row-major
-    View<Index> sides;
+// A uniform grid over map lines: cell (i, j) (i along x) lists the lines within the grid's
+// reach of the cell, ids cell_lines[cell_start[c] .. cell_start[c + 1]) of cell c = i * ny + j.
+struct CellGrid {
     double x0, y0, cell;
     Index nx, ny;
     View<Index> cell_start, cell_lines;
+};
+
+// The map's lines and two grids over them: `wide`, whose reach is the largest gate, and
+// `near`, finer, whose reach is `near_reach`: a return whose gate is no larger is looked up
+// there, among fewer lines (the same nearest line: every line within its gate is listed in
+// both, in the order of their ids). `sides`: the sides each line was seen from (bit 1: the side
+// its normal points to, bit 2: the other); a return matches a line only from a side it was
+// seen from. `normal`: each line's unit normal (cos alpha, sin alpha), as line_normals gives it.
+struct LineGrid {
+    View<double> rho, normal, start, end;  // normal, start, end: L x 2, row-major
+    View<Index> sides;
+    CellGrid wide, near;
+    double near_reach;
 };
 
 struct FilterParams {
@@ -70,6 +79,10 @@ struct FilterStep {
     double chi_square;
     FilterStatus status;
 };
+
+// The unit normals (cos, sin) of lines at angles `alpha`, L x 2 row-major: worked out once
+// per map, not for each return's candidate lines.
+Reals line_normals(View<double> alpha);
 
 // The filter's step for one scan: predict with the odometry `increment` (x, y, theta in the
 // last pose's frame; null: the first scan, no prediction), then associate the scan's returns

@@ -301,6 +301,7 @@ def localize(
     state = _SearchState(GlobalSearch(tracker, search), lost=initial is None)
     odometry_of = poses or (lambda index, scan: scan.pose)
     last_odometry: Pose | None = None
+    returns_of = _Returns()
     indexed = _reporting(indexed, on_scan)
     scans = indexed if initial is None else _from_start(indexed, initial[0], run)
     for index, scan in scans:
@@ -311,7 +312,7 @@ def localize(
         if last_odometry is None and initial is not None:
             tracker.start(frame.pose(initial[1]), initial_sigma)
         increment = None if last_odometry is None else relative_pose(last_odometry, odometry)
-        points = scan.points[scan.valid].astype(np.float64)
+        points = returns_of(scan)
         predicted, pose, covariance, status = state.step(scan, points, increment)
         last_odometry = odometry
         if status == "lost" and len(run.lost_at) == len(run.found_at):  # once an episode
@@ -326,6 +327,25 @@ def localize(
         run.drift, run.scale = float(tracker.state[3]), float(tracker.state[4])
         run.lever = (float(tracker.state[5]), float(tracker.state[6]))
     return run
+
+
+class _Returns:
+    """A scan's valid returns in the sensor frame: the rows of :attr:`Scan.points` of its valid
+    beams (the same numbers), the cosines and sines of its bearings kept for the next scans
+    with the same bearings, as a log's are."""
+
+    def __init__(self) -> None:
+        self._bearings: tuple[int, float, float] | None = None
+        self._cos = self._sin = np.zeros(0)
+
+    def __call__(self, scan: Scan) -> np.ndarray:
+        bearings = (len(scan), scan.angle_min, scan.angle_increment)
+        if bearings != self._bearings:
+            self._bearings = bearings
+            self._cos, self._sin = np.cos(scan.angles), np.sin(scan.angles)
+        valid = scan.valid
+        r = scan.ranges[valid]
+        return np.column_stack((r * self._cos[valid], r * self._sin[valid]))
 
 
 class _Recovered(NamedTuple):
