@@ -150,19 +150,20 @@ def _filter(**changes):
         "near_cell_start": _ints(0, 2),
         "near_cell_lines": _ints(0, 1),
         "near_reach": 0.2,
-        "settings": FilterSettings().kernel_values(),
+        "settings": FilterSettings().record(),
         "max_points": 400,
     }
     args.update(changes)
     return lambda: _core.filter_scan(*args.values())
 
 
-def _settings_with(position: int, value: float) -> np.ndarray:
+def _settings_with(group: str, name: str, value) -> dict:
+    """The filter's settings record with one field changed."""
     from scanlines.map.filter import FilterSettings
 
-    values = FilterSettings().kernel_values()
-    values[position] = value
-    return values
+    record = FilterSettings().record()
+    record[group][name] = value
+    return record
 
 
 SHORT = GAP[:-1]  # a gap array one short
@@ -765,10 +766,13 @@ PROBES: dict[str, list[tuple[str, Callable]]] = {
     "iepf_stack": _stack_probes("iepf", "segments", {"split_reference": 5}),
     "split_merge_stack": _stack_probes("split_merge", "clustering", {"breakpoints": -2, "k": NAN}),
     "filter_scan": [
-        ("a count setting NaN", _filter(settings=_settings_with(19, NAN))),
-        ("a count setting negative", _filter(settings=_settings_with(15, -3.0))),
-        ("a count setting 1e300", _filter(settings=_settings_with(21, 1e300))),
-        ("22 settings", _filter(settings=_settings_with(0, 0.0)[:22])),
+        ("a count setting 0", _filter(settings=_settings_with("solver", "iterations", 0))),
+        (
+            "a count setting negative",
+            _filter(settings=_settings_with("association", "line_returns", -3)),
+        ),
+        ("a count setting 1e300", _filter(settings=_settings_with("solver", "min_pairs", 10**300))),
+        ("a number setting NaN", _filter(settings=_settings_with("noise", "huber", NAN))),
         ("nx NaN", _filter(shape=vec([-10.0, -10.0, 20.0, NAN, 1.0]))),
         ("nx 1e300", _filter(shape=vec([-10.0, -10.0, 20.0, 1e300, 1.0]))),
         ("cell 0", _filter(shape=vec([-10.0, -10.0, 0.0, 1.0, 1.0]))),

@@ -20,6 +20,7 @@ import scanlines.sensor
 from scanlines import ParameterError
 from scanlines.geometry.registration import IcpSettings
 from scanlines.map.align import AlignSettings
+from scanlines.map.filter import FilterSettings
 from scanlines.map.fusion import FusionSettings
 from scanlines.map.relocalise import SearchSettings
 from scanlines.map.tracking import TrackSettings
@@ -27,7 +28,7 @@ from scanlines.params import Param, integer, number
 from scanlines.params.tables import Groups, SettingsTable
 from test_parameter_domains import ANY_TYPE_WRONG, inside, outside
 
-TABLES = (IcpSettings, AlignSettings, FusionSettings, SearchSettings, TrackSettings)
+TABLES = (IcpSettings, AlignSettings, FusionSettings, SearchSettings, TrackSettings, FilterSettings)
 SETTINGS = [(table, name) for table in TABLES for name in table.parameters]
 IDS = [f"{table.__name__}.{name}" for table, name in SETTINGS]
 
@@ -70,6 +71,8 @@ def test_the_domain_edges_are_accepted(table, name):
     for value in inside(domain):
         if table is IcpSettings and name == "min_distance" and float(value) > 0.5:
             continue  # at most max_distance: test_a_relation_between_settings
+        if table is FilterSettings and name == "gate_min" and float(value) > 0.5:
+            continue  # at most gate_max: test_a_relation_between_settings
         made = table(**{name: value})
         assert getattr(made, name) == table.parameters[name].check(name, value)
 
@@ -83,6 +86,8 @@ def test_a_relation_between_settings():
     error = one_line_error(IcpSettings, "min_distance", 0.6)
     assert str(error) == "IcpSettings.min_distance must be at most max_distance (0.5), got 0.6"
     assert IcpSettings(min_distance=0.6, max_distance=0.6).min_distance == 0.6
+    error = one_line_error(FilterSettings, "gate_min", 0.6)
+    assert str(error) == "FilterSettings.gate_min must be at most gate_max (0.5), got 0.6"
 
 
 @pytest.mark.parametrize("table", TABLES, ids=lambda t: t.__name__)

@@ -13,44 +13,38 @@ namespace {
 
 using InTable = In<double, nb::ndim<2>>;
 
-// The settings in the order of scanlines.map.filter.FilterSettings.kernel_values().
-constexpr std::size_t PARAMS = 23;
-
-FilterParams params_of(const InReals& values) {
-    if (values.shape(0) != PARAMS) throw nb::value_error("the filter takes 23 settings");
-    const double* v = values.data();
-    // A count from the settings' floats: a whole number in 0 .. MAX_SETTING_COUNT.
-    auto count = [&](std::size_t i, const char* name) {
-        double x = v[i];
-        if (!(x >= 0.0 && x <= static_cast<double>(MAX_SETTING_COUNT)) || x != std::floor(x))
-            value_error(std::string("the filter's ") + name + " must be a whole number in 0 .. " +
-                        text(MAX_SETTING_COUNT) + ", got " + std::to_string(x));
-        return static_cast<Index>(x);
+// The filter's settings record (scanlines.map.filter.FilterSettings.record), by group and
+// name; max_points is given on its own.
+FilterParams params_of(const nb::dict& record) {
+    const nb::dict odometry = group(record, "odometry"), association = group(record, "association"),
+                   noise = group(record, "noise"), solver = group(record, "solver");
+    auto count = [](const nb::dict& settings, const char* name) {
+        return setting_in(settings, name, 1, MAX_SETTING_COUNT);
     };
     FilterParams p{};
-    p.odometry_floor = v[0];
-    p.odometry_per_metre = v[1];
-    p.turn_floor = v[2];
-    p.turn_per_radian = v[3];
-    p.turn_per_metre = v[4];
-    p.drift_walk = v[5];
-    p.scale_walk = v[6];
-    p.normal_window = count(7, "normal_window");
-    p.neighbour_gap = v[8];
-    p.flatness = v[9];
-    p.normal_cosine = v[10];
-    p.gate_base = v[11];
-    p.gate_sigmas = v[12];
-    p.gate_min = v[13];
-    p.gate_max = v[14];
-    p.line_returns = count(15, "line_returns");
-    p.return_sigma = v[16];
-    p.line_sigma = v[17];
-    p.huber = v[18];
-    p.iterations = count(19, "iterations");
-    p.tolerance = v[20];
-    p.min_pairs = count(21, "min_pairs");
-    p.max_chi_square = v[22];
+    p.odometry_floor = number_setting(odometry, "odometry_floor");
+    p.odometry_per_metre = number_setting(odometry, "odometry_per_metre");
+    p.turn_floor = number_setting(odometry, "turn_floor");
+    p.turn_per_radian = number_setting(odometry, "turn_per_radian");
+    p.turn_per_metre = number_setting(odometry, "turn_per_metre");
+    p.drift_walk = number_setting(odometry, "drift_walk");
+    p.scale_walk = number_setting(odometry, "scale_walk");
+    p.normal_window = count(association, "normal_window");
+    p.neighbour_gap = number_setting(association, "neighbour_gap");
+    p.flatness = number_setting(association, "flatness");
+    p.normal_cosine = number_setting(association, "normal_cosine");
+    p.gate_base = number_setting(association, "gate_base");
+    p.gate_sigmas = number_setting(association, "gate_sigmas");
+    p.gate_min = number_setting(association, "gate_min");
+    p.gate_max = number_setting(association, "gate_max");
+    p.line_returns = count(association, "line_returns");
+    p.return_sigma = number_setting(noise, "return_sigma");
+    p.line_sigma = number_setting(noise, "line_sigma");
+    p.huber = number_setting(noise, "huber");
+    p.iterations = count(solver, "iterations");
+    p.tolerance = number_setting(solver, "tolerance");
+    p.min_pairs = count(solver, "min_pairs");
+    p.max_chi_square = number_setting(solver, "max_chi_square");
     p.max_points = 0;
     return p;
 }
@@ -88,7 +82,7 @@ nb::tuple filter_scan_binding(const InReals& state, const InTable& covariance,
                               const InReals& shape, const InInts& cell_start,
                               const InInts& cell_lines, const InReals& near_shape,
                               const InInts& near_cell_start, const InInts& near_cell_lines,
-                              double near_reach, const InReals& settings, Index max_points) {
+                              double near_reach, const nb::dict& settings, Index max_points) {
     constexpr std::size_t n = FILTER_STATE;
     if (state.shape(0) != n || covariance.shape(0) != n || covariance.shape(1) != n)
         throw nb::value_error("the state has 7 values and its covariance 7 x 7");

@@ -55,14 +55,16 @@ gate widens until the map is caught again.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, fields
-from typing import Any, NamedTuple
+from typing import ClassVar, NamedTuple
 
 import numpy as np
 
+from scanlines.errors import ParameterError
 from scanlines.geometry.poses import Pose
 from scanlines.map.align import LineSet
 from scanlines.map.fusion import BOTH
+from scanlines.params import MAX_COUNT, MAX_METRES, KernelField, Param, choice, integer, number
+from scanlines.params.tables import Groups, SettingsTable
 
 __all__ = ["FilterSettings", "FilterStep", "LineGrid", "LineMapFilter", "line_grid"]
 
@@ -79,75 +81,82 @@ NEAR_CELL = 0.1
 STATUSES = ("aligned", "too few returns on map lines", "inconsistent with the prediction")
 
 
-@dataclass(frozen=True)
-class FilterSettings:
-    """The constants of the filter (metres, radians; module docstring). Odometry: the
-    increment's noise (``odometry_floor`` + ``odometry_per_metre`` x distance for x and y;
-    ``turn_floor`` + ``turn_per_radian`` x turn + ``turn_per_metre`` x distance for the
-    heading), the prior of the heading drift (radians per metre) and of the scale error, and
-    their random walks per metre driven. ``max_points``: the returns used (evenly
-    subsampled), 0 for all. ``sides``: a return matches only a face seen from its side
-    (False, the default: the sides a map keeps are ignored)."""
+_METRES = number(low=0.0, high=MAX_METRES)
+_POSITIVE_METRES = number(low=0.0, low_open=True, high=MAX_METRES)
+_SHARE = number(low=0.0)
+_RADIANS = number(low=0.0, high=math.pi)
+_COUNT = integer(1, MAX_COUNT)
+_NOT_READ = ()  # a setting of the Python side only: no field of the kernel's record
 
-    odometry_floor: float = 0.005
-    odometry_per_metre: float = 0.05
-    turn_floor: float = math.radians(0.2)
-    turn_per_radian: float = 0.05
-    turn_per_metre: float = 0.02
-    drift_sigma: float = 0.1
-    scale_sigma: float = 0.05
-    lever_sigma: float = 0.2
-    drift_walk: float = 0.0005
-    scale_walk: float = 0.0005
-    normal_window: int = 2
-    neighbour_gap: float = 0.3
-    flatness: float = 0.3
-    normal_tolerance: float = math.radians(30.0)
-    gate_base: float = 0.05
-    gate_sigmas: float = 2.0
-    gate_min: float = 0.1
-    gate_max: float = 0.5
-    line_returns: int = 8
-    return_sigma: float = 0.01
-    line_sigma: float = 0.02
-    huber: float = 2.0
-    iterations: int = 10
-    tolerance: float = 1e-5
-    min_pairs: int = 10
-    max_chi_square: float = 16.27
-    max_points: int = 400
-    sides: bool = False
 
-    def __post_init__(self) -> None:
-        from scanlines.errors import ParameterError
+class FilterSettings(SettingsTable):
+    """The constants of the filter (metres, radians; module docstring): the odometry
+    increment's noise and the priors and random walks of its errors, the association of
+    returns to map lines, the residuals' noise, the Gauss-Newton steps and the gate on the
+    correction, the returns used and whether walls have a side."""
 
-        for f in fields(self):
-            value = getattr(self, f.name)
-            if not math.isfinite(value) or value < 0:
-                raise ParameterError(f"FilterSettings.{f.name}: {value!r} is not >= 0")
+    groups: ClassVar[Groups] = {
+        "odometry": {
+            "odometry_floor": Param(0.005, _METRES, "an increment's x, y sigma at rest (m)"),
+            "odometry_per_metre": Param(0.05, _SHARE, "x, y sigma per metre driven (m/m)"),
+            "turn_floor": Param(math.radians(0.2), _RADIANS, "heading sigma at rest (rad)"),
+            "turn_per_radian": Param(0.05, _SHARE, "heading sigma per radian turned"),
+            "turn_per_metre": Param(0.02, _SHARE, "heading sigma per metre driven (rad/m)"),
+            "drift_sigma": Param(0.1, _SHARE, "prior of the heading drift (rad/m)", _NOT_READ),
+            "scale_sigma": Param(0.05, _SHARE, "prior of the odometry's scale error", _NOT_READ),
+            "lever_sigma": Param(0.2, _METRES, "prior of the laser's lever (m)", _NOT_READ),
+            "drift_walk": Param(0.0005, _SHARE, "the drift's random walk per metre driven"),
+            "scale_walk": Param(0.0005, _SHARE, "the scale's random walk per metre driven"),
+        },
+        "association": {
+            "normal_window": Param(2, _COUNT, "neighbours each side of a return's local line"),
+            "neighbour_gap": Param(0.3, _METRES, "farthest neighbour of that line (m)"),
+            "flatness": Param(0.3, _SHARE, "largest spread across that line over along it"),
+            "normal_tolerance": Param(
+                math.radians(30.0),
+                number(low=0.0, high=math.pi / 2),
+                "largest angle between a return's line and its map line (rad)",
+                (KernelField("normal_cosine", math.cos),),
+            ),
+            "gate_base": Param(0.05, _METRES, "a return's gate at a certain pose (m)"),
+            "gate_sigmas": Param(2.0, _SHARE, "the gate's growth in position sigmas"),
+            "gate_min": Param(0.1, _POSITIVE_METRES, "smallest gate (m)"),
+            "gate_max": Param(0.5, _POSITIVE_METRES, "largest gate (m)"),
+            "line_returns": Param(8, _COUNT, "returns a map line needs to count"),
+        },
+        "noise": {
+            "return_sigma": Param(0.01, _POSITIVE_METRES, "a return's residual sigma (m)"),
+            "line_sigma": Param(0.02, _METRES, "a map line's sigma, shared by its returns (m)"),
+            "huber": Param(2.0, _SHARE, "Huber's width (standard deviations)"),
+        },
+        "solver": {
+            "iterations": Param(10, _COUNT, "most Gauss-Newton steps a scan"),
+            "tolerance": Param(1e-5, _METRES, "a step this small ends them (m, rad)"),
+            "min_pairs": Param(10, _COUNT, "returns on map lines a correction needs"),
+            "max_chi_square": Param(
+                16.27, _SHARE, "largest squared distance of the correction from the prediction"
+            ),
+        },
+        "scan": {
+            "max_points": Param(
+                400, integer(0, MAX_COUNT), "returns used, evenly subsampled (0: all)", _NOT_READ
+            ),
+            "sides": Param(
+                False,
+                choice(True, False),
+                "a return matches only a face seen from its side",
+                _NOT_READ,
+            ),
+        },
+    }
+
+    def check(self) -> None:
         if self.gate_min > self.gate_max:
-            raise ParameterError("FilterSettings: gate_min exceeds gate_max")
-        if self.normal_tolerance > math.pi / 2:
-            raise ParameterError("FilterSettings.normal_tolerance: at most 90 degrees")
-        for name in ("iterations", "min_pairs", "normal_window", "line_returns"):
-            if getattr(self, name) < 1:
-                raise ParameterError(f"FilterSettings.{name}: must be >= 1")
-
-    def to_dict(self) -> dict[str, Any]:
-        return asdict(self)
-
-    def kernel_values(self) -> np.ndarray:
-        """The settings in the order the compiled kernel takes them."""
-        return np.array(
-            [self.odometry_floor, self.odometry_per_metre, self.turn_floor,
-             self.turn_per_radian, self.turn_per_metre, self.drift_walk, self.scale_walk,
-             self.normal_window, self.neighbour_gap, self.flatness,
-             math.cos(self.normal_tolerance), self.gate_base, self.gate_sigmas,
-             self.gate_min, self.gate_max, self.line_returns, self.return_sigma,
-             self.line_sigma, self.huber, self.iterations, self.tolerance, self.min_pairs,
-             self.max_chi_square],
-            dtype=np.float64,
-        )  # fmt: skip
+            raise ParameterError(
+                f"FilterSettings.gate_min must be at most gate_max ({self.gate_max}), "
+                f"got {self.gate_min}",
+                parameter="gate_min",
+            )
 
 
 class LineGrid(NamedTuple):
@@ -266,7 +275,7 @@ class LineMapFilter:
     def __init__(self, lines: LineSet, settings: FilterSettings | None = None) -> None:
         self.settings = settings or FilterSettings()
         self.use_lines(lines)
-        self._values = self.settings.kernel_values()
+        self._record = self.settings.record()
         self.state: np.ndarray | None = None
         self.covariance: np.ndarray | None = None
         self._first = True
@@ -316,7 +325,7 @@ class LineMapFilter:
             np.ascontiguousarray(points[:, 0]), np.ascontiguousarray(points[:, 1]),
             lines.rho, self.normals, lines.start, lines.end, lines.sides,
             grid.shape, grid.cell_start, grid.cell_lines, near.shape, near.cell_start,
-            near.cell_lines, near.reach, self._values,
+            near.cell_lines, near.reach, self._record,
             self.settings.max_points,
         )  # fmt: skip
         self._first = False
