@@ -355,3 +355,18 @@ def test_an_extractor_pickles_with_its_parameters():
     )
     scan = scan_of([((2.0, -3.0), (2.0, 3.0))], fov_deg=90, step_deg=1.0)
     assert copy(scan).first.tolist() == extractor(scan).first.tolist()
+
+
+def test_the_core_readme_is_true_to_the_tree():
+    """``cpp/README.md``'s listing: every folder of the core has its line, and every file it
+    names (``filter.cpp``, ``scanlines/core.hpp``) is in the core."""
+    core = REPOSITORY / "cpp"
+    text = (core / "README.md").read_text()
+    (listing,) = re.findall(r"```\n(CMakeLists.txt.*?)```", text, flags=re.DOTALL)
+    described = set(re.findall(r"^([\w/]+/)\s", listing, flags=re.MULTILINE))
+    folders = {f"{p.relative_to(core).as_posix()}/" for p in core.rglob("*") if p.is_dir()}
+    folders = {f for f in folders if f.count("/") <= 2 and f != "scanlines/"}
+    assert folders <= described, sorted(folders - described)
+    files = {p.name for p in core.rglob("*") if p.is_file()}
+    named = re.findall(r"\b([\w/]+\.(?:cpp|hpp))\b", text)
+    assert sorted(n for n in named if n.rsplit("/", 1)[-1] not in files) == []
