@@ -30,6 +30,7 @@ import math
 import numpy as np
 
 from scanlines.geometry.poses import Pose, compose
+from scanlines.map.scoring import beam_shares, mapped
 from scanlines.map.search_settings import SearchSettings
 
 __all__ = ["ExplainedGrid", "GlobalSearch", "Hypothesis", "LinePairs", "SearchSettings",
@@ -86,6 +87,13 @@ class ExplainedGrid:
         wx = pose[0] + (c * ux - s * uy)[:, None] * t[None, :]
         wy = pose[1] + (s * ux + c * uy)[:, None] * t[None, :]
         return float(np.mean((self._hits(wx, wy) & along).any(axis=1)))
+
+    def hits_at(self, points: np.ndarray, pose) -> np.ndarray:
+        """Which of sensor-frame ``points`` are explained at ``pose``."""
+        c, s = math.cos(pose[2]), math.sin(pose[2])
+        x = pose[0] + c * points[:, 0] - s * points[:, 1]
+        y = pose[1] + s * points[:, 0] + c * points[:, 1]
+        return self._hits(x, y)
 
     def share_at(self, points: np.ndarray, pose) -> float:
         """:meth:`shares` at one ``pose`` in fewer array operations (each scan's lost test)."""
@@ -288,6 +296,7 @@ class Hypothesis:
         self.pending: Pose = (0.0, 0.0, 0.0)
         self.shares: list[float] = []
         self.crossed: list[float] = []  # shares of beams through a map line, when checked
+        self.beams: list[tuple[float, float]] = []  # beam_shares, scan by scan
         self.pose: Pose = self._pose()
 
     def _pose(self) -> Pose:
@@ -369,6 +378,7 @@ class GlobalSearch:
             hypothesis = self._hypothesis(poses[k], errors)
             hypothesis.move(None, points)  # aligned on the scan it came from
             hypothesis.shares.append(float(self.grid.shares(sample, hypothesis.pose)[0]))
+            hypothesis.beams.append(self._beams(sample, hypothesis.pose))
             self.hypotheses.append(hypothesis)
             added += 1
         self._trim()
@@ -395,9 +405,11 @@ class GlobalSearch:
             h.move(increment, points if refine else None)
         if self.hypotheses:
             poses = np.array([h.pose for h in self.hypotheses])
-            shares = self.grid.shares(self.sample(points), poses)
+            sample = self.sample(points)
+            shares = self.grid.shares(sample, poses)
             for h, share in zip(self.hypotheses, shares, strict=True):
                 h.shares.append(float(share))
+                h.beams.append(self._beams(sample, h.pose))
         kept: list[Hypothesis] = []
         for h in sorted(self.hypotheses, key=lambda h: -len(h.shares)):
             if len(h.shares) >= s.drop_after and h.recent(s.drop_after) < s.drop_share:
@@ -406,6 +418,11 @@ class GlobalSearch:
                 continue  # two that became one (checked when they are refined)
             kept.append(h)
         self.hypotheses = kept
+
+    def _beams(self, sample: np.ndarray, pose: Pose) -> tuple[float, float]:
+        s = self.settings
+        explained = self.grid.hits_at(sample, pose)
+        return beam_shares(sample, pose, explained, self.tracker.lines, s.clearance, s.reach)
 
     def _trim(self) -> None:
         s = self.settings
@@ -433,7 +450,8 @@ class GlobalSearch:
             if len(h.shares) < count:
                 continue
             score = h.recent(count)
-            if score >= floor and score >= rival + s.margin and score > best_score:
+            taken = score >= floor or mapped(h.shares, h.beams, s.agree_far, s)
+            if taken and score >= rival + s.margin and score > best_score:
                 best, best_score = h, score
         if best is None:
             return None
@@ -441,6 +459,8 @@ class GlobalSearch:
             distinct = h is not best and not _same(h.pose, best.pose, s)
             if distinct and h.recent(s.agree) > best.recent(s.agree) - s.margin:
                 return None
+        if mapped(best.shares, best.beams, s.agree_far, s):
+            return best  # its beams cast on the map's lines: none seen through a wall
         best.crossed.append(self.grid.crossed(self.sample(points), best.pose, s.clearance, s.reach))
         if len(best.crossed) < s.checks or np.mean(best.crossed[-s.checks :]) > s.max_crossed:
             return None
