@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import copy
 import math
+from collections import deque
 
 import numpy as np
 
@@ -296,7 +297,8 @@ class Hypothesis:
         self.pending: Pose = (0.0, 0.0, 0.0)
         self.shares: list[float] = []
         self.crossed: list[float] = []  # shares of beams through a map line, when checked
-        self.beams: list[tuple[float, float]] = []  # beam_shares, scan by scan
+        self.poses: list[Pose] = []  # its pose at each share
+        self.beams: dict[int, tuple[float, float]] = {}  # beam_shares by the search's scan
         self.pose: Pose = self._pose()
 
     def _pose(self) -> Pose:
@@ -331,6 +333,7 @@ class GlobalSearch:
         self.hypotheses: list[Hypothesis] = []
         self._scans = 0
         self._picks: dict[int, np.ndarray] = {}  # the returns scored, by the scan's size
+        self._samples: deque[np.ndarray] = deque(maxlen=self.settings.agree_far)
 
     @property
     def pairs(self) -> LinePairs:
@@ -378,7 +381,7 @@ class GlobalSearch:
             hypothesis = self._hypothesis(poses[k], errors)
             hypothesis.move(None, points)  # aligned on the scan it came from
             hypothesis.shares.append(float(self.grid.shares(sample, hypothesis.pose)[0]))
-            hypothesis.beams.append(self._beams(sample, hypothesis.pose))
+            hypothesis.poses.append(hypothesis.pose)
             self.hypotheses.append(hypothesis)
             added += 1
         self._trim()
@@ -400,16 +403,16 @@ class GlobalSearch:
         scan (sensor-frame returns); the poor and the duplicates dropped."""
         s = self.settings
         self._scans += 1
+        self._samples.append(self.sample(points))
         refine = self._scans % (s.refine_every_tracked if tracked else s.refine_every) == 0
         for h in self.hypotheses:
             h.move(increment, points if refine else None)
         if self.hypotheses:
             poses = np.array([h.pose for h in self.hypotheses])
-            sample = self.sample(points)
-            shares = self.grid.shares(sample, poses)
+            shares = self.grid.shares(self.sample(points), poses)
             for h, share in zip(self.hypotheses, shares, strict=True):
                 h.shares.append(float(share))
-                h.beams.append(self._beams(sample, h.pose))
+                h.poses.append(h.pose)
         kept: list[Hypothesis] = []
         for h in sorted(self.hypotheses, key=lambda h: -len(h.shares)):
             if len(h.shares) >= s.drop_after and h.recent(s.drop_after) < s.drop_share:
@@ -419,10 +422,28 @@ class GlobalSearch:
             kept.append(h)
         self.hypotheses = kept
 
-    def _beams(self, sample: np.ndarray, pose: Pose) -> tuple[float, float]:
+    def _mapped(self, h: Hypothesis) -> bool:
+        """:func:`~scanlines.map.scoring.mapped` over the last ``agree_far`` scans, the beams
+        cast only for a hypothesis explaining ``mapped_share`` (the costly part)."""
         s = self.settings
-        explained = self.grid.hits_at(sample, pose)
-        return beam_shares(sample, pose, explained, self.tracker.lines, s.clearance, s.reach)
+        count = s.agree_far
+        if len(h.shares) < count or len(self._samples) < count:
+            return False
+        if h.recent(count) < s.mapped_share:
+            return False
+        beams = []
+        for back in range(1, count + 1):
+            scan = self._scans - back + 1
+            if scan not in h.beams:
+                sample, pose = self._samples[-back], h.poses[-back]
+                explained = self.grid.hits_at(sample, pose)
+                h.beams[scan] = beam_shares(
+                    sample, pose, explained, self.tracker.lines, s.clearance, s.reach
+                )
+            beams.append(h.beams[scan])
+        for old in [k for k in h.beams if k <= self._scans - count]:
+            del h.beams[old]
+        return mapped(h.shares, beams[::-1], count, s)
 
     def _trim(self) -> None:
         s = self.settings
@@ -450,7 +471,7 @@ class GlobalSearch:
             if len(h.shares) < count:
                 continue
             score = h.recent(count)
-            taken = score >= floor or mapped(h.shares, h.beams, s.agree_far, s)
+            taken = score >= floor or self._mapped(h)
             if taken and score >= rival + s.margin and score > best_score:
                 best, best_score = h, score
         if best is None:
@@ -459,7 +480,7 @@ class GlobalSearch:
             distinct = h is not best and not _same(h.pose, best.pose, s)
             if distinct and h.recent(s.agree) > best.recent(s.agree) - s.margin:
                 return None
-        if mapped(best.shares, best.beams, s.agree_far, s):
+        if self._mapped(best):
             return best  # its beams cast on the map's lines: none seen through a wall
         best.crossed.append(self.grid.crossed(self.sample(points), best.pose, s.clearance, s.reach))
         if len(best.crossed) < s.checks or np.mean(best.crossed[-s.checks :]) > s.max_crossed:
@@ -474,3 +495,4 @@ class GlobalSearch:
     def clear(self) -> None:
         self.hypotheses = []
         self._scans = 0
+        self._samples.clear()
