@@ -31,90 +31,11 @@ from collections import deque
 import numpy as np
 
 from scanlines.geometry.poses import Pose, compose
-from scanlines.map.scoring import beam_shares, mapped
+from scanlines.map.scoring import ExplainedGrid, beam_shares, mapped
 from scanlines.map.search_settings import SearchSettings
 
 __all__ = ["ExplainedGrid", "GlobalSearch", "Hypothesis", "LinePairs", "SearchSettings",
            "pose_candidates"]  # fmt: skip
-
-
-class ExplainedGrid:
-    """A bitmap of the cells (``cell`` metres) within ``near`` of some map line: a return
-    in such a cell is *explained* by the map."""
-
-    def __init__(self, start: np.ndarray, end: np.ndarray, near: float, cell: float) -> None:
-        start = np.asarray(start, dtype=np.float64).reshape(-1, 2)
-        end = np.asarray(end, dtype=np.float64).reshape(-1, 2)
-        self.cell = cell
-        if not len(start):
-            self.origin, self.bits = np.zeros(2), np.zeros((1, 1), dtype=bool)
-            return
-        self.origin = np.minimum(start, end).min(axis=0) - near - cell
-        top = np.maximum(start, end).max(axis=0) + near + cell
-        nx, ny = (int(v) for v in np.ceil((top - self.origin) / cell) + 1)
-        self.bits = np.zeros((nx, ny), dtype=bool)
-        reach = math.ceil(near / cell)
-        di, dj = np.meshgrid(np.arange(-reach, reach + 1), np.arange(-reach, reach + 1))
-        disk = np.hypot(di, dj) * cell <= near
-        di, dj = di[disk], dj[disk]
-        for a, b in zip(start, end, strict=True):
-            count = max(2, math.ceil(np.hypot(*(b - a)) / (0.5 * cell)) + 1)
-            t = np.linspace(0.0, 1.0, count)[:, None]
-            cells = np.floor((a + t * (b - a) - self.origin) / cell).astype(np.int64)
-            i = np.clip((cells[:, 0:1] + di).ravel(), 0, nx - 1)
-            j = np.clip((cells[:, 1:2] + dj).ravel(), 0, ny - 1)
-            self.bits[i, j] = True
-
-    def _hits(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        i = np.floor((x - self.origin[0]) / self.cell).astype(np.int64)
-        j = np.floor((y - self.origin[1]) / self.cell).astype(np.int64)
-        nx, ny = self.bits.shape
-        inside = (i >= 0) & (i < nx) & (j >= 0) & (j < ny)
-        hit = np.zeros(i.shape, dtype=bool)
-        hit[inside] = self.bits[i[inside], j[inside]]
-        return hit
-
-    def crossed(self, points: np.ndarray, pose, clearance: float, reach: float) -> float:
-        """The share of sensor-frame ``points`` whose beam, from the sensor at ``pose`` to
-        ``clearance`` short of the return (at most ``reach`` metres), passes near a map
-        line: a return seen through a wall, which a right pose does not have."""
-        if not len(points):
-            return 0.0
-        r = np.hypot(points[:, 0], points[:, 1])
-        t = np.arange(self.cell, reach, self.cell)  # distances along each beam
-        along = t[None, :] <= (r - clearance)[:, None]  # K x T
-        c, s = math.cos(pose[2]), math.sin(pose[2])
-        ux, uy = points[:, 0] / np.maximum(r, 1e-9), points[:, 1] / np.maximum(r, 1e-9)
-        wx = pose[0] + (c * ux - s * uy)[:, None] * t[None, :]
-        wy = pose[1] + (s * ux + c * uy)[:, None] * t[None, :]
-        return float(np.mean((self._hits(wx, wy) & along).any(axis=1)))
-
-    def hits_at(self, points: np.ndarray, pose) -> np.ndarray:
-        """Which of sensor-frame ``points`` are explained at ``pose``."""
-        c, s = math.cos(pose[2]), math.sin(pose[2])
-        x = pose[0] + c * points[:, 0] - s * points[:, 1]
-        y = pose[1] + s * points[:, 0] + c * points[:, 1]
-        return self._hits(x, y)
-
-    def share_at(self, points: np.ndarray, pose) -> float:
-        """:meth:`shares` at one ``pose`` in fewer array operations (each scan's lost test)."""
-        if not len(points):
-            return 0.0
-        c, s = (float(f(np.full((1, 1), float(pose[2])))[0, 0]) for f in (np.cos, np.sin))
-        x = pose[0] + c * points[:, 0] - s * points[:, 1]
-        y = pose[1] + s * points[:, 0] + c * points[:, 1]
-        return int(np.count_nonzero(self._hits(x, y))) / len(points)
-
-    def shares(self, points: np.ndarray, poses: np.ndarray) -> np.ndarray:
-        """The share of sensor-frame ``points`` (K x 2) explained at each of ``poses``
-        (H x 3)."""
-        poses = np.asarray(poses, dtype=np.float64).reshape(-1, 3)
-        if not len(points):
-            return np.zeros(len(poses))
-        c, s = np.cos(poses[:, 2:3]), np.sin(poses[:, 2:3])
-        x = poses[:, 0:1] + c * points[:, 0] - s * points[:, 1]
-        y = poses[:, 1:2] + s * points[:, 0] + c * points[:, 1]
-        return self._hits(x, y).mean(axis=1)
 
 
 def _wrap(angle):
@@ -471,21 +392,28 @@ class GlobalSearch:
             if len(h.shares) < count:
                 continue
             score = h.recent(count)
-            taken = score >= floor or self._mapped(h)
-            if taken and score >= rival + s.margin and score > best_score:
+            if score < rival + s.margin or score <= best_score:
+                continue
+            if score >= floor or (self._leads(h) and self._mapped(h)):
                 best, best_score = h, score
-        if best is None:
+        if best is None or not self._leads(best):
             return None
-        for h in self.hypotheses:
-            distinct = h is not best and not _same(h.pose, best.pose, s)
-            if distinct and h.recent(s.agree) > best.recent(s.agree) - s.margin:
-                return None
         if self._mapped(best):
             return best  # its beams cast on the map's lines: none seen through a wall
         best.crossed.append(self.grid.crossed(self.sample(points), best.pose, s.clearance, s.reach))
         if len(best.crossed) < s.checks or np.mean(best.crossed[-s.checks :]) > s.max_crossed:
             return None
         return best
+
+    def _leads(self, best: Hypothesis) -> bool:
+        """Whether no hypothesis distinct from ``best`` comes within ``margin`` of it over
+        the last ``agree`` scans."""
+        s = self.settings
+        lead = best.recent(s.agree) - s.margin
+        return not any(
+            h is not best and h.recent(s.agree) > lead and not _same(h.pose, best.pose, s)
+            for h in self.hypotheses
+        )
 
     def settle(self, winner: Hypothesis) -> None:
         """The winner's pending move applied through its filter (no returns matched)."""
