@@ -20,6 +20,10 @@ distinct ones become hypotheses. Each hypothesis is then a copy of the filter (w
 odometry's errors learnt so far), stepped on the next scans like the filter itself and
 scored again on each; a hypothesis is kept when it has explained at least ``found_share``
 of the returns over ``agree`` scans and no distinct rival comes within ``margin`` of it.
+Where the map holds only part of what the sensor sees, a hypothesis leading its rivals may
+instead be judged where the map has lines (:func:`~scanlines.map.scoring.mapped`: its beams
+cast on the map's lines over ``agree_far`` scans, few seen through a wall, most of those
+that meet a map line explained).
 """
 
 from __future__ import annotations
