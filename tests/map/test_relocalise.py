@@ -18,9 +18,11 @@ from scanlines.data import sample
 from scanlines.evaluation.trajectory import load_trajectory, match_times
 from scanlines.geometry.poses import compose, relative_pose
 from scanlines.map import build_map
+from scanlines.map.align import LineSet
 from scanlines.map.export import write_map
 from scanlines.map.localize import localize, read_line_map
 from scanlines.map.relocalise import ExplainedGrid, LinePairs, SearchSettings, pose_candidates
+from scanlines.map.scoring import beam_shares, first_hits, mapped
 from test_map import view
 
 #: A room with a shelf, a stub and a pillar: no turn or mirror of it looks the same.
@@ -174,3 +176,22 @@ def test_the_share_at_one_pose_is_the_share_of_the_many_pose_form(pose, seed):
     points = rng.uniform(-10, 10, (int(rng.integers(1, 300)), 2))
     assert grid.share_at(points, pose) == float(grid.shares(points, np.asarray(pose))[0])
     assert grid.share_at(points[:0], pose) == 0.0
+
+
+def test_beams_cast_on_the_map_tell_walls_seen_through_from_places_the_map_lacks():
+    # a wall at x = 2 (y -1..1); the sensor at the origin facing +x
+    lines = LineSet(np.zeros(1), np.zeros(1), np.array([[2.0, -1.0]]), np.array([[2.0, 1.0]]))
+    points = np.array([[2.0, 0.0], [3.0, 0.0], [1.0, 0.2], [0.0, 4.0]])
+    hits = first_hits(points, np.zeros(3), lines.start, lines.end, 10.0)[0]
+    assert hits[:2] == pytest.approx([2.0, 2.0])
+    assert hits[3] == math.inf
+    explained = np.array([True, False, False, False])
+    through, short = beam_shares(points, (0.0, 0.0, 0.0), explained, lines, 0.3, 10.0)
+    assert (through, short) == (0.25, 0.25)  # one beyond the wall, one in front; one unmapped
+    settings = SearchSettings()
+    count = settings.agree_far
+    assert mapped([0.4] * count, [(0.0, 0.1)] * count, count, settings)
+    assert not mapped([0.4] * count, [(0.05, 0.0)] * count, count, settings)  # through walls
+    assert not mapped([0.4] * count, [(0.0, 0.3)] * count, count, settings)  # 0.4 of 0.7
+    assert not mapped([0.3] * count, [(0.0, 0.0)] * count, count, settings)  # too little
+    assert not mapped([0.9] * (count - 1), [(0.0, 0.0)] * (count - 1), count, settings)

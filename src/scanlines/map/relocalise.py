@@ -20,92 +20,26 @@ distinct ones become hypotheses. Each hypothesis is then a copy of the filter (w
 odometry's errors learnt so far), stepped on the next scans like the filter itself and
 scored again on each; a hypothesis is kept when it has explained at least ``found_share``
 of the returns over ``agree`` scans and no distinct rival comes within ``margin`` of it.
+Where the map holds only part of what the sensor sees, a hypothesis leading its rivals may
+instead be judged where the map has lines (:func:`~scanlines.map.scoring.mapped`: its beams
+cast on the map's lines over ``agree_far`` scans, few seen through a wall, most of those
+that meet a map line explained).
 """
 
 from __future__ import annotations
 
 import copy
 import math
+from collections import deque
 
 import numpy as np
 
 from scanlines.geometry.poses import Pose, compose
+from scanlines.map.scoring import ExplainedGrid, beam_shares, mapped
 from scanlines.map.search_settings import SearchSettings
 
 __all__ = ["ExplainedGrid", "GlobalSearch", "Hypothesis", "LinePairs", "SearchSettings",
            "pose_candidates"]  # fmt: skip
-
-
-class ExplainedGrid:
-    """A bitmap of the cells (``cell`` metres) within ``near`` of some map line: a return
-    in such a cell is *explained* by the map."""
-
-    def __init__(self, start: np.ndarray, end: np.ndarray, near: float, cell: float) -> None:
-        start = np.asarray(start, dtype=np.float64).reshape(-1, 2)
-        end = np.asarray(end, dtype=np.float64).reshape(-1, 2)
-        self.cell = cell
-        if not len(start):
-            self.origin, self.bits = np.zeros(2), np.zeros((1, 1), dtype=bool)
-            return
-        self.origin = np.minimum(start, end).min(axis=0) - near - cell
-        top = np.maximum(start, end).max(axis=0) + near + cell
-        nx, ny = (int(v) for v in np.ceil((top - self.origin) / cell) + 1)
-        self.bits = np.zeros((nx, ny), dtype=bool)
-        reach = math.ceil(near / cell)
-        di, dj = np.meshgrid(np.arange(-reach, reach + 1), np.arange(-reach, reach + 1))
-        disk = np.hypot(di, dj) * cell <= near
-        di, dj = di[disk], dj[disk]
-        for a, b in zip(start, end, strict=True):
-            count = max(2, math.ceil(np.hypot(*(b - a)) / (0.5 * cell)) + 1)
-            t = np.linspace(0.0, 1.0, count)[:, None]
-            cells = np.floor((a + t * (b - a) - self.origin) / cell).astype(np.int64)
-            i = np.clip((cells[:, 0:1] + di).ravel(), 0, nx - 1)
-            j = np.clip((cells[:, 1:2] + dj).ravel(), 0, ny - 1)
-            self.bits[i, j] = True
-
-    def _hits(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        i = np.floor((x - self.origin[0]) / self.cell).astype(np.int64)
-        j = np.floor((y - self.origin[1]) / self.cell).astype(np.int64)
-        nx, ny = self.bits.shape
-        inside = (i >= 0) & (i < nx) & (j >= 0) & (j < ny)
-        hit = np.zeros(i.shape, dtype=bool)
-        hit[inside] = self.bits[i[inside], j[inside]]
-        return hit
-
-    def crossed(self, points: np.ndarray, pose, clearance: float, reach: float) -> float:
-        """The share of sensor-frame ``points`` whose beam, from the sensor at ``pose`` to
-        ``clearance`` short of the return (at most ``reach`` metres), passes near a map
-        line: a return seen through a wall, which a right pose does not have."""
-        if not len(points):
-            return 0.0
-        r = np.hypot(points[:, 0], points[:, 1])
-        t = np.arange(self.cell, reach, self.cell)  # distances along each beam
-        along = t[None, :] <= (r - clearance)[:, None]  # K x T
-        c, s = math.cos(pose[2]), math.sin(pose[2])
-        ux, uy = points[:, 0] / np.maximum(r, 1e-9), points[:, 1] / np.maximum(r, 1e-9)
-        wx = pose[0] + (c * ux - s * uy)[:, None] * t[None, :]
-        wy = pose[1] + (s * ux + c * uy)[:, None] * t[None, :]
-        return float(np.mean((self._hits(wx, wy) & along).any(axis=1)))
-
-    def share_at(self, points: np.ndarray, pose) -> float:
-        """:meth:`shares` at one ``pose`` in fewer array operations (each scan's lost test)."""
-        if not len(points):
-            return 0.0
-        c, s = (float(f(np.full((1, 1), float(pose[2])))[0, 0]) for f in (np.cos, np.sin))
-        x = pose[0] + c * points[:, 0] - s * points[:, 1]
-        y = pose[1] + s * points[:, 0] + c * points[:, 1]
-        return int(np.count_nonzero(self._hits(x, y))) / len(points)
-
-    def shares(self, points: np.ndarray, poses: np.ndarray) -> np.ndarray:
-        """The share of sensor-frame ``points`` (K x 2) explained at each of ``poses``
-        (H x 3)."""
-        poses = np.asarray(poses, dtype=np.float64).reshape(-1, 3)
-        if not len(points):
-            return np.zeros(len(poses))
-        c, s = np.cos(poses[:, 2:3]), np.sin(poses[:, 2:3])
-        x = poses[:, 0:1] + c * points[:, 0] - s * points[:, 1]
-        y = poses[:, 1:2] + s * points[:, 0] + c * points[:, 1]
-        return self._hits(x, y).mean(axis=1)
 
 
 def _wrap(angle):
@@ -288,6 +222,8 @@ class Hypothesis:
         self.pending: Pose = (0.0, 0.0, 0.0)
         self.shares: list[float] = []
         self.crossed: list[float] = []  # shares of beams through a map line, when checked
+        self.poses: list[Pose] = []  # its pose at each share
+        self.beams: dict[int, tuple[float, float]] = {}  # beam_shares by the search's scan
         self.pose: Pose = self._pose()
 
     def _pose(self) -> Pose:
@@ -322,6 +258,7 @@ class GlobalSearch:
         self.hypotheses: list[Hypothesis] = []
         self._scans = 0
         self._picks: dict[int, np.ndarray] = {}  # the returns scored, by the scan's size
+        self._samples: deque[np.ndarray] = deque(maxlen=self.settings.agree_far)
 
     @property
     def pairs(self) -> LinePairs:
@@ -369,6 +306,7 @@ class GlobalSearch:
             hypothesis = self._hypothesis(poses[k], errors)
             hypothesis.move(None, points)  # aligned on the scan it came from
             hypothesis.shares.append(float(self.grid.shares(sample, hypothesis.pose)[0]))
+            hypothesis.poses.append(hypothesis.pose)
             self.hypotheses.append(hypothesis)
             added += 1
         self._trim()
@@ -390,6 +328,7 @@ class GlobalSearch:
         scan (sensor-frame returns); the poor and the duplicates dropped."""
         s = self.settings
         self._scans += 1
+        self._samples.append(self.sample(points))
         refine = self._scans % (s.refine_every_tracked if tracked else s.refine_every) == 0
         for h in self.hypotheses:
             h.move(increment, points if refine else None)
@@ -398,6 +337,7 @@ class GlobalSearch:
             shares = self.grid.shares(self.sample(points), poses)
             for h, share in zip(self.hypotheses, shares, strict=True):
                 h.shares.append(float(share))
+                h.poses.append(h.pose)
         kept: list[Hypothesis] = []
         for h in sorted(self.hypotheses, key=lambda h: -len(h.shares)):
             if len(h.shares) >= s.drop_after and h.recent(s.drop_after) < s.drop_share:
@@ -406,6 +346,29 @@ class GlobalSearch:
                 continue  # two that became one (checked when they are refined)
             kept.append(h)
         self.hypotheses = kept
+
+    def _mapped(self, h: Hypothesis) -> bool:
+        """:func:`~scanlines.map.scoring.mapped` over the last ``agree_far`` scans, the beams
+        cast only for a hypothesis explaining ``mapped_share`` (the costly part)."""
+        s = self.settings
+        count = s.agree_far
+        if len(h.shares) < count or len(self._samples) < count:
+            return False
+        if h.recent(count) < s.mapped_share:
+            return False
+        beams = []
+        for back in range(1, count + 1):
+            scan = self._scans - back + 1
+            if scan not in h.beams:
+                sample, pose = self._samples[-back], h.poses[-back]
+                explained = self.grid.hits_at(sample, pose)
+                h.beams[scan] = beam_shares(
+                    sample, pose, explained, self.tracker.lines, s.clearance, s.reach
+                )
+            beams.append(h.beams[scan])
+        for old in [k for k in h.beams if k <= self._scans - count]:
+            del h.beams[old]
+        return mapped(h.shares, beams[::-1], count, s)
 
     def _trim(self) -> None:
         s = self.settings
@@ -433,18 +396,28 @@ class GlobalSearch:
             if len(h.shares) < count:
                 continue
             score = h.recent(count)
-            if score >= floor and score >= rival + s.margin and score > best_score:
+            if score < rival + s.margin or score <= best_score:
+                continue
+            if score >= floor or (self._leads(h) and self._mapped(h)):
                 best, best_score = h, score
-        if best is None:
+        if best is None or not self._leads(best):
             return None
-        for h in self.hypotheses:
-            distinct = h is not best and not _same(h.pose, best.pose, s)
-            if distinct and h.recent(s.agree) > best.recent(s.agree) - s.margin:
-                return None
+        if self._mapped(best):
+            return best  # its beams cast on the map's lines: none seen through a wall
         best.crossed.append(self.grid.crossed(self.sample(points), best.pose, s.clearance, s.reach))
         if len(best.crossed) < s.checks or np.mean(best.crossed[-s.checks :]) > s.max_crossed:
             return None
         return best
+
+    def _leads(self, best: Hypothesis) -> bool:
+        """Whether no hypothesis distinct from ``best`` comes within ``margin`` of it over
+        the last ``agree`` scans."""
+        s = self.settings
+        lead = best.recent(s.agree) - s.margin
+        return not any(
+            h is not best and h.recent(s.agree) > lead and not _same(h.pose, best.pose, s)
+            for h in self.hypotheses
+        )
 
     def settle(self, winner: Hypothesis) -> None:
         """The winner's pending move applied through its filter (no returns matched)."""
@@ -454,3 +427,4 @@ class GlobalSearch:
     def clear(self) -> None:
         self.hypotheses = []
         self._scans = 0
+        self._samples.clear()

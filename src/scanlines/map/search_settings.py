@@ -138,6 +138,24 @@ class SearchSettings(SettingsTable):
                 0.2, _SHARE, "a winner seeing more of its returns through a map line is refused"
             ),
             "checks": Param(3, _SCANS, "scans of that check before a winner is taken"),
+            "mapped_share": Param(
+                0.35,
+                _SHARE,
+                "a hypothesis explaining less over agree_far scans is not judged where the map "
+                "has lines",
+            ),
+            "mapped_fraction": Param(
+                0.7,
+                _SHARE,
+                "share of the returns whose beams meet a map line a hypothesis explains to be "
+                "taken over agree_far scans (below found_share_far of all)",
+            ),
+            "max_through": Param(
+                0.03,
+                _SHARE,
+                "most returns seen through a map line (beams cast on the map's lines) such a "
+                "hypothesis may have",
+            ),
         },
         "lost": {
             "lost_share": Param(0.25, _SHARE, "a scan explaining a smaller share is low"),
