@@ -9,7 +9,7 @@ void bind_adaptive(nb::module_& m);
 void bind_paper(nb::module_& m);
 void bind_partition(nb::module_& m);
 void bind_split_methods(nb::module_& m);
-void bind_steps(nb::module_& m);
+void bind_fits(nb::module_& m);
 void bind_numbers(nb::module_& m);
 void bind_segmentation(nb::module_& m);
 void bind_filter(nb::module_& m);
@@ -33,7 +33,7 @@ NB_MODULE(_core, m) {
     scanlines::bind::bind_paper(m);
     scanlines::bind::bind_partition(m);
     scanlines::bind::bind_split_methods(m);
-    scanlines::bind::bind_steps(m);
+    scanlines::bind::bind_fits(m);
     scanlines::bind::bind_numbers(m);
     scanlines::bind::bind_segmentation(m);
     scanlines::bind::bind_filter(m);

@@ -1,14 +1,22 @@
 // The segmentation steps the Python side calls on their own (the methods whose search is
-// numpy, and the tests of each step): breakpoint rules, clusters, corner scores, splits,
-// merges and the events between segments.
+// numpy, and the tests of each step): where a scan is cut. Noise points, breakpoint rules,
+// clusters, corner scores, the threshold sweep, splits, merges and the events between
+// segments.
 #include <nanobind/stl/pair.h>
+#include <nanobind/stl/tuple.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
 
 #include "arrays.hpp"
 #include "scanlines/steps/breakpoints.hpp"
 #include "scanlines/steps/clusters.hpp"
 #include "scanlines/steps/corners.hpp"
+#include "scanlines/steps/denoise.hpp"
 #include "scanlines/steps/events.hpp"
 #include "scanlines/steps/merge.hpp"
+#include "scanlines/steps/select.hpp"
 #include "scanlines/steps/split.hpp"
 
 namespace scanlines::bind {
@@ -30,6 +38,187 @@ void check_grouped_runs(const InInts& a, const InInts& b, const InInts& group, I
                         const char* group_name) {
     expect_runs("a", "b", a.data(), a.shape(0), b.data(), b.shape(0), n);
     expect_length(group_name, group.shape(0), a.shape(0), "one per run");
+}
+
+// What a sweep of the clusters [start, end] indexes: clusters of the cost's points, in order,
+// a score per candidate, each candidate inside a cluster, a count of evaluations.
+void check_sweep(const RunCost& cost, const Ints& start, const Ints& end, const Ints& candidates,
+                 const Reals& scores, Index max_evaluations) {
+    const Index n = cost.moments.stride - 1;
+    expect_clusters(start, end, n);
+    expect_length("scores", scores.size(), candidates.size(), "one score per candidate");
+    for (std::size_t j = 0; j < candidates.size(); ++j) {
+        Index c = candidates[j];
+        auto after = std::upper_bound(start.begin(), start.end(), c);
+        if (after == start.begin() || c > end[static_cast<std::size_t>(after - start.begin()) - 1])
+            index_error("candidates[" + std::to_string(j) + "] = " + text(c) +
+                        " lies in no cluster");
+    }
+    expect_between("max_evaluations", max_evaluations, 0, MAX_SETTING_COUNT);
+}
+
+// A sweep continued with the cost it was started with (its points), candidates done .. upto.
+void check_sweep_step(const Sweep& sweep, const RunCost& cost, Index done, Index upto) {
+    const Index n = cost.moments.stride - 1;
+    if (static_cast<Index>(sweep.run_end.size()) != n)
+        value_error("the sweep was started on " + text(static_cast<Index>(sweep.run_end.size())) +
+                    " points, the cost has " + text(n));
+    expect_between("done", done, 0, sweep.useful);
+    expect_between("upto", upto, done, sweep.useful);
+}
+
+// The sweep and criterion (scanlines/steps/select.py), for the tests of the steps.
+// The Sweep type, once per process: a process may import the module twice (two copies of
+// the package side by side, tools/benchmarks/compare_versions.py).
+static void bind_sweep_type(nb::module_& m) {
+    if (nb::type<Sweep>().is_valid()) {
+        m.attr("Sweep") = nb::type<Sweep>();
+        return;
+    }
+    nb::class_<Sweep>(m, "Sweep", "A threshold sweep in progress (scanlines.steps.select).")
+        .def_prop_ro("ranked", [](const Sweep& s) { return copy_to_numpy(s.ranked); })
+        .def_prop_ro("ranked_score", [](const Sweep& s) { return copy_to_numpy(s.ranked_score); })
+        .def_ro("useful", &Sweep::useful)
+        .def_prop_ro("accepted", [](const Sweep& s) { return flags_to_numpy(s.accepted); })
+        .def_prop_ro("parent_a", [](const Sweep& s) { return copy_to_numpy(s.parent_a); })
+        .def_prop_ro("parent_b", [](const Sweep& s) { return copy_to_numpy(s.parent_b); })
+        .def_prop_ro("sse", [](const Sweep& s) { return copy_to_numpy(s.sse); })
+        .def_prop_ro("segments", [](const Sweep& s) { return copy_to_numpy(s.segments); });
+}
+
+void bind_select(nb::module_& m) {
+    bind_sweep_type(m);
+    m.def(
+        "threshold_grid",
+        [](double low, double high, double step, Index max_evaluations) {
+            if (!std::isfinite(low) || !std::isfinite(high))
+                value_error("low and high must be finite");
+            if (!(step > 0.0) || !std::isfinite(step))
+                value_error("step must be finite and above 0");
+            expect_between("max_evaluations", max_evaluations, 0, MAX_SETTING_COUNT);
+            return to_numpy(threshold_grid(low, high, step, max_evaluations));
+        },
+        "low, low + step, ... up to high, at most max_evaluations values.");
+    m.def(
+        "start_sweep",
+        [](const CostTuple& cost, const InInts& start, const InInts& end, const InInts& candidates,
+           const InReals& scores, const InReals& grid, bool use_grid, Index max_evaluations) {
+            RunCost run_cost = cost_of(cost);
+            Ints starts = vector_of(start), ends = vector_of(end), at = vector_of(candidates);
+            Reals score = vector_of(scores);
+            check_sweep(run_cost, starts, ends, at, score, max_evaluations);
+            return start_sweep(run_cost, starts, ends, at, score, vector_of(grid), use_grid,
+                               max_evaluations);
+        },
+        "A sweep of the clusters [start, end] with no candidate inserted yet.");
+    m.def(
+        "extend_sweep",
+        [](Sweep& sweep, const CostTuple& cost, bool shared, Index done, Index upto) {
+            RunCost run_cost = cost_of(cost);
+            check_sweep_step(sweep, run_cost, done, upto);
+            return extend_sweep(sweep, run_cost, shared, done, upto);
+        },
+        "Insert candidates done .. upto - 1 of the sweep (in place); returns upto.");
+    m.def(
+        "sweep_levels",
+        [](const CostTuple& cost, const InInts& start, const InInts& end, const InInts& candidates,
+           const InReals& scores, const InReals& grid, bool use_grid, Index max_evaluations,
+           bool shared) {
+            RunCost run_cost = cost_of(cost);
+            Ints starts = vector_of(start), ends = vector_of(end), at = vector_of(candidates);
+            Reals score = vector_of(scores);
+            check_sweep(run_cost, starts, ends, at, score, max_evaluations);
+            Levels out = sweep_levels(run_cost, starts, ends, at, score, vector_of(grid), use_grid,
+                                      max_evaluations, shared);
+            return nb::make_tuple(to_numpy(std::move(out.ranked)), flags_to_numpy(out.accepted),
+                                  to_numpy(std::move(out.sse)), to_numpy(std::move(out.segments)),
+                                  to_numpy(std::move(out.thresholds)),
+                                  to_numpy(std::move(out.levels)));
+        },
+        "Every cut a threshold makes: (ranked, accepted, sse, segments, thresholds, levels).");
+    m.def(
+        "best_level",
+        [](Index criterion, const InReals& sse, const InInts& segments, const InInts& levels,
+           Index n_points, double sigma, double penalty) {
+            expect_between("criterion", criterion, BIC, SSE);
+            expect_length("segments", segments.shape(0), sse.shape(0), "one per cut, as sse");
+            expect_positions("levels", levels.data(), levels.shape(0),
+                             static_cast<Index>(sse.shape(0)));
+            auto [best, values] = best_level(criterion, vector_of(sse), vector_of(segments),
+                                             vector_of(levels), n_points, sigma, penalty);
+            return nb::make_tuple(best, to_numpy(std::move(values)));
+        },
+        "Index of the best tried threshold (the first on a tie) and every criterion value.");
+    m.def(
+        "level_corners",
+        [](const InInts& ranked, const InFlags& accepted, Index level) {
+            expect_length("accepted", accepted.shape(0), ranked.shape(0), "one per candidate");
+            expect_between("level", level, 0, static_cast<Index>(ranked.shape(0)));
+            return to_numpy(level_corners(vector_of(ranked), flags_of(accepted), level));
+        },
+        "Sorted positions of the accepted candidates among the level best.");
+}
+
+// Denoising (scanlines/steps/denoise.py), for the tests of the steps.
+void bind_denoise(nb::module_& m) {
+    m.def(
+        "literal_noise",
+        [](const InReals& d) { return flags_to_numpy(literal_noise(vector_of(d))); },
+        "Step 2 as written, on neighbour distances d (length n - 1): a mask of n points.");
+    m.def(
+        "isolated_noise",
+        [](const ReturnsTuple& returns, const InInts& gap, double step, nb::handle rule,
+           const InFlags& breaks) {
+            Returns points = returns_tuple_of(returns);
+            expect_pairs("gap", gap.shape(0), points.index.size());
+            expect_pairs("breaks", breaks.shape(0), points.index.size());
+            return flags_to_numpy(isolated_noise(points, vector_of(gap), step,
+                                                 breakpoint_rule_of(rule), flags_of(breaks)));
+        },
+        "Points cut off from both neighbours that are themselves continuous (a spike).");
+    m.def(
+        "window_means",
+        [](const InReals& x, const InReals& y, const InFlags& noise, Index window,
+           const InFlags& breaks) {
+            const std::size_t n = x.shape(0);
+            expect_length("y", y.shape(0), n, "one per point, as x");
+            expect_length("noise", noise.shape(0), n, "one flag per point");
+            expect_pairs("breaks", breaks.shape(0), n);
+            expect_at_least("window", window, 1);
+            auto [mx, my] =
+                window_means(vector_of(x), vector_of(y), flags_of(noise), window, flags_of(breaks));
+            return nb::make_tuple(to_numpy(std::move(mx)), to_numpy(std::move(my)));
+        },
+        "Step 3: noise point i and its neighbours become the mean of window points.");
+    m.def(
+        "in_between_clusters",
+        [](const InReals& r, const InInts& gap, const InFlags& breaks, const InFlags& small,
+           double margin) {
+            const std::size_t n = r.shape(0);
+            expect_pairs("gap", gap.shape(0), n);
+            expect_pairs("breaks", breaks.shape(0), n);
+            expect_length("small", small.shape(0), n, "one flag per point");
+            return flags_to_numpy(in_between_clusters(vector_of(r), vector_of(gap),
+                                                      flags_of(breaks), flags_of(small), margin));
+        },
+        "Mask of the returns of two-return clusters that lie in depth between their neighbours.");
+    m.def(
+        "denoise",
+        [](const ReturnsTuple& returns, Index n_beams, double step, bool full_circle,
+           nb::handle rule, Index kind, Index window, Index min_cluster_points, double margin) {
+            Returns points = returns_tuple_of(returns);
+            expect_beams(points.index, n_beams);
+            expect_step(step);
+            expect_between("kind", kind, ISOLATED, NO_DENOISE);
+            expect_between("window", window, 1, MAX_SETTING_COUNT);
+            expect_between("min_cluster_points", min_cluster_points, 0, MAX_SETTING_COUNT);
+            Denoised out = denoise(std::move(points), n_beams, step, full_circle,
+                                   breakpoint_rule_of(rule), kind, window, min_cluster_points,
+                                   margin);
+            return nb::make_tuple(returns_to_numpy(std::move(out.returns)),
+                                  to_numpy(std::move(out.outliers)), flags_to_numpy(out.breaks));
+        },
+        "Steps 2-3 by kind: (returns, beams dropped as noise, break flags or empty).");
 }
 
 }  // namespace
@@ -152,6 +341,8 @@ static void bind_segments(nb::module_& m) {
 void bind_segmentation(nb::module_& m) {
     bind_clustering(m);
     bind_segments(m);
+    bind_select(m);
+    bind_denoise(m);
 }
 
 }  // namespace scanlines::bind
