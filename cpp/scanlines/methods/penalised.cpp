@@ -60,17 +60,19 @@ Runs joined_runs(const Sums& sums, const Flags& opens, const Runs& runs, const O
     return out;
 }
 
-// Whether each return lies in its run's fit (returns outside the runs: true).
+// Whether each of the returns lo .. lo + count - 1 lies in its run's fit (runs counted from
+// lo; returns outside the runs: true).
 Flags inside_fit(const Returns& ret, const Sums& sums, const Reals& sigma, double model_error,
-                 const Runs& runs, double clutter_cost) {
-    Flags out(ret.x.size(), true);
+                 const Runs& runs, double clutter_cost, Index lo, Index count) {
+    Flags out(count, true);
     const double floor = model_error * model_error;
     for (std::size_t k = 0; k < runs.a.size(); ++k) {
         FittedLine line = line_of(sums, runs.a[k], runs.b[k]);
         double c = std::cos(line.alpha), si = std::sin(line.alpha);
         for (Index p = runs.a[k]; p <= runs.b[k]; ++p) {
-            double off = ret.x[p] * c + ret.y[p] * si - line.rho;
-            out[p] = 0.5 * off * off / (sigma[p] * sigma[p] + floor) <= clutter_cost;
+            const Index q = lo + p;
+            double off = ret.x[q] * c + ret.y[q] * si - line.rho;
+            out[p] = 0.5 * off * off / (sigma[q] * sigma[q] + floor) <= clutter_cost;
         }
     }
     return out;
@@ -97,17 +99,24 @@ void outside_runs_left_out(const Runs& runs, Flags& held) {
 
 Sums weighted_sums(const Returns& ret, const Reals& sigma, const Reals& footprint,
                    double model_error, const Flags& held) {
+    return weighted_sums(ret, sigma, footprint, model_error, held, 0,
+                         static_cast<Index>(ret.x.size()));
+}
+
+Sums weighted_sums(const Returns& ret, const Reals& sigma, const Reals& footprint,
+                   double model_error, const Flags& held, Index lo, Index hi) {
     const Reals& x = ret.x;
     const Reals& y = ret.y;
-    const Index n = static_cast<Index>(x.size());
-    Sums out{Reals(static_cast<std::size_t>(C * (n + 1)), 0.0), n ? x[0] : 0.0, n ? y[0] : 0.0};
+    const Index n = hi - lo;
+    const double x0 = x.empty() ? 0.0 : x[0], y0 = y.empty() ? 0.0 : y[0];
+    Sums out{Reals(static_cast<std::size_t>(C * (n + 1)), 0.0), x0, y0};
     const double floor = model_error * model_error;
     double* o = out.v.data();
-    for (Index p = 0; p < n; ++p) {
+    for (Index p = lo; p < hi; ++p) {  // row p + 1 - lo: the sums up to return p
         double w = held[p] ? footprint[p] / (sigma[p] * sigma[p] + floor) : 0.0;
-        double u = x[p] - x[0], v = y[p] - y[0];
-        const double* prev = o + C * p;
-        double* next = o + C * (p + 1);
+        double u = x[p] - x0, v = y[p] - y0;
+        const double* prev = o + C * (p - lo);
+        double* next = o + C * (p + 1 - lo);
         next[0] = prev[0] + w;
         next[1] = prev[1] + w * u;
         next[2] = prev[2] + w * v;
@@ -182,16 +191,50 @@ bool continuous(const Returns& ret, Index p, Index q, Index beams, double step,
     return apart <= reach + spread;
 }
 
-Runs optimal_runs(const Sums& sums, const Flags& opens, const Objective& o, const Ints& at,
-                  const Flags& allowed) {
-    const Index n = static_cast<Index>(sums.v.size() / C) - 1;
-    Reals best(n + 1), cost(n + 1);
-    Ints start(n + 1), candidates(n + 1), expires(n + 1, n + 1);
-    best[0] = 0.0;
+namespace {
+
+// Whether start s is still a candidate at the end of step t: not pruned by then, within the
+// look-back, and allowed (expires: as the steps up to t left it).
+bool candidate_at(Index s, Index t, const Ints& expires, const Ints& at, const Flags& allowed) {
+    const Index span = at.empty() ? t - s : at[t] - at[s];
+    if (expires[s] <= t || span > LOOK_BACK) return false;
+    return allowed.empty() || allowed[s] || span <= NEAR_STARTS;
+}
+
+// The candidates at the end of step from - 1, found again from the pruning the search
+// recorded (ascending, as the steps keep them); the prunings recorded after that step undone.
+Index candidates_before(Search& search, Index from, const Flags& opens, const Objective& o,
+                        const Ints& at, const Flags& allowed, Ints& candidates) {
+    const Index n = static_cast<Index>(search.best.size()) - 1;
+    for (Index s = 0; s <= n; ++s)  // a start is pruned once, at step expires - min_points
+        if (search.expires[s] > n || search.expires[s] - o.min_points >= from)
+            search.expires[s] = n + 1;
+    Index first = std::max<Index>(from - 2, 0);
+    while (first > 0 && !opens[first]) --first;
     Index count = 0;
+    for (Index s = first; s < from - 1; ++s)
+        if (candidate_at(s, from - 1, search.expires, at, allowed)) candidates[count++] = s;
+    return count;
+}
+
+}  // namespace
+
+void search_from(const Sums& sums, const Flags& opens, const Objective& o, const Ints& at,
+                 const Flags& allowed, Search& search, Index from) {
+    const Index n = static_cast<Index>(sums.v.size() / C) - 1;
+    if (search.best.size() != static_cast<std::size_t>(n + 1) || from < 1) {
+        search = {Reals(n + 1), Ints(n + 1), Ints(n + 1, n + 1)};
+        search.best[0] = 0.0;
+        from = 1;
+    }
+    Reals& best = search.best;
+    Ints& expires = search.expires;
+    Reals cost(n + 1);
+    Ints candidates(n + 1);
+    Index count = candidates_before(search, from, opens, o, at, allowed, candidates);
     const double* prefix = sums.v.data();
     const bool across = o.residual == Residual::ACROSS_LINE;
-    for (Index t = 1; t <= n; ++t) {
+    for (Index t = from; t <= n; ++t) {
         if (opens[t - 1]) count = 0;
         candidates[count++] = t - 1;
         // The prefix sums up to t, read once (the same arithmetic as scatter(sums, s, t - 1)).
@@ -203,23 +246,22 @@ Runs optimal_runs(const Sums& sums, const Flags& opens, const Objective& o, cons
         Index kept = 0;
         for (Index c = 0; c < count; ++c) {
             const Index s = candidates[c];
+            if (!candidate_at(s, t, expires, at, allowed)) continue;
             const Index span = at.empty() ? t - s : at[t] - at[s];
-            if (expires[s] <= t || span > LOOK_BACK) continue;
-            if (!allowed.empty() && !allowed[s] && span > NEAR_STARTS) continue;
             candidates[kept] = s;
             double value = INF;
-            const double* from = prefix + C * s;
-            const double held = end[6] - from[6];
+            const double* from_row = prefix + C * s;
+            const double held = end[6] - from_row[6];
             if (held >= static_cast<double>(o.min_points)) {
-                const double w = end[0] - from[0];
-                const double mx = (end[1] - from[1]) / w;
-                const double my = (end[2] - from[2]) / w;
-                const double sxx = end[3] - from[3] - w * mx * mx;
-                const double sxy = end[4] - from[4] - w * mx * my;
-                const double syy = end[5] - from[5] - w * my * my;
+                const double w = end[0] - from_row[0];
+                const double mx = (end[1] - from_row[1]) / w;
+                const double my = (end[2] - from_row[2]) / w;
+                const double sxx = end[3] - from_row[3] - w * mx * mx;
+                const double sxy = end[4] - from_row[4] - w * mx * my;
+                const double syy = end[5] - from_row[5] - w * my * my;
                 double chi2 = across ? eigenvalues(sxx, sxy, syy).first
                                      : along_beam_chi2({w, mx, my, sxx, sxy, syy},
-                                                       end[7] - from[7], sums.x0, sums.y0,
+                                                       end[7] - from_row[7], sums.x0, sums.y0,
                                                        o.model_error);
                 value = best[s] + 0.5 * chi2;
                 value += o.clutter_cost * (static_cast<double>(span) - held);
@@ -232,37 +274,48 @@ Runs optimal_runs(const Sums& sums, const Flags& opens, const Objective& o, cons
             ++kept;
         }
         best[t] = best_t;
-        start[t] = start_t;
+        search.start[t] = start_t;
         count = kept;
         for (Index c = 0; c < count; ++c)  // prune the starts that t dominates (PELT)
             if (cost[c] >= best_t && cost[c] < INF && expires[candidates[c]] > n)
                 expires[candidates[c]] = t + o.min_points;
     }
+}
+
+Runs traced_runs(const Search& search) {
     Runs out;
-    Index t = n;
+    Index t = static_cast<Index>(search.start.size()) - 1;
     while (t > 0) {
-        if (start[t] < 0) {
+        if (search.start[t] < 0) {
             --t;
             continue;
         }
-        out.a.push_back(start[t]);
+        out.a.push_back(search.start[t]);
         out.b.push_back(t - 1);
-        t = start[t];
+        t = search.start[t];
     }
     std::reverse(out.a.begin(), out.a.end());
     std::reverse(out.b.begin(), out.b.end());
     return out;
 }
 
+Runs optimal_runs(const Sums& sums, const Flags& opens, const Objective& o, const Ints& at,
+                  const Flags& allowed) {
+    Search search;
+    search_from(sums, opens, o, at, allowed, search, 1);
+    return traced_runs(search);
+}
+
 // The optimum in two stages: the same objective at a quarter of the penalty on blocks of
 // COARSE_BLOCK returns (cut also where clusters open), then over every return but with a
 // segment longer than NEAR_STARTS starting only within BOUNDARY_WINDOW of a boundary of the
-// first stage or where a cluster opens.
-Runs two_stage_runs(const Sums& sums, const Flags& opens, const Objective& o) {
+// first stage or where a cluster opens. Row 0 of sums is the scan's return `first`: the
+// blocks start at the scan's multiples of COARSE_BLOCK.
+Runs two_stage_runs(const Sums& sums, const Flags& opens, const Objective& o, Index first) {
     const Index n = static_cast<Index>(sums.v.size() / C) - 1;
     Ints at;
     for (Index p = 0; p < n; ++p)
-        if (p % COARSE_BLOCK == 0 || opens[p]) at.push_back(p);
+        if ((first + p) % COARSE_BLOCK == 0 || opens[p]) at.push_back(p);
     at.push_back(n);
     const Index m = static_cast<Index>(at.size()) - 1;
     Sums coarse{Reals(static_cast<std::size_t>(C * (m + 1))), sums.x0, sums.y0};
@@ -290,6 +343,52 @@ Runs two_stage_runs(const Sums& sums, const Flags& opens, const Objective& o) {
     return optimal_runs(sums, opens, o, Ints(), allowed);
 }
 
+namespace {
+
+// The runs of one cluster's returns lo .. hi - 1 (counted from lo) and their held flags, in
+// up to ROUNDS rounds. No segment crosses an opening, so the optimum is the clusters' optima
+// side by side; each cluster is solved alone (its own sums and costs from zero), so that its
+// runs depend on its returns only, and a round re-solves only the clusters whose held
+// returns changed (a left-out return changes its cluster alone), from the first return that
+// changed on (the search before it is the same).
+Runs cluster_runs(const Returns& ret, const Reals& sigma, const Reals& footprint, Index lo,
+                  Index hi, const Objective& o, Flags& held) {
+    const Index count = hi - lo;
+    if (count < o.min_points) {  // no segment fits: every return outside the runs
+        if (o.bridge_left_out) std::fill(held.begin() + lo, held.begin() + hi, false);
+        return {};
+    }
+    Flags opens(count, false);
+    opens[0] = true;
+    Runs runs;
+    Search search;
+    Index from = 1;
+    for (int round = 0; round < ROUNDS; ++round) {
+        Sums sums = weighted_sums(ret, sigma, footprint, o.model_error, held, lo, hi);
+        if (o.two_stage) {
+            runs = two_stage_runs(sums, opens, o, lo);
+        } else {
+            search_from(sums, opens, o, Ints(), Flags(), search, from);
+            runs = traced_runs(search);
+        }
+        // Joined until no two neighbours join: a long wall comes out of the look-back in
+        // pieces, and a join of two long pieces can pay where each piece's first did not.
+        for (std::size_t before = 0; before != runs.a.size();) {
+            before = runs.a.size();
+            runs = joined_runs(sums, opens, runs, o);
+        }
+        Flags fits = inside_fit(ret, sums, sigma, o.model_error, runs, o.clutter_cost, lo, count);
+        if (o.bridge_left_out) outside_runs_left_out(runs, fits);
+        auto changed = std::mismatch(fits.begin(), fits.end(), held.begin() + lo).first;
+        if (changed == fits.end()) break;
+        from = static_cast<Index>(changed - fits.begin()) + 1;  // rows up to it are the same
+        std::copy(fits.begin(), fits.end(), held.begin() + lo);
+    }
+    return runs;
+}
+
+}  // namespace
+
 ScanPartition best_partition(const Returns& ret, const Reals& sigma, const Reals& footprint,
                          Index n_beams, double step, const Objective& o) {
     const Index n = ret.size();
@@ -308,28 +407,22 @@ ScanPartition best_partition(const Returns& ret, const Reals& sigma, const Reals
                 opens[p] = opens[p + 1] = false;
     Flags held(n, true);
     Runs runs;
-    for (int round = 0; round < ROUNDS; ++round) {
-        Sums sums = weighted_sums(ret, sigma, footprint, o.model_error, held);
-        runs = o.two_stage ? two_stage_runs(sums, opens, o)
-                           : optimal_runs(sums, opens, o, Ints(), Flags());
-        // Joined until no two neighbours join: a long wall comes out of the look-back in
-        // pieces, and a join of two long pieces can pay where each piece's first did not.
-        for (std::size_t before = 0; before != runs.a.size();) {
-            before = runs.a.size();
-            runs = joined_runs(sums, opens, runs, o);
+    for (Index lo = 0; lo < n;) {
+        Index hi = lo + 1;
+        while (hi < n && !opens[hi]) ++hi;
+        Runs found = cluster_runs(ret, sigma, footprint, lo, hi, o, held);
+        for (std::size_t k = 0; k < found.a.size(); ++k) {
+            runs.a.push_back(lo + found.a[k]);
+            runs.b.push_back(lo + found.b[k]);
         }
-        Flags fits = inside_fit(ret, sums, sigma, o.model_error, runs, o.clutter_cost);
-        if (o.bridge_left_out) outside_runs_left_out(runs, fits);
-        bool changed = fits != held;
-        held = fits;
-        if (!changed) break;
+        lo = hi;
     }
     Sums sums = weighted_sums(ret, sigma, footprint, o.model_error, held);
     runs = trimmed_runs(held, runs);
     std::fill(held.begin(), held.end(), false);  // returns outside the runs are outliers too
     for (std::size_t k = 0; k < runs.a.size(); ++k)
         for (Index p = runs.a[k]; p <= runs.b[k]; ++p) held[p] = true;
-    Flags fits = inside_fit(ret, sums, sigma, o.model_error, runs, o.clutter_cost);
+    Flags fits = inside_fit(ret, sums, sigma, o.model_error, runs, o.clutter_cost, 0, n);
     for (Index p = 0; p < n; ++p) held[p] = held[p] && fits[p];
     runs = trimmed_runs(held, runs);  // a run's end may have left its fit
     return {runs, held, sums, gap};

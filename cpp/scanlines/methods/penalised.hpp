@@ -51,6 +51,9 @@ struct Scatter {
 // Each return's weight is footprint[p] / (sigma[p]^2 + model_error^2) while held, else 0.
 Sums weighted_sums(const Returns& ret, const Reals& sigma, const Reals& footprint,
                    double model_error, const Flags& held);
+// The same over returns lo .. hi - 1 alone (row 0: none of them), about the scan's first return.
+Sums weighted_sums(const Returns& ret, const Reals& sigma, const Reals& footprint,
+                   double model_error, const Flags& held, Index lo, Index hi);
 
 
 // The weighted scatter of the returns of runs [a, b] (about their weighted mean).
@@ -81,6 +84,22 @@ bool continuous(const Returns& ret, Index p, Index q, Index beams, double step,
 // the starts a segment longer than a few returns may have (empty: every start).
 Runs optimal_runs(const Sums& sums, const Flags& opens, const Objective& objective,
                   const Ints& at, const Flags& allowed);
+
+// The programme's state: each end's least cost and best start, and the step + min_points at
+// which each start was pruned (n + 1: never).
+struct Search {
+    Reals best;
+    Ints start, expires;
+};
+
+// Steps from .. n of the programme into `search`, which holds steps 1 .. from - 1 of a search
+// over sums whose rows 0 .. from - 1 were the same (bit for bit), so that the result is the
+// whole search's over these sums; from = 1 (or a search of another size): all of it.
+void search_from(const Sums& sums, const Flags& opens, const Objective& objective,
+                 const Ints& at, const Flags& allowed, Search& search, Index from);
+
+// The runs the best starts of a search trace back from its last end.
+Runs traced_runs(const Search& search);
 
 struct ScanPartition {
     Runs runs;
