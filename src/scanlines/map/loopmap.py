@@ -12,6 +12,7 @@ from scanlines.geometry.transform import to_world
 from scanlines.map.build import MapBuild, TrackedPose, build_map
 from scanlines.map.fusion import FusionSettings, LineMap
 from scanlines.map.loops import LoopCloser, LoopResult, LoopSettings
+from scanlines.map.submaps import LocalTracker
 from scanlines.map.tracking import TrackSettings
 from scanlines.scan import Scan
 
@@ -33,15 +34,23 @@ def build_closed_map(
 ) -> tuple[MapBuild, LoopResult]:
     """:func:`~scanlines.map.build.build_map` with tracking, then the loops closed
     (:class:`~scanlines.map.loops.LoopCloser`) and the map fused again from the optimised
-    poses (held-out poses moved with them). Returns the build (its ``tracked`` records as
-    the tracker left them) and the loop result."""
+    poses (held-out poses moved with them). The graph's tracking edges come from a second
+    tracker on the last ``loops.submap_scans`` scans
+    (:class:`~scanlines.map.submaps.LocalTracker`; 0: from the map's tracker). Returns the
+    build (its ``tracked`` records as the tracker left them) and the loop result."""
     closer = LoopCloser(loops)
     features: dict[int, Any] = {}
     indices: list[int] = []
+    size = closer.settings.submap_scans
+    local = LocalTracker(size, settings, track or TrackSettings()) if size else None
 
     def keep(record: TrackedPose, scan: Scan, extracted) -> None:
         evidence = scan if record.mapped else None
-        closer.add(record.index, record.pose, record.covariance, evidence)
+        if local is None:
+            closer.add(record.index, record.pose, record.covariance, evidence)
+        else:
+            pose, covariance = local.track(record, scan, extracted)
+            closer.add(record.index, record.pose, covariance, evidence, local=pose)
         indices.append(record.index)
         if extracted is not None:
             features[len(indices) - 1] = extracted
