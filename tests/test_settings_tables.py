@@ -22,13 +22,22 @@ from scanlines.geometry.registration import IcpSettings
 from scanlines.map.align import AlignSettings
 from scanlines.map.filter import FilterSettings
 from scanlines.map.fusion import FusionSettings
+from scanlines.map.loops import LoopSettings
 from scanlines.map.relocalise import SearchSettings
 from scanlines.map.tracking import TrackSettings
 from scanlines.params import Param, integer, number
 from scanlines.params.tables import Groups, SettingsTable
 from test_parameter_domains import ANY_TYPE_WRONG, inside, outside
 
-TABLES = (IcpSettings, AlignSettings, FusionSettings, SearchSettings, TrackSettings, FilterSettings)
+TABLES = (
+    IcpSettings,
+    AlignSettings,
+    FusionSettings,
+    SearchSettings,
+    TrackSettings,
+    FilterSettings,
+    LoopSettings,
+)
 SETTINGS = [(table, name) for table in TABLES for name in table.parameters]
 IDS = [f"{table.__name__}.{name}" for table, name in SETTINGS]
 

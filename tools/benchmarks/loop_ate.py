@@ -20,7 +20,6 @@ import pickle
 import resource
 import tempfile
 import time
-from dataclasses import fields
 from pathlib import Path
 
 import numpy as np
@@ -29,13 +28,8 @@ import numpy as np
 def loop_settings(assignments: list[str]):
     from scanlines.map.loops import LoopSettings
 
-    kinds = {f.name: type(getattr(LoopSettings(), f.name)) for f in fields(LoopSettings)}
-    values = {}
-    for item in assignments:
-        name, value = item.split("=", 1)
-        kind = kinds[name]
-        values[name] = value.lower() in ("1", "true", "yes") if kind is bool else kind(value)
-    return LoopSettings(**values)
+    # Each setting's check reads the text as the command line gives it ("3", "0.02").
+    return LoopSettings(**dict(item.split("=", 1) for item in assignments))
 
 
 class _Recorder:

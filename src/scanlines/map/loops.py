@@ -41,8 +41,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import asdict, dataclass
-from typing import Any, NamedTuple
+from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
 
@@ -56,33 +55,53 @@ from scanlines.geometry.registration import (
     transform_points,
 )
 from scanlines.map.posegraph import Edge, PoseGraph, edge_errors, optimise
+from scanlines.params import MAX_COUNT, MAX_METRES, MAX_SCANS, Param, integer, number
+from scanlines.params.tables import Groups, SettingsTable
 
 __all__ = ["Closure", "LoopCloser", "LoopResult", "LoopSettings", "Refusal"]
 
 
-@dataclass(frozen=True)
-class LoopSettings:
-    """The constants of loop closure (metres, radians; see the module's note)."""
+_METRES = number(low=0.0, high=MAX_METRES)
+_POSITIVE_METRES = number(low=0.0, low_open=True, high=MAX_METRES)
+_POSITIVE_RADIANS = number(low=0.0, low_open=True, high=math.pi)
+_CHI_SQUARE = number(low=0.0, low_open=True)
 
-    every: int = 3
-    min_travel: float = 2.0
-    radius: float = 1.5
-    window: int = 5
-    min_inliers: float = 0.7
-    max_rms: float = 0.03
-    least: float = 0.02
-    gate: float = 11.34  # chi-square, 3 degrees of freedom, 99 %
-    consistency: float = 11.34
-    closure_sigma: float = 0.02
-    closure_turn_sigma: float = math.radians(0.5)
-    edge_floor: float = 0.02
-    edge_turn_floor: float = 0.01
-    rounds: int = 2
-    max_points: int = 200
-    submap_scans: int = 0
 
-    def to_dict(self) -> dict[str, Any]:
-        return asdict(self)
+class LoopSettings(SettingsTable):
+    """The constants of loop closure (metres, radians; the module's note)."""
+
+    groups: ClassVar[Groups] = {
+        "candidates": {
+            "every": Param(3, integer(1, MAX_SCANS), "every this many scans is a query"),
+            "min_travel": Param(2.0, _METRES, "path before a query an old scan must be (m)"),
+            "radius": Param(1.5, _METRES, "an old scan's estimated pose this near a query (m)"),
+            "window": Param(5, integer(0, MAX_SCANS), "neighbours each side in the old submap"),
+        },
+        "verification": {
+            "min_inliers": Param(0.7, number(low=0.0, high=1.0), "least inlier share"),
+            "max_rms": Param(0.03, _METRES, "largest inliers' RMS (m)"),
+            "least": Param(0.02, number(low=0.0), "least pinning of every direction"),
+            "gate": Param(11.34, _CHI_SQUARE, "agreement with odometry (chi-square, 3 dof)"),
+            "consistency": Param(11.34, _CHI_SQUARE, "agreement with the other closures"),
+        },
+        "weights": {
+            "closure_sigma": Param(0.02, _POSITIVE_METRES, "a closure's position sigma (m)"),
+            "closure_turn_sigma": Param(
+                math.radians(0.5), _POSITIVE_RADIANS, "a closure's heading sigma (rad)"
+            ),
+            "edge_floor": Param(0.02, _METRES, "floor of a tracking edge's position sigma (m)"),
+            "edge_turn_floor": Param(
+                0.01, number(low=0.0, high=math.pi), "floor of its heading sigma (rad)"
+            ),
+        },
+        "search": {
+            "rounds": Param(2, integer(1, 100), "rounds of detection"),
+            "max_points": Param(200, integer(2, MAX_COUNT), "a query's returns aligned, at most"),
+            "submap_scans": Param(
+                0, integer(0, MAX_SCANS), "tracking edges from the last scans' lines (0: off)"
+            ),
+        },
+    }
 
     def closure_information(self) -> np.ndarray:
         s, t = self.closure_sigma, self.closure_turn_sigma
