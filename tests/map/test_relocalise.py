@@ -21,7 +21,14 @@ from scanlines.map import build_map
 from scanlines.map.align import LineSet
 from scanlines.map.export import write_map
 from scanlines.map.localize import localize, read_line_map
-from scanlines.map.relocalise import ExplainedGrid, LinePairs, SearchSettings, pose_candidates
+from scanlines.map.relocalise import (
+    ExplainedGrid,
+    LineEnds,
+    LinePairs,
+    SearchSettings,
+    end_candidates,
+    pose_candidates,
+)
 from scanlines.map.scoring import beam_shares, first_hits, mapped
 from test_map import view
 
@@ -151,6 +158,46 @@ def test_localize_without_an_initial_pose_says_lost_and_found(tmp_path):
     distance = np.linalg.norm(poses.poses[i, :2] - mapped.poses[j, :2], axis=1)
     assert found.sum() > 100
     assert np.median(distance[found]) < 0.05
+
+
+#: A corridor between two walls, a doorway in one of them and a wall behind: every wall
+#: parallel, only the doorway's jambs fix a position along the corridor.
+CORRIDOR = [((-10.0, -1.0), (10.0, -1.0)), ((-10.0, 1.0), (2.0, 1.0)),
+            ((3.0, 1.0), (10.0, 1.0)), ((-10.0, 3.0), (10.0, 3.0))]  # fmt: skip
+
+
+def _line_set(walls) -> LineSet:
+    start, end = np.array([a for a, _ in walls]), np.array([b for _, b in walls])
+    alpha = np.arctan2(end[:, 0] - start[:, 0], -(end[:, 1] - start[:, 1]))
+    rho = np.cos(alpha) * start[:, 0] + np.sin(alpha) * start[:, 1]
+    alpha = np.where(rho < 0, alpha + math.pi, alpha)
+    return LineSet(np.abs(rho), np.remainder(alpha + math.pi, 2 * math.pi) - math.pi, start, end)
+
+
+@pytest.mark.parametrize("true", [(0.5, -0.2, 0.3), (4.2, 0.1, 2.9), (1.0, 0.3, -0.2)])
+def test_a_doorway_in_a_corridor_fixes_the_pose_that_parallel_walls_cannot(true):
+    from scanlines.extractor import Extractor
+
+    lines = _line_set(CORRIDOR)
+    settings = SearchSettings()
+    extraction = Extractor()(view(CORRIDOR, true, seed=5, sigma=0.002))
+    rows, kinds = np.asarray(extraction.lines)[:, :6], np.asarray(extraction.end_kinds)
+    assert len(pose_candidates(rows, lines, LinePairs(lines, settings), settings)) == 0
+    poses = end_candidates(rows, kinds, lines, LineEnds(lines, settings), settings)
+    distance = np.hypot(poses[:, 0] - true[0], poses[:, 1] - true[1])
+    turn = np.abs(np.remainder(poses[:, 2] - true[2] + math.pi, 2 * math.pi) - math.pi)
+    assert np.any((distance < 0.05) & (turn < math.radians(2.0)))
+
+
+def test_only_the_ends_of_walls_are_open_ends():
+    lines = _line_set([*CORRIDOR, ((10.0, -1.0), (10.0, 3.0))])
+    ends = LineEnds(lines, SearchSettings())
+    jambs = np.isin(np.round(ends.point[:, 0], 6), (2.0, 3.0)) & (ends.point[:, 1] == 1.0)
+    assert jambs.any()
+    assert ends.open[jambs].all()
+    corners = ends.point[:, 0] == 10.0
+    assert corners.any()
+    assert not ends.open[corners].any()
 
 
 @pytest.mark.parametrize("count", [0, 1])

@@ -14,9 +14,12 @@ Two scan segments that are not parallel, matched to two map lines whose angle be
 is the same, fix a pose: the turn from the angles, the position from the two lines' offsets
 (the sensor on a side each map line was seen from, each segment overlapping its map line).
 Every such pair of the scan's longest segments against every pair of map lines gives the
-candidates; each is scored by the share of the scan's returns within ``near`` of a map
-line (:class:`ExplainedGrid`: a bitmap of the cells near the map's lines), and the best
-distinct ones become hypotheses. Each hypothesis is then a copy of the filter (with the
+candidates. Where no two cross (a corridor's two walls) and no hypothesis explains the scans
+yet, one segment on a map line and a segment's real end (a jump: a doorway's jamb; a
+corner) on a map line's end point fix a pose (:func:`end_candidates`). Each candidate is
+scored by the share of the scan's returns within ``near`` of a map line
+(:class:`ExplainedGrid`: a bitmap of the cells near the map's lines), and the best distinct
+ones become hypotheses. Each hypothesis is then a copy of the filter (with the
 odometry's errors learnt so far), stepped on the next scans like the filter itself and
 scored again on each; a hypothesis is kept when it has explained at least ``found_share``
 of the returns over ``agree`` scans and no distinct rival comes within ``margin`` of it.
@@ -35,163 +38,16 @@ from collections import deque
 import numpy as np
 
 from scanlines.geometry.poses import Pose, compose
+from scanlines.map.candidates import LineEnds, LinePairs, end_candidates, pose_candidates
 from scanlines.map.scoring import ExplainedGrid, beam_shares, mapped
 from scanlines.map.search_settings import SearchSettings
 
-__all__ = ["ExplainedGrid", "GlobalSearch", "Hypothesis", "LinePairs", "SearchSettings",
-           "pose_candidates"]  # fmt: skip
+__all__ = ["ExplainedGrid", "GlobalSearch", "Hypothesis", "LineEnds", "LinePairs",
+           "SearchSettings", "end_candidates", "pose_candidates"]  # fmt: skip
 
 
 def _wrap(angle):
     return np.mod(np.asarray(angle) + math.pi, 2.0 * math.pi) - math.pi
-
-
-def _segments(segments: np.ndarray, settings: SearchSettings) -> np.ndarray:
-    """The longest of a scan's segments (rows: rho, alpha, start x, y, end x, y)."""
-    length = np.hypot(segments[:, 4] - segments[:, 2], segments[:, 5] - segments[:, 3])
-    keep = np.flatnonzero(length >= settings.min_segment)
-    keep = keep[np.argsort(-length[keep])][: settings.segments]
-    return segments[keep]
-
-
-class LinePairs:
-    """The pairs ``(a, b)`` of map lines (both orders) that could fix a pose: each at least
-    ``min_line`` long, crossing at ``min_crossing`` or more, within ``max_pair_distance`` of
-    each other; sorted by the angle from ``a`` to ``b`` (mod pi, in [-pi/2, pi/2))."""
-
-    def __init__(self, lines, settings: SearchSettings) -> None:
-        start, end = np.asarray(lines.start), np.asarray(lines.end)
-        alpha = np.asarray(lines.alpha)
-        usable = np.flatnonzero(np.hypot(*(end - start).T) >= settings.min_line)
-        lo = np.minimum(start, end)[usable]
-        hi = np.maximum(start, end)[usable]
-        pairs_a, pairs_b, gaps = [], [], []
-        for k, line in enumerate(usable):  # one row at a time: memory follows the pairs kept
-            gap = np.maximum(0.0, np.maximum(lo - hi[k], lo[k] - hi))
-            distance = np.hypot(gap[:, 0], gap[:, 1])
-            between = _half_turn(alpha[usable] - alpha[line])
-            keep = (distance <= settings.max_pair_distance) & (
-                np.abs(between) >= settings.min_crossing
-            )
-            pairs_a.append(np.full(int(keep.sum()), line, dtype=np.int32))
-            pairs_b.append(usable[keep].astype(np.int32))
-            gaps.append(distance[keep].astype(np.float32))
-        a = np.concatenate(pairs_a) if pairs_a else np.zeros(0, np.int32)
-        b = np.concatenate(pairs_b) if pairs_b else np.zeros(0, np.int32)
-        gap = np.concatenate(gaps) if gaps else np.zeros(0, np.float32)
-        between = _half_turn(alpha[b] - alpha[a]).astype(np.float32)
-        order = np.argsort(between, kind="stable")
-        self.a, self.b, self.between, self.gap = a[order], b[order], between[order], gap[order]
-        self.length = np.hypot(*(end - start).T).astype(np.float32)
-
-    def matching(
-        self, crossing: float, tolerance: float, gap: float, lengths: tuple[float, float]
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """The pairs whose angle is within ``tolerance`` of ``crossing`` (mod pi), whose
-        boxes lie at most ``gap`` apart (two segments' lines are no farther apart than
-        the segments) and whose lines are at least ``lengths`` long."""
-        picks = []
-        for centre in (crossing - math.pi, crossing, crossing + math.pi):
-            lo = np.searchsorted(self.between, centre - tolerance, side="left")
-            hi = np.searchsorted(self.between, centre + tolerance, side="right")
-            if hi > lo:
-                picks.append(np.arange(lo, hi))
-        if not picks:
-            return self.a[:0], self.b[:0]
-        k = np.concatenate(picks)
-        a, b = self.a[k], self.b[k]
-        keep = (
-            (self.gap[k] <= gap) & (self.length[a] >= lengths[0]) & (self.length[b] >= lengths[1])
-        )
-        return a[keep].astype(np.intp), b[keep].astype(np.intp)
-
-
-def _half_turn(angle):
-    """An angle between two lines (mod pi), in [-pi/2, pi/2)."""
-    return np.mod(np.asarray(angle) + math.pi / 2, math.pi) - math.pi / 2
-
-
-def pose_candidates(segments: np.ndarray, lines, pairs: LinePairs, settings: SearchSettings):
-    """Poses (H x 3) that put two non-parallel ``segments`` (sensor frame; rows rho,
-    alpha, start x, y, end x, y) on two map ``lines`` (a LineSet, with ``sides``) of
-    ``pairs``, each segment overlapping its line and the sensor on a side each line was
-    seen from."""
-    rho, alpha = np.asarray(lines.rho), np.asarray(lines.alpha)
-    sides = np.full(len(rho), 3) if lines.sides is None else np.asarray(lines.sides)
-    out = []
-    segments = _segments(segments, settings)
-    for i in range(len(segments)):
-        for j in range(i + 1, len(segments)):
-            crossing = float(_half_turn(segments[j, 1] - segments[i, 1]))
-            if abs(crossing) < settings.min_crossing:
-                continue
-            a, b = pairs.matching(
-                crossing, settings.angle_tolerance, _apart(segments[i], segments[j]) + 0.5,
-                (_length(segments[i]) - 2 * settings.overlap_slack,
-                 _length(segments[j]) - 2 * settings.overlap_slack),
-            )  # fmt: skip
-            for flip in (0.0, math.pi):
-                theta = _wrap(alpha[a] - segments[i, 1] + flip)
-                poses = _solve(segments[i], segments[j], theta, a, b, rho, alpha)
-                good = _fits(segments[i], poses, a, lines, sides, settings)
-                poses, on = poses[good], b[good]
-                out.append(poses[_fits(segments[j], poses, on, lines, sides, settings)])
-    return np.concatenate(out) if out else np.zeros((0, 3))
-
-
-def _length(segment) -> float:
-    return math.hypot(segment[4] - segment[2], segment[5] - segment[3])
-
-
-def _apart(p, q) -> float:
-    """The distance between two segments' boxes (rows: rho, alpha, start, end)."""
-    lo_p, hi_p = np.minimum(p[2:4], p[4:6]), np.maximum(p[2:4], p[4:6])
-    lo_q, hi_q = np.minimum(q[2:4], q[4:6]), np.maximum(q[2:4], q[4:6])
-    gap = np.maximum(0.0, np.maximum(lo_q - hi_p, lo_p - hi_q))
-    return float(np.hypot(*gap))
-
-
-def _solve(seg_i, seg_j, theta, a, b, rho, alpha) -> np.ndarray:
-    """The positions that put ``seg_i`` on lines ``a`` and ``seg_j`` on lines ``b`` at
-    headings ``theta``."""
-    ni = np.stack((np.cos(seg_i[1] + theta), np.sin(seg_i[1] + theta)), axis=-1)
-    nj = np.stack((np.cos(seg_j[1] + theta), np.sin(seg_j[1] + theta)), axis=-1)
-    na = np.stack((np.cos(alpha[a]), np.sin(alpha[a])), axis=-1)
-    nb = np.stack((np.cos(alpha[b]), np.sin(alpha[b])), axis=-1)
-    sa = np.sign(np.sum(ni * na, axis=1))
-    sb = np.sign(np.sum(nj * nb, axis=1))
-    ra, rb = sa * rho[a] - seg_i[0], sb * rho[b] - seg_j[0]
-    det = ni[:, 0] * nj[:, 1] - ni[:, 1] * nj[:, 0]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        x = (ra * nj[:, 1] - rb * ni[:, 1]) / det
-        y = (ni[:, 0] * rb - nj[:, 0] * ra) / det
-    return np.column_stack((x, y, theta))
-
-
-def _fits(segment, poses, line_ids, lines, sides, settings: SearchSettings) -> np.ndarray:
-    """Whether ``segment`` at each of ``poses`` overlaps its map line and the sensor is on
-    a side that line was seen from."""
-    alpha = np.asarray(lines.alpha)[line_ids]
-    rho = np.asarray(lines.rho)[line_ids]
-    x, y, t = poses[:, 0], poses[:, 1], poses[:, 2]
-    offset = np.cos(alpha) * x + np.sin(alpha) * y - rho
-    side = np.where(offset > 0, 1, 2)
-    ok = np.isfinite(x) & ((sides[line_ids] & side) != 0)
-    if not ok.any():
-        return ok
-    tangent = np.stack((-np.sin(alpha), np.cos(alpha)), axis=-1)
-    ends = []
-    for px, py in (segment[2:4], segment[4:6]):
-        wx = x + np.cos(t) * px - np.sin(t) * py
-        wy = y + np.sin(t) * px + np.cos(t) * py
-        ends.append(tangent[:, 0] * wx + tangent[:, 1] * wy)
-    lo, hi = np.minimum(*ends), np.maximum(*ends)
-    start, end = np.asarray(lines.start)[line_ids], np.asarray(lines.end)[line_ids]
-    a = np.sum(tangent * start, axis=1)
-    b = np.sum(tangent * end, axis=1)
-    slack = settings.overlap_slack
-    ok &= (lo >= np.minimum(a, b) - slack) & (hi <= np.maximum(a, b) + slack)
-    return ok
 
 
 def _distinct(poses: np.ndarray, scores: np.ndarray, settings: SearchSettings, count: int):
@@ -255,6 +111,7 @@ class GlobalSearch:
         lines = tracker.lines
         self.grid = ExplainedGrid(lines.start, lines.end, self.settings.near, self.settings.cell)
         self._pairs: LinePairs | None = None
+        self._ends: LineEnds | None = None
         self.hypotheses: list[Hypothesis] = []
         self._scans = 0
         self._picks: dict[int, np.ndarray] = {}  # the returns scored, by the scan's size
@@ -266,6 +123,13 @@ class GlobalSearch:
         if self._pairs is None:
             self._pairs = LinePairs(self.tracker.lines, self.settings)
         return self._pairs
+
+    @property
+    def ends(self) -> LineEnds:
+        """The map's line end points, made the first time a pose is searched for."""
+        if self._ends is None:
+            self._ends = LineEnds(self.tracker.lines, self.settings)
+        return self._ends
 
     def sample(self, points: np.ndarray) -> np.ndarray:
         """The returns scored (evenly subsampled)."""
@@ -285,20 +149,40 @@ class GlobalSearch:
     def propose(self, scan, points: np.ndarray, errors=None) -> int:
         """New hypotheses from ``scan``'s segments (``points``: its valid returns, sensor
         frame; ``errors``: the odometry's errors and their covariance to start them with,
-        ``state[3:]`` of the filter and its block); how many."""
+        ``state[3:]`` of the filter and its block); how many. Where no two segments cross
+        (a corridor's walls) and no hypothesis explains the scans yet, candidates from a
+        segment's end on a map line's end (:func:`end_candidates`) too."""
         from scanlines.extractor import Extractor
 
         s = self.settings
         if self._extractor is None:
             self._extractor = Extractor()
-        rows = np.asarray(self._extractor(scan).lines)[:, :6]
+        extraction = self._extractor(scan)
+        rows = np.asarray(extraction.lines)[:, :6]
+        sample = self.sample(points)
         poses = pose_candidates(rows, self.tracker.lines, self.pairs, s)
+        added = self._add(poses, s.candidates, sample, points, errors)
+        if s.end_candidates and not len(poses) and not self._held():
+            kinds = np.asarray(extraction.end_kinds)
+            poses = end_candidates(rows, kinds, self.tracker.lines, self.ends, s)
+            added += self._add(poses, s.end_candidates, sample, points, errors)
+        self._trim()
+        return added
+
+    def _held(self) -> bool:
+        """Whether a hypothesis explains ``found_share`` over its last ``agree`` scans."""
+        s = self.settings
+        return any(h.recent(s.agree) >= s.found_share for h in self.hypotheses)
+
+    def _add(self, poses, count: int, sample, points, errors) -> int:
+        """The best ``count`` distinct of ``poses`` made hypotheses (those explaining at
+        least ``drop_share`` of ``sample``, none the same as a hypothesis); how many."""
+        s = self.settings
         if not len(poses):
             return 0
-        sample = self.sample(points)
         scores = self.grid.shares(sample, poses)
         added = 0
-        for k in _distinct(poses, scores, s, s.candidates):
+        for k in _distinct(poses, scores, s, count):
             if scores[k] < s.drop_share:
                 break
             if any(_same(poses[k], h.pose, s) for h in self.hypotheses):
@@ -309,7 +193,6 @@ class GlobalSearch:
             hypothesis.poses.append(hypothesis.pose)
             self.hypotheses.append(hypothesis)
             added += 1
-        self._trim()
         return added
 
     def _hypothesis(self, pose, errors) -> Hypothesis:

@@ -56,6 +56,17 @@ class SearchSettings(SettingsTable):
             "overlap_slack": Param(
                 0.3, _METRES, "a segment may overhang its map line's ends by this (m)"
             ),
+            "end_tolerance": Param(
+                0.15,
+                number(low=0.0, low_open=True, high=MAX_METRES),
+                "a segment's real end matches a map line's end point this far off its line (m)",
+            ),
+            "end_candidates": Param(
+                2,
+                integer(0, MAX_COUNT),
+                "best distinct candidates from a segment's end made hypotheses where no two "
+                "segments cross and no hypothesis explains found_share (0: none)",
+            ),
             "candidates": Param(
                 20, integer(1, MAX_COUNT), "best distinct candidates of a scan made hypotheses"
             ),
