@@ -52,7 +52,6 @@ from typing import ClassVar, NamedTuple
 import numpy as np
 
 from scanlines import _core
-from scanlines.errors import ParameterError
 from scanlines.geometry.poses import IDENTITY, Pose, compose, invert, relative_pose
 from scanlines.params import MAX_COUNT, MAX_METRES, Param, integer, number
 from scanlines.params.tables import Groups, SettingsTable
@@ -144,12 +143,7 @@ class IcpSettings(SettingsTable):
     }
 
     def check(self) -> None:
-        if self.min_distance > self.max_distance:
-            raise ParameterError(
-                f"IcpSettings.min_distance must be at most max_distance ({self.max_distance:g}), "
-                f"got {self.min_distance:g}",
-                parameter="min_distance",
-            )
+        self.require_at_most("min_distance", "max_distance")
 
 
 class LineTarget(NamedTuple):

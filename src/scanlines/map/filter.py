@@ -59,7 +59,6 @@ from typing import ClassVar, NamedTuple
 
 import numpy as np
 
-from scanlines.errors import ParameterError
 from scanlines.geometry.poses import Pose
 from scanlines.map.align import LineSet
 from scanlines.map.fusion import BOTH
@@ -151,12 +150,7 @@ class FilterSettings(SettingsTable):
     }
 
     def check(self) -> None:
-        if self.gate_min > self.gate_max:
-            raise ParameterError(
-                f"FilterSettings.gate_min must be at most gate_max ({self.gate_max}), "
-                f"got {self.gate_min}",
-                parameter="gate_min",
-            )
+        self.require_at_most("gate_min", "gate_max")
 
 
 class LineGrid(NamedTuple):

@@ -79,6 +79,16 @@ class SettingsTable:
         """Relations between the settings (a subclass's): a ``ParameterError`` naming one
         of them when they do not hold."""
 
+    def require_at_most(self, name: str, bound: str) -> None:
+        """The relation ``name <= bound`` between two settings (for :meth:`check`): a
+        ``ParameterError`` naming ``name`` when it does not hold."""
+        value, limit = self.__dict__[name], self.__dict__[bound]
+        if value > limit:
+            raise ParameterError(
+                f"{type(self).__name__}.{name} must be at most {bound} ({limit:g}), got {value:g}",
+                parameter=name,
+            )
+
     def to_dict(self) -> dict[str, Any]:
         """The settings by name, group by group."""
         return {name: self.__dict__[name] for name in self.parameters}
